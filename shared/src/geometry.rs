@@ -1,0 +1,447 @@
+//! Plane geometry of the payload: the footprint polygon and its convex hull, and the closed
+//! rail with its arc-length parametrisation.
+//!
+//! SPEC.md section 5 ("Scenario files": `footprint`, `rail`, `candidates` as arc lengths) and
+//! section 3 ("Lift-off thrust": the ground support is the convex hull `H` of the footprint).
+//! Coordinates are the payload's body frame in metres.
+
+use core::ops::{Add, Mul, Neg, Sub};
+
+use heapless::Vec;
+
+use crate::math;
+
+/// Most vertices a footprint, its hull or a rail may have.
+pub const MAX_VERTICES: usize = 32;
+
+/// A point or a vector in the payload's horizontal plane, metres.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Vec2 {
+    /// Body x (forward).
+    pub x: f32,
+    /// Body y (right).
+    pub y: f32,
+}
+
+impl Vec2 {
+    /// A vector from its components.
+    pub const fn new(x: f32, y: f32) -> Self {
+        Self { x, y }
+    }
+
+    /// Dot product.
+    pub fn dot(self, other: Self) -> f32 {
+        self.x * other.x + self.y * other.y
+    }
+
+    /// z component of the cross product `self x other` (positive: `other` is counter-clockwise).
+    pub fn cross(self, other: Self) -> f32 {
+        self.x * other.y - self.y * other.x
+    }
+
+    /// Euclidean length.
+    pub fn norm(self) -> f32 {
+        math::sqrt(self.dot(self))
+    }
+
+    /// True when both components are finite.
+    pub fn is_finite(self) -> bool {
+        self.x.is_finite() && self.y.is_finite()
+    }
+}
+
+impl Add for Vec2 {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Self::new(self.x + o.x, self.y + o.y)
+    }
+}
+
+impl Sub for Vec2 {
+    type Output = Self;
+    fn sub(self, o: Self) -> Self {
+        Self::new(self.x - o.x, self.y - o.y)
+    }
+}
+
+impl Mul<f32> for Vec2 {
+    type Output = Self;
+    fn mul(self, k: f32) -> Self {
+        Self::new(self.x * k, self.y * k)
+    }
+}
+
+impl Neg for Vec2 {
+    type Output = Self;
+    fn neg(self) -> Self {
+        Self::new(-self.x, -self.y)
+    }
+}
+
+/// Why a vertex list is not a usable simple polygon.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PolygonError {
+    /// Fewer than three vertices.
+    TooFewVertices,
+    /// More than [`MAX_VERTICES`] vertices.
+    TooManyVertices,
+    /// A coordinate is NaN or infinite.
+    NotFinite {
+        /// Index of the offending vertex.
+        vertex: usize,
+    },
+    /// Two consecutive vertices coincide.
+    ZeroLengthEdge {
+        /// Index of the edge's first vertex.
+        edge: usize,
+    },
+    /// Two edges cross or touch, or an edge folds back onto its neighbour.
+    SelfIntersecting {
+        /// Index of the first edge.
+        edge_a: usize,
+        /// Index of the second edge.
+        edge_b: usize,
+    },
+    /// The polygon encloses no area.
+    ZeroArea,
+}
+
+impl core::fmt::Display for PolygonError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Self::TooFewVertices => write!(f, "needs at least 3 vertices"),
+            Self::TooManyVertices => write!(f, "has more than {MAX_VERTICES} vertices"),
+            Self::NotFinite { vertex } => write!(f, "vertex {vertex} is not a finite number"),
+            Self::ZeroLengthEdge { edge } => {
+                write!(f, "vertices {edge} and the next one coincide")
+            }
+            Self::SelfIntersecting { edge_a, edge_b } => {
+                write!(f, "is self-intersecting (edges {edge_a} and {edge_b} meet)")
+            }
+            Self::ZeroArea => write!(f, "encloses no area"),
+        }
+    }
+}
+
+/// The signed area of a closed polygon (shoelace; positive when counter-clockwise).
+pub fn signed_area(vertices: &[Vec2]) -> f32 {
+    let n = vertices.len();
+    let mut twice = 0.0;
+    for i in 0..n {
+        twice += vertices[i].cross(vertices[(i + 1) % n]);
+    }
+    0.5 * twice
+}
+
+/// Checks that `vertices` form a simple closed polygon: at least three finite vertices, no
+/// zero-length edge, no two edges meeting except neighbours at their shared vertex, and a
+/// non-zero area.
+pub fn check_simple_polygon(vertices: &[Vec2]) -> Result<(), PolygonError> {
+    let n = vertices.len();
+    if n < 3 {
+        return Err(PolygonError::TooFewVertices);
+    }
+    if n > MAX_VERTICES {
+        return Err(PolygonError::TooManyVertices);
+    }
+    if let Some(vertex) = vertices.iter().position(|v| !v.is_finite()) {
+        return Err(PolygonError::NotFinite { vertex });
+    }
+    let edge = |i: usize| (vertices[i], vertices[(i + 1) % n]);
+    for i in 0..n {
+        let (a, b) = edge(i);
+        if (b - a).norm() <= 1e-6 {
+            return Err(PolygonError::ZeroLengthEdge { edge: i });
+        }
+    }
+    for i in 0..n {
+        let (a, b) = edge(i);
+        // A neighbour that folds straight back over this edge.
+        let (_, c) = edge((i + 1) % n);
+        if (b - a).cross(c - b).abs() <= 1e-9 && (b - a).dot(c - b) < 0.0 {
+            return Err(PolygonError::SelfIntersecting {
+                edge_a: i,
+                edge_b: (i + 1) % n,
+            });
+        }
+        for j in (i + 2)..n {
+            if i == 0 && j == n - 1 {
+                continue; // neighbours through the closing vertex
+            }
+            let (p, q) = edge(j);
+            if segments_touch(a, b, p, q) {
+                return Err(PolygonError::SelfIntersecting {
+                    edge_a: i,
+                    edge_b: j,
+                });
+            }
+        }
+    }
+    if math::abs(signed_area(vertices)) <= 1e-9 {
+        return Err(PolygonError::ZeroArea);
+    }
+    Ok(())
+}
+
+/// True when closed segments `a-b` and `p-q` share at least one point.
+fn segments_touch(a: Vec2, b: Vec2, p: Vec2, q: Vec2) -> bool {
+    let side = |o: Vec2, d: Vec2, r: Vec2| {
+        let c = d.cross(r - o);
+        if c > 1e-9 {
+            1
+        } else if c < -1e-9 {
+            -1
+        } else {
+            0
+        }
+    };
+    let on_segment = |o: Vec2, e: Vec2, r: Vec2| {
+        r.x >= o.x.min(e.x) - 1e-9
+            && r.x <= o.x.max(e.x) + 1e-9
+            && r.y >= o.y.min(e.y) - 1e-9
+            && r.y <= o.y.max(e.y) + 1e-9
+    };
+    let (ab, pq) = (b - a, q - p);
+    let (s1, s2) = (side(a, ab, p), side(a, ab, q));
+    let (s3, s4) = (side(p, pq, a), side(p, pq, b));
+    if s1 * s2 < 0 && s3 * s4 < 0 {
+        return true;
+    }
+    (s1 == 0 && on_segment(a, b, p))
+        || (s2 == 0 && on_segment(a, b, q))
+        || (s3 == 0 && on_segment(p, q, a))
+        || (s4 == 0 && on_segment(p, q, b))
+}
+
+/// The convex hull of a point set, counter-clockwise, without collinear vertices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConvexHull {
+    vertices: Vec<Vec2, MAX_VERTICES>,
+}
+
+impl ConvexHull {
+    /// Hull of `points` (Andrew's monotone chain). `None` for fewer than three points, more
+    /// than [`MAX_VERTICES`], or when all points are collinear.
+    pub fn of(points: &[Vec2]) -> Option<Self> {
+        let mut sorted: Vec<Vec2, MAX_VERTICES> = Vec::from_slice(points).ok()?;
+        if sorted.len() < 3 {
+            return None;
+        }
+        sorted.sort_unstable_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+        // Lower hull then upper hull; each point pops the ones that would make a right turn.
+        let mut hull: Vec<Vec2, { 2 * MAX_VERTICES }> = Vec::new();
+        for pass in 0..2 {
+            let floor = hull.len();
+            let push = |p: Vec2, hull: &mut Vec<Vec2, { 2 * MAX_VERTICES }>| {
+                while hull.len() >= floor + 2 {
+                    let k = hull.len();
+                    if (hull[k - 1] - hull[k - 2]).cross(p - hull[k - 2]) <= 1e-9 {
+                        hull.pop();
+                    } else {
+                        break;
+                    }
+                }
+                // Capacity is twice the input, so this cannot overflow.
+                let _ = hull.push(p);
+            };
+            if pass == 0 {
+                sorted.iter().for_each(|&p| push(p, &mut hull));
+            } else {
+                sorted.iter().rev().for_each(|&p| push(p, &mut hull));
+            }
+            hull.pop(); // the last point of each chain starts the other one
+        }
+        if hull.len() < 3 {
+            return None;
+        }
+        let vertices = Vec::from_slice(&hull).ok()?;
+        Some(Self { vertices })
+    }
+
+    /// The hull's vertices, counter-clockwise.
+    pub fn vertices(&self) -> &[Vec2] {
+        &self.vertices
+    }
+
+    /// Edge `i` as (start, end), counter-clockwise.
+    fn edge(&self, i: usize) -> (Vec2, Vec2) {
+        let n = self.vertices.len();
+        (self.vertices[i], self.vertices[(i + 1) % n])
+    }
+
+    /// True when `p` lies inside the hull or within `tolerance` metres outside its boundary.
+    pub fn contains(&self, p: Vec2, tolerance: f32) -> bool {
+        (0..self.vertices.len()).all(|i| {
+            let (a, b) = self.edge(i);
+            let d = b - a;
+            d.cross(p - a) >= -tolerance * d.norm()
+        })
+    }
+
+    /// `sup { t >= 0 : origin + t * direction in H }`: how far along `direction` (in units of its
+    /// length) a point starting at `origin` can travel before it leaves the hull.
+    /// `None` when `origin` is outside the hull; `f32::INFINITY` when `direction` is zero.
+    pub fn exit_distance(&self, origin: Vec2, direction: Vec2) -> Option<f32> {
+        if !self.contains(origin, 1e-6) {
+            return None;
+        }
+        let mut t_max = f32::INFINITY;
+        for i in 0..self.vertices.len() {
+            let (a, b) = self.edge(i);
+            let d = b - a;
+            // Inside: d x (p - a) >= 0. Along the ray it falls at rate d x direction.
+            let rate = d.cross(direction);
+            if rate < 0.0 {
+                let slack = d.cross(origin - a).max(0.0);
+                t_max = t_max.min(slack / -rate);
+            }
+        }
+        Some(t_max)
+    }
+}
+
+/// A closed rail through the rotor centres, parametrised by arc length from its first vertex.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rail {
+    vertices: Vec<Vec2, MAX_VERTICES>,
+    /// `cumulative[i]` is the arc length at vertex `i`; the last entry is the perimeter.
+    cumulative: Vec<f32, { MAX_VERTICES + 1 }>,
+}
+
+impl Rail {
+    /// A rail through `vertices` in order, closed back to the first. The path must be a simple
+    /// polygon.
+    pub fn new(vertices: &[Vec2]) -> Result<Self, PolygonError> {
+        check_simple_polygon(vertices)?;
+        let vertices: Vec<Vec2, MAX_VERTICES> =
+            Vec::from_slice(vertices).map_err(|_| PolygonError::TooManyVertices)?;
+        let n = vertices.len();
+        let mut cumulative = Vec::new();
+        let mut s = 0.0;
+        for i in 0..=n {
+            // Capacity MAX_VERTICES + 1 holds n + 1 entries.
+            let _ = cumulative.push(s);
+            if i < n {
+                s += (vertices[(i + 1) % n] - vertices[i]).norm();
+            }
+        }
+        Ok(Self {
+            vertices,
+            cumulative,
+        })
+    }
+
+    /// The rail's vertices, as given.
+    pub fn vertices(&self) -> &[Vec2] {
+        &self.vertices
+    }
+
+    /// Total length of the closed rail, metres.
+    pub fn perimeter(&self) -> f32 {
+        self.cumulative[self.cumulative.len() - 1]
+    }
+
+    /// `s` brought into `[0, perimeter)`.
+    pub fn wrap(&self, s: f32) -> f32 {
+        let p = self.perimeter();
+        let w = s - p * math::floor(s / p);
+        if w >= p { 0.0 } else { w }
+    }
+
+    /// Arc length from `from` forward (in the rail's direction) to `to`, in `[0, perimeter)`.
+    pub fn forward_gap(&self, from: f32, to: f32) -> f32 {
+        self.wrap(to - from)
+    }
+
+    /// The point at arc length `s` (wrapped onto the rail).
+    pub fn point_at(&self, s: f32) -> Vec2 {
+        let s = self.wrap(s);
+        let n = self.vertices.len();
+        // The segment whose arc-length span holds s (n is small: a linear scan is fine).
+        let i = (0..n).rev().find(|&i| self.cumulative[i] <= s).unwrap_or(0);
+        let (a, b) = (self.vertices[i], self.vertices[(i + 1) % n]);
+        let length = self.cumulative[i + 1] - self.cumulative[i];
+        let f = if length > 0.0 {
+            (s - self.cumulative[i]) / length
+        } else {
+            0.0
+        };
+        a + (b - a) * f
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pts(raw: &[[f32; 2]]) -> heapless::Vec<Vec2, MAX_VERTICES> {
+        raw.iter().map(|p| Vec2::new(p[0], p[1])).collect()
+    }
+
+    const L_SHAPE: [[f32; 2]; 6] = [
+        [0.0, 0.0],
+        [0.62, 0.0],
+        [0.62, 0.2],
+        [0.2, 0.2],
+        [0.2, 0.62],
+        [0.0, 0.62],
+    ];
+
+    #[test]
+    fn l_shape_is_simple_and_its_hull_drops_the_inner_corner() {
+        let l = pts(&L_SHAPE);
+        assert_eq!(check_simple_polygon(&l), Ok(()));
+        let hull = ConvexHull::of(&l).expect("hull");
+        assert_eq!(hull.vertices().len(), 5);
+        assert!(!hull.vertices().contains(&Vec2::new(0.2, 0.2)));
+        assert!(signed_area(hull.vertices()) > 0.0, "counter-clockwise");
+        // The inner corner's notch is inside the hull, a point beyond the diagonal is not.
+        assert!(hull.contains(Vec2::new(0.35, 0.35), 0.0));
+        assert!(!hull.contains(Vec2::new(0.45, 0.45), 0.0));
+    }
+
+    #[test]
+    fn bow_tie_and_spike_are_rejected() {
+        let bow = pts(&[[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]]);
+        assert!(matches!(
+            check_simple_polygon(&bow),
+            Err(PolygonError::SelfIntersecting { .. })
+        ));
+        let spike = pts(&[[0.0, 0.0], [2.0, 0.0], [1.0, 0.0], [1.0, 1.0]]);
+        assert!(check_simple_polygon(&spike).is_err());
+        let line = pts(&[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]);
+        assert!(check_simple_polygon(&line).is_err());
+    }
+
+    #[test]
+    fn exit_distance_matches_the_rectangle_by_hand() {
+        let rect = pts(&[[-0.88, -0.1], [0.88, -0.1], [0.88, 0.1], [-0.88, 0.1]]);
+        let hull = ConvexHull::of(&rect).expect("hull");
+        let t = hull
+            .exit_distance(Vec2::new(0.3, 0.0), Vec2::new(0.5, 0.0))
+            .expect("inside");
+        assert!((t - (0.88 - 0.3) / 0.5).abs() < 1e-5, "t = {t}");
+        assert_eq!(
+            hull.exit_distance(Vec2::new(1.0, 0.0), Vec2::new(1.0, 0.0)),
+            None
+        );
+    }
+
+    #[test]
+    fn rail_arc_length_walks_the_rectangle() {
+        let rail = Rail::new(&pts(&[
+            [-1.0, -0.22],
+            [1.0, -0.22],
+            [1.0, 0.22],
+            [-1.0, 0.22],
+        ]))
+        .expect("rail");
+        assert!((rail.perimeter() - 4.88).abs() < 1e-5);
+        let p = rail.point_at(2.22);
+        assert!((p - Vec2::new(1.0, 0.0)).norm() < 1e-5, "{p:?}");
+        let wrapped = rail.point_at(4.88 + 0.12);
+        assert!((wrapped - Vec2::new(-0.88, -0.22)).norm() < 1e-5);
+        assert!((rail.forward_gap(4.66, 0.12) - 0.34).abs() < 1e-5);
+        assert!((rail.wrap(-0.5) - 4.38).abs() < 1e-5);
+    }
+}

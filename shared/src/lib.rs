@@ -1,0 +1,16 @@
+//! The autonomy of a payload carried by `n` single-rotor robots riding a common rail around it
+//! (SPEC.md, sections 2 and 3).
+//!
+//! Everything here is plain synchronous code: no allocation, no executor, no time source,
+//! fixed capacities and `f32`. The flight controller (`firmware`) and the simulator
+//! (`host-sim`) run exactly this code, so what the simulator tests is what flies.
+//!
+//! Math goes through [`libm`] explicitly (see [`math`]) so that host and target compute with the
+//! same functions.
+#![no_std]
+#![deny(missing_docs)]
+
+pub mod geometry;
+pub mod math;
+pub mod scenario;
+pub mod timing;
