@@ -10,7 +10,11 @@
 #![no_std]
 #![deny(missing_docs)]
 
+pub mod estimation;
+#[cfg(test)]
+pub(crate) mod fixtures;
 pub mod geometry;
 pub mod math;
 pub mod scenario;
+pub mod statics;
 pub mod timing;

@@ -34,6 +34,18 @@ pub fn floor(x: f32) -> f32 {
     libm::floorf(x)
 }
 
+/// Smallest integer not below `x`.
+#[inline]
+pub fn ceil(x: f32) -> f32 {
+    libm::ceilf(x)
+}
+
+/// Nearest integer, halves away from zero.
+#[inline]
+pub fn round(x: f32) -> f32 {
+    libm::roundf(x)
+}
+
 /// Sine (radians).
 #[inline]
 pub fn sin(x: f32) -> f32 {
@@ -50,4 +62,64 @@ pub fn cos(x: f32) -> f32 {
 #[inline]
 pub fn atan2(y: f32, x: f32) -> f32 {
     libm::atan2f(y, x)
+}
+
+/// Error function.
+#[inline]
+pub fn erf(x: f32) -> f32 {
+    libm::erff(x)
+}
+
+/// Complementary error function `1 - erf(x)`, accurate in the tail.
+#[inline]
+pub fn erfc(x: f32) -> f32 {
+    libm::erfcf(x)
+}
+
+/// `ln(sqrt(2 pi))`.
+pub const LN_SQRT_2PI: f32 = 0.918_938_5;
+
+/// Standard normal density.
+#[inline]
+pub fn normal_pdf(x: f32) -> f32 {
+    exp(-0.5 * x * x - LN_SQRT_2PI)
+}
+
+/// Standard normal distribution function `P(X <= x)`.
+#[inline]
+pub fn normal_cdf(x: f32) -> f32 {
+    0.5 * erfc(-x * core::f32::consts::FRAC_1_SQRT_2)
+}
+
+/// `ln P(X >= a)` for a standard normal `X`, finite for every finite `a` (asymptotic
+/// expansion where `erfc` would underflow).
+pub fn ln_normal_sf(a: f32) -> f32 {
+    if a < 9.0 {
+        ln(0.5 * erfc(a * core::f32::consts::FRAC_1_SQRT_2))
+    } else {
+        // Mills ratio: P(X >= a) ~ phi(a) / a * (1 - 1/a^2 + 3/a^4); relative error < 3e-5 here.
+        let inv2 = 1.0 / (a * a);
+        -0.5 * a * a - LN_SQRT_2PI - ln(a) + ln(1.0 - inv2 + 3.0 * inv2 * inv2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normal_tail_is_continuous_across_the_switch_and_exact_below_it() {
+        assert!((ln_normal_sf(0.0) - ln(0.5)).abs() < 1e-6);
+        let below = ln_normal_sf(8.9999);
+        let above = ln_normal_sf(9.0);
+        assert!((below - above).abs() < 1e-3, "{below} vs {above}");
+        // Exact value of ln P(X >= 6) = ln(9.8659e-10).
+        assert!(
+            (ln_normal_sf(6.0) - (-20.7367)).abs() < 1e-3,
+            "{}",
+            ln_normal_sf(6.0)
+        );
+        assert!(ln_normal_sf(40.0).is_finite());
+        assert!(ln_normal_sf(-10.0).abs() < 1e-6);
+    }
 }

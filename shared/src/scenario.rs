@@ -664,55 +664,7 @@ impl Scenario {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    const RECT: [Vec2; 4] = [
-        Vec2::new(-0.88, -0.1),
-        Vec2::new(0.88, -0.1),
-        Vec2::new(0.88, 0.1),
-        Vec2::new(-0.88, 0.1),
-    ];
-    const RAIL: [Vec2; 4] = [
-        Vec2::new(-1.0, -0.22),
-        Vec2::new(1.0, -0.22),
-        Vec2::new(1.0, 0.22),
-        Vec2::new(-1.0, 0.22),
-    ];
-    const CANDIDATES: [f32; 12] = [
-        0.12, 0.56, 1.0, 1.44, 1.88, 2.22, 2.56, 3.0, 3.44, 3.88, 4.32, 4.66,
-    ];
-    const SPIN: [i64; 8] = [1, -1, 1, -1, 1, -1, 1, -1];
-
-    fn rect_sim1() -> ScenarioInput<'static> {
-        ScenarioInput {
-            footprint: &RECT,
-            rail: &RAIL,
-            candidates: &CANDIDATES,
-            robots: RobotsInput {
-                count: 8,
-                mass: 0.1,
-                max_thrust: 14.2,
-                torque_per_thrust: 0.016,
-                spin: &SPIN,
-                min_spacing: 0.25,
-                pair_size: 2,
-                initial: None,
-            },
-            estimation: EstimationSetup {
-                grid_min: [-0.5, -0.05, 2.5],
-                grid_max: [0.5, 0.05, 4.0],
-                resolution: [0.1, 0.03, 0.5],
-                threshold: 0.8,
-                noise_sigma: 1.0,
-                max_measurements: 20,
-            },
-            formation: FormationSetup { balance_eps: 1e-5 },
-            truth: Some(Truth {
-                com: Vec2::new(0.33, 0.01),
-                mass: 3.5,
-            }),
-            flight: None,
-        }
-    }
+    use crate::fixtures::rect_sim1;
 
     #[test]
     fn paper_rectangle_is_accepted_with_even_start() {

@@ -1,0 +1,20 @@
+//! Estimation of theta = [COM x, COM y, mass] before take-off, by lifting one edge with
+//! adjacent groups of robots (SPEC.md section 2, step 1; section 4 for the paper's cases).
+//!
+//! - [`grid`]: the grid of theta (and an optional thrust-scale axis).
+//! - [`groups`]: lifting groups of adjacent candidates.
+//! - [`likelihood`]: the reading's model, with censoring at the robots' maximum thrust.
+//! - [`posterior`]: the log-domain grid posterior, its MAP and the stopping rule's mass.
+//! - [`information`]: mutual information of each group's next reading.
+//! - [`estimator`]: the loop that ties them together.
+
+pub mod estimator;
+pub mod grid;
+pub mod groups;
+pub mod information;
+pub mod likelihood;
+pub mod posterior;
+
+pub use estimator::{Estimate, EstimationError, Estimator, EstimatorOptions, GroupChoice, Status};
+pub use grid::ThrustScaleAxis;
+pub use likelihood::Measurement;

@@ -1,0 +1,179 @@
+//! The grid posterior over theta (and the thrust scale, when on), kept as log-probabilities so
+//! that long runs never underflow (SPEC.md section 2, steps 1.4 and 1.5).
+//!
+//! The prior is uniform on the grid points whose COM lies in the footprint's convex hull and
+//! zero elsewhere. After each update the log-values are shifted so the largest is 0.
+
+use heapless::Vec;
+
+use crate::estimation::grid::Grid;
+use crate::estimation::likelihood::{LiftLikelihood, Measurement};
+use crate::geometry::ConvexHull;
+use crate::math;
+use crate::scenario::MAX_GRID_POINTS;
+use crate::statics::thrust_from_fraction;
+
+/// Predicted lift-off reading at grid point (COM with share `fraction`, mass `im`, scale `is`):
+/// the thrust the flight controller believes it applies, `s * (m_r g + M g f)`.
+pub fn predicted_reading(grid: &Grid, fraction: f32, im: usize, is: usize, robot_mass: f32) -> f32 {
+    grid.scale(is) * thrust_from_fraction(fraction, grid.mass(im), robot_mass)
+}
+
+/// Unnormalised log posterior on every grid point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Posterior {
+    ln_p: Vec<f32, MAX_GRID_POINTS>,
+}
+
+impl Posterior {
+    /// Uniform prior on the points whose COM lies in `hull`; `None` when no grid COM does.
+    pub fn uniform_on_hull(grid: &Grid, hull: &ConvexHull) -> Option<Self> {
+        let block = grid.len() / grid.com_len();
+        let mut ln_p = Vec::new();
+        let mut any = false;
+        for c in 0..grid.com_len() {
+            let inside = hull.contains(grid.com(c), 1e-6);
+            any |= inside;
+            let v = if inside { 0.0 } else { f32::NEG_INFINITY };
+            for _ in 0..block {
+                // grid.len() <= MAX_GRID_POINTS by Grid::new.
+                let _ = ln_p.push(v);
+            }
+        }
+        any.then_some(Self { ln_p })
+    }
+
+    /// The log-values, flat in the grid's layout.
+    pub fn ln_values(&self) -> &[f32] {
+        &self.ln_p
+    }
+
+    /// Bayes update with one measurement of a group whose geometric share at COM point `c` is
+    /// `fractions[c]`.
+    pub fn update(
+        &mut self,
+        grid: &Grid,
+        fractions: &[f32],
+        robot_mass: f32,
+        likelihood: &LiftLikelihood,
+        measurement: Measurement,
+    ) {
+        let (nm, ns) = (grid.shape()[2], grid.scale_len());
+        let mut top = f32::NEG_INFINITY;
+        for (c, &fraction) in fractions.iter().enumerate().take(grid.com_len()) {
+            for im in 0..nm {
+                for is in 0..ns {
+                    let i = (c * nm + im) * ns + is;
+                    if self.ln_p[i] == f32::NEG_INFINITY {
+                        continue;
+                    }
+                    let predicted = predicted_reading(grid, fraction, im, is, robot_mass);
+                    self.ln_p[i] += likelihood.ln_likelihood(measurement, predicted);
+                    top = top.max(self.ln_p[i]);
+                }
+            }
+        }
+        if top.is_finite() {
+            self.ln_p
+                .iter_mut()
+                .filter(|v| v.is_finite())
+                .for_each(|v| *v -= top);
+        }
+    }
+
+    /// Normalised probabilities of every grid point into `out` (length `grid.len()`).
+    pub fn probabilities(&self, out: &mut [f32]) {
+        let mut total = 0.0;
+        for (o, &l) in out.iter_mut().zip(self.ln_p.iter()) {
+            *o = if l.is_finite() { math::exp(l) } else { 0.0 };
+            total += *o;
+        }
+        if total > 0.0 {
+            out.iter_mut().for_each(|o| *o /= total);
+        }
+    }
+
+    /// Normalised marginal over theta (the thrust scale summed out) into `out` (length
+    /// `grid.theta_len()`).
+    pub fn theta_marginal(&self, grid: &Grid, out: &mut [f32]) {
+        let ns = grid.scale_len();
+        let mut total = 0.0;
+        for (t, o) in out.iter_mut().enumerate().take(grid.theta_len()) {
+            *o = self.ln_p[t * ns..(t + 1) * ns]
+                .iter()
+                .filter(|l| l.is_finite())
+                .map(|&l| math::exp(l))
+                .sum();
+            total += *o;
+        }
+        if total > 0.0 {
+            out.iter_mut().for_each(|o| *o /= total);
+        }
+    }
+
+    /// Posterior mean of the thrust scale (1 without the axis).
+    pub fn mean_scale(&self, grid: &Grid) -> f32 {
+        let ns = grid.scale_len();
+        let (mut total, mut weighted) = (0.0, 0.0);
+        for (i, &l) in self.ln_p.iter().enumerate() {
+            if l.is_finite() {
+                let w = math::exp(l);
+                total += w;
+                weighted += w * grid.scale(i % ns);
+            }
+        }
+        if total > 0.0 { weighted / total } else { 1.0 }
+    }
+}
+
+/// The stopping rule's view of a theta marginal: the MAP point and the posterior mass of
+/// `Theta_N`, the points within one resolution of it on every axis (SPEC.md section 2, 1.5).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Concentration {
+    /// Grid indices of the MAP point.
+    pub map_indices: [usize; 3],
+    /// Theta value of the MAP point.
+    pub map: [f32; 3],
+    /// Posterior mass of `Theta_N`.
+    pub mass_near_map: f32,
+    /// Posterior mean of theta over `Theta_N`: the estimate, finer than the grid.
+    pub local_mean: [f32; 3],
+}
+
+/// Finds the MAP of the normalised theta marginal `marginal` and the mass around it.
+pub fn concentration(grid: &Grid, marginal: &[f32]) -> Concentration {
+    let best = marginal.iter().enumerate().take(grid.theta_len()).fold(
+        (0, f32::NEG_INFINITY),
+        |acc, (i, &p)| if p > acc.1 { (i, p) } else { acc },
+    );
+    let map_indices = grid.axis_indices(best.0);
+    let shape = grid.shape();
+    let range =
+        |a: usize| map_indices[a].saturating_sub(1)..=(map_indices[a] + 1).min(shape[a] - 1);
+    let (mut mass, mut sum) = (0.0, [0.0f32; 3]);
+    for ix in range(0) {
+        for iy in range(1) {
+            for im in range(2) {
+                let t = grid.theta_index([ix, iy, im]);
+                let p = marginal[t];
+                let theta = grid.theta(t);
+                mass += p;
+                for a in 0..3 {
+                    sum[a] += p * theta[a];
+                }
+            }
+        }
+    }
+    let map = grid.theta(best.0);
+    let local_mean = if mass > 0.0 {
+        sum.map(|s| s / mass)
+    } else {
+        map
+    };
+    Concentration {
+        map_indices,
+        map,
+        mass_near_map: mass,
+        local_mean,
+    }
+}

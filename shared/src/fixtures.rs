@@ -1,0 +1,107 @@
+//! Test fixtures: the paper's scenarios as [`ScenarioInput`]s (the same values as the files in
+//! `tests/scenarios/`).
+
+use crate::geometry::Vec2;
+use crate::scenario::{
+    EstimationSetup, FormationSetup, RobotsInput, Scenario, ScenarioInput, Truth,
+};
+
+const RECT: [Vec2; 4] = [
+    Vec2::new(-0.88, -0.1),
+    Vec2::new(0.88, -0.1),
+    Vec2::new(0.88, 0.1),
+    Vec2::new(-0.88, 0.1),
+];
+const RECT_RAIL: [Vec2; 4] = [
+    Vec2::new(-1.0, -0.22),
+    Vec2::new(1.0, -0.22),
+    Vec2::new(1.0, 0.22),
+    Vec2::new(-1.0, 0.22),
+];
+const RECT_CANDIDATES: [f32; 12] = [
+    0.12, 0.56, 1.0, 1.44, 1.88, 2.22, 2.56, 3.0, 3.44, 3.88, 4.32, 4.66,
+];
+const L_SHAPE: [Vec2; 6] = [
+    Vec2::new(0.0, 0.0),
+    Vec2::new(0.62, 0.0),
+    Vec2::new(0.62, 0.2),
+    Vec2::new(0.2, 0.2),
+    Vec2::new(0.2, 0.62),
+    Vec2::new(0.0, 0.62),
+];
+const L_RAIL: [Vec2; 6] = [
+    Vec2::new(-0.12, -0.12),
+    Vec2::new(0.74, -0.12),
+    Vec2::new(0.74, 0.32),
+    Vec2::new(0.32, 0.32),
+    Vec2::new(0.32, 0.74),
+    Vec2::new(-0.12, 0.74),
+];
+const L_CANDIDATES: [f32; 11] = [0.1, 0.45, 0.8, 1.08, 1.5, 1.72, 1.94, 2.36, 2.64, 2.99, 3.3];
+const SPIN: [i64; 8] = [1, -1, 1, -1, 1, -1, 1, -1];
+
+fn robots() -> RobotsInput<'static> {
+    RobotsInput {
+        count: 8,
+        mass: 0.1,
+        max_thrust: 14.2,
+        torque_per_thrust: 0.016,
+        spin: &SPIN,
+        min_spacing: 0.25,
+        pair_size: 2,
+        initial: None,
+    }
+}
+
+/// `rect-sim1` as input.
+pub fn rect_sim1() -> ScenarioInput<'static> {
+    ScenarioInput {
+        footprint: &RECT,
+        rail: &RECT_RAIL,
+        candidates: &RECT_CANDIDATES,
+        robots: robots(),
+        estimation: EstimationSetup {
+            grid_min: [-0.5, -0.05, 2.5],
+            grid_max: [0.5, 0.05, 4.0],
+            resolution: [0.1, 0.03, 0.5],
+            threshold: 0.8,
+            noise_sigma: 1.0,
+            max_measurements: 20,
+        },
+        formation: FormationSetup { balance_eps: 1e-5 },
+        truth: Some(Truth {
+            com: Vec2::new(0.33, 0.01),
+            mass: 3.5,
+        }),
+        flight: None,
+    }
+}
+
+/// `L-sim1` as input.
+pub fn l_sim1() -> ScenarioInput<'static> {
+    ScenarioInput {
+        footprint: &L_SHAPE,
+        rail: &L_RAIL,
+        candidates: &L_CANDIDATES,
+        robots: robots(),
+        estimation: EstimationSetup {
+            grid_min: [0.05, 0.02, 2.2],
+            grid_max: [0.57, 0.57, 4.0],
+            resolution: [0.065, 0.065, 0.45],
+            threshold: 0.8,
+            noise_sigma: 1.0,
+            max_measurements: 20,
+        },
+        formation: FormationSetup { balance_eps: 1e-4 },
+        truth: Some(Truth {
+            com: Vec2::new(0.31, 0.1),
+            mass: 3.5,
+        }),
+        flight: None,
+    }
+}
+
+/// A checked scenario from an input fixture.
+pub fn checked(input: ScenarioInput<'_>) -> Scenario {
+    Scenario::from_input(&input).expect("fixture is valid")
+}
