@@ -1,16 +1,14 @@
 //! The `host-sim` command line (SPEC.md section 5, "The simulator's command line").
 //!
 //! Every command takes `--scenario FILE` and `--json`; with `--json`, stdout is one JSON object
-//! and nothing else. A value that starts with `-` is given as `--com=-0.2,0.1`.
+//! and nothing else. A value that starts with `-` may be given as `--com=-0.2,0.1`.
 
 use std::ffi::OsString;
 use std::path::PathBuf;
 
-use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
-use serde_json::json;
 
-use crate::scenario_file::{self, LoadedScenario};
+use crate::commands;
 
 /// Simulator and bench tool for the rail-riding rotor transport.
 #[derive(Debug, Parser)]
@@ -26,6 +24,10 @@ pub struct Cli {
 pub enum Command {
     /// Read and check a scenario file; print its derived geometry (hull, rail, grid).
     Validate(Common),
+    /// The model's lift-off thrust of one adjacent candidate pair for a given COM and mass.
+    Lift(commands::lift::LiftArgs),
+    /// Monte Carlo of the estimation: random (or given) truths, noisy model readings.
+    Estimate(commands::estimate::EstimateArgs),
 }
 
 /// Options every command takes.
@@ -56,57 +58,40 @@ where
 {
     let cli = Cli::try_parse_from(args).map_err(CliError::Usage)?;
     match cli.command {
-        Command::Validate(common) => validate(&common).map_err(CliError::Failed),
+        Command::Validate(common) => commands::validate::run(&common),
+        Command::Lift(args) => commands::lift::run(&args),
+        Command::Estimate(args) => commands::estimate::run(&args),
     }
+    .map_err(CliError::Failed)
 }
 
-fn validate(common: &Common) -> Result<()> {
-    let loaded = scenario_file::load(&common.scenario)?;
-    let report = validate_report(&loaded);
-    if common.json {
-        println!("{report}");
-    } else {
-        let s = &loaded.scenario;
-        println!(
-            "scenario {} ({}): valid",
-            loaded.name,
-            loaded.path.display()
-        );
-        println!(
-            "  footprint {} vertices, hull {} vertices; rail {:.3} m; {} candidates",
-            s.payload.footprint.len(),
-            s.payload.hull.vertices().len(),
-            s.payload.rail.perimeter(),
-            s.payload.candidates.len()
-        );
-        println!(
-            "  {} robots, lifting {} at a time; grid {} x {} x {} = {} points",
-            s.robots.count(),
-            s.robots.pair_size,
-            s.estimation.axis_len(0),
-            s.estimation.axis_len(1),
-            s.estimation.axis_len(2),
-            s.estimation.grid_points()
-        );
+/// Parses `N` comma-separated numbers, as in `--com 0.3,0.01`.
+pub fn parse_list<const N: usize>(text: &str) -> Result<[f64; N], String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    if parts.len() != N {
+        return Err(format!(
+            "expected {N} comma-separated numbers, got `{text}`"
+        ));
     }
-    Ok(())
+    let mut out = [0.0; N];
+    for (slot, part) in out.iter_mut().zip(parts) {
+        let v: f64 = part
+            .parse()
+            .map_err(|_| format!("`{part}` is not a number"))?;
+        if !v.is_finite() {
+            return Err(format!("`{part}` is not a finite number"));
+        }
+        *slot = v;
+    }
+    Ok(out)
 }
 
-fn validate_report(loaded: &LoadedScenario) -> serde_json::Value {
-    let s = &loaded.scenario;
-    let xy = |p: shared::geometry::Vec2| [p.x, p.y];
-    let grid_shape = [0, 1, 2].map(|a| s.estimation.axis_len(a));
-    json!({
-        "name": loaded.name,
-        "valid": true,
-        "hull": s.payload.hull.vertices().iter().map(|&p| xy(p)).collect::<Vec<_>>(),
-        "rail_length": s.payload.rail.perimeter(),
-        "candidates": s.payload.candidates.iter()
-            .map(|&c| json!({"arc_length": c, "point": xy(s.payload.rail.point_at(c))}))
-            .collect::<Vec<_>>(),
-        "robots": s.robots.count(),
-        "pair_size": s.robots.pair_size,
-        "grid_shape": grid_shape,
-        "grid_points": s.estimation.grid_points(),
-    })
+/// Clap value parser for two numbers.
+pub fn pair(text: &str) -> Result<[f64; 2], String> {
+    parse_list::<2>(text)
+}
+
+/// Clap value parser for three numbers.
+pub fn triple(text: &str) -> Result<[f64; 3], String> {
+    parse_list::<3>(text)
 }

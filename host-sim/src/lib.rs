@@ -4,4 +4,6 @@
 //! No algorithm lives here: everything the vehicle decides is computed by `shared`.
 
 pub mod cli;
+pub mod commands;
+pub mod monte_carlo;
 pub mod scenario_file;

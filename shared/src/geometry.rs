@@ -123,6 +123,8 @@ impl core::fmt::Display for PolygonError {
     }
 }
 
+impl core::error::Error for PolygonError {}
+
 /// The signed area of a closed polygon (shoelace; positive when counter-clockwise).
 pub fn signed_area(vertices: &[Vec2]) -> f32 {
     let n = vertices.len();

@@ -361,6 +361,8 @@ impl core::fmt::Display for ScenarioError {
     }
 }
 
+impl core::error::Error for ScenarioError {}
+
 fn fail<T>(key: &'static str, problem: Problem) -> Result<T, ScenarioError> {
     Err(ScenarioError { key, problem })
 }

@@ -11,7 +11,7 @@ use crate::estimation::grid::{Grid, GridError, ThrustScaleAxis};
 use crate::estimation::groups::{group_count, lift_group};
 use crate::estimation::information::{InformationScratch, mutual_information};
 use crate::estimation::likelihood::{LiftLikelihood, Measurement};
-use crate::estimation::posterior::{Concentration, Posterior, concentration};
+use crate::estimation::posterior::{CellModel, Concentration, Posterior, concentration};
 use crate::geometry::{ConvexHull, Vec2};
 use crate::scenario::{MAX_CANDIDATES, MAX_GRID_POINTS, Scenario};
 use crate::statics::lift_fraction;
@@ -52,6 +52,8 @@ impl core::fmt::Display for EstimationError {
         }
     }
 }
+
+impl core::error::Error for EstimationError {}
 
 /// Where the estimation stands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -243,14 +245,18 @@ impl Estimator {
                 return Err(EstimationError::BadReading);
             }
         }
-        self.fill_fractions(group)?;
-        self.posterior.update(
-            &self.grid,
-            &self.fractions,
-            self.robot_mass,
-            &self.likelihood,
-            measurement,
-        );
+        let g = *self
+            .groups
+            .get(group)
+            .ok_or(EstimationError::UnknownGroup(group))?;
+        let cell = CellModel {
+            hull: &self.hull,
+            centroid: g.centroid,
+            size: g.size,
+            robot_mass: self.robot_mass,
+        };
+        self.posterior
+            .update(&self.grid, &cell, &self.likelihood, measurement);
         self.measurements += 1;
         self.summarise();
         Ok(self.status())
@@ -379,7 +385,7 @@ mod tests {
         }
         let ln = e.posterior().ln_values();
         assert!(ln.iter().all(|v| !v.is_nan()));
-        assert!(ln.iter().any(|v| *v == 0.0), "renormalised to a max of 0");
+        assert!(ln.contains(&0.0), "renormalised to a max of 0");
         assert!(e.estimate().confidence.is_finite());
     }
 

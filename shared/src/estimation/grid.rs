@@ -66,6 +66,8 @@ impl core::fmt::Display for GridError {
     }
 }
 
+impl core::error::Error for GridError {}
+
 /// The grid's axes and index arithmetic.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Grid {

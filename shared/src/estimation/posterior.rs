@@ -8,15 +8,41 @@ use heapless::Vec;
 
 use crate::estimation::grid::Grid;
 use crate::estimation::likelihood::{LiftLikelihood, Measurement};
-use crate::geometry::ConvexHull;
+use crate::geometry::{ConvexHull, Vec2};
 use crate::math;
 use crate::scenario::MAX_GRID_POINTS;
-use crate::statics::thrust_from_fraction;
+use crate::statics::{lift_fraction, thrust_from_fraction};
 
 /// Predicted lift-off reading at grid point (COM with share `fraction`, mass `im`, scale `is`):
 /// the thrust the flight controller believes it applies, `s * (m_r g + M g f)`.
 pub fn predicted_reading(grid: &Grid, fraction: f32, im: usize, is: usize, robot_mass: f32) -> f32 {
     grid.scale(is) * thrust_from_fraction(fraction, grid.mass(im), robot_mass)
+}
+
+/// Sub-point offsets within a cell, in resolutions.
+const SUB_OFFSETS: [f32; 3] = [-1.0 / 3.0, 0.0, 1.0 / 3.0];
+
+/// `ln(mean(exp(terms)))` without overflow or underflow.
+fn ln_mean_exp(terms: &[f32]) -> f32 {
+    let top = terms.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    if !top.is_finite() {
+        return top;
+    }
+    let sum: f32 = terms.iter().map(|&t| math::exp(t - top)).sum();
+    top + math::ln(sum / terms.len() as f32)
+}
+
+/// The lifting group and robots a reading came from, as the cell likelihood needs them.
+#[derive(Clone, Copy, Debug)]
+pub struct CellModel<'a> {
+    /// The footprint's convex hull.
+    pub hull: &'a ConvexHull,
+    /// Centroid of the group's rotor points.
+    pub centroid: Vec2,
+    /// Robots in the group.
+    pub size: usize,
+    /// Mass of one robot, kg.
+    pub robot_mass: f32,
 }
 
 /// Unnormalised log posterior on every grid point.
@@ -48,27 +74,62 @@ impl Posterior {
         &self.ln_p
     }
 
-    /// Bayes update with one measurement of a group whose geometric share at COM point `c` is
-    /// `fractions[c]`.
+    /// Bayes update with one reading of the group `cell.group`.
+    ///
+    /// Each grid point stands for its cell (`+-res/2` on every theta axis): its likelihood is
+    /// the reading's likelihood averaged over the cell, by `3 x 3 x 3` sub-points at
+    /// `-res/3, 0, +res/3` combined in the log domain. A truth between grid points then
+    /// weighs its neighbouring cells as it should, where a point likelihood would lock onto
+    /// whichever point predicts nearest (neighbouring points' predictions differ by about
+    /// `sigma` on the paper's grids, so the point posterior is overconfident).
     pub fn update(
         &mut self,
         grid: &Grid,
-        fractions: &[f32],
-        robot_mass: f32,
+        cell: &CellModel<'_>,
         likelihood: &LiftLikelihood,
         measurement: Measurement,
     ) {
         let (nm, ns) = (grid.shape()[2], grid.scale_len());
+        let res = grid.resolution();
         let mut top = f32::NEG_INFINITY;
-        for (c, &fraction) in fractions.iter().enumerate().take(grid.com_len()) {
+        for c in 0..grid.com_len() {
+            let block = c * nm * ns..(c + 1) * nm * ns;
+            if self.ln_p[block.clone()]
+                .iter()
+                .all(|v| *v == f32::NEG_INFINITY)
+            {
+                continue;
+            }
+            // Shares of the COM sub-points that lie in the hull.
+            let centre = grid.com(c);
+            let mut shares: Vec<f32, 9> = Vec::new();
+            for dx in SUB_OFFSETS {
+                for dy in SUB_OFFSETS {
+                    let com = Vec2::new(centre.x + dx * res[0], centre.y + dy * res[1]);
+                    if let Some(f) = lift_fraction(cell.hull, com, cell.centroid, cell.size) {
+                        let _ = shares.push(f);
+                    }
+                }
+            }
+            if shares.is_empty() {
+                continue;
+            }
             for im in 0..nm {
                 for is in 0..ns {
                     let i = (c * nm + im) * ns + is;
                     if self.ln_p[i] == f32::NEG_INFINITY {
                         continue;
                     }
-                    let predicted = predicted_reading(grid, fraction, im, is, robot_mass);
-                    self.ln_p[i] += likelihood.ln_likelihood(measurement, predicted);
+                    let scale = grid.scale(is);
+                    let mut terms: Vec<f32, 27> = Vec::new();
+                    for &f in &shares {
+                        for dm in SUB_OFFSETS {
+                            let mass = grid.mass(im) + dm * res[2];
+                            let predicted = scale * thrust_from_fraction(f, mass, cell.robot_mass);
+                            let _ = terms.push(likelihood.ln_likelihood(measurement, predicted));
+                        }
+                    }
+                    self.ln_p[i] += ln_mean_exp(&terms);
                     top = top.max(self.ln_p[i]);
                 }
             }

@@ -1,0 +1,90 @@
+//! `host-sim lift --pair I --com X,Y --mass M`: the lift-off thrust model of `shared::statics`
+//! for adjacent candidate pair `I` (candidates `I` and `I+1`, wrapping).
+
+use anyhow::{Result, bail};
+use clap::Args;
+use serde_json::json;
+use shared::estimation::groups::{group_count, lift_group};
+use shared::geometry::Vec2;
+use shared::statics::lift_off_thrust;
+
+use crate::cli::{Common, pair};
+use crate::scenario_file;
+
+/// Arguments of `lift`.
+#[derive(Debug, Args)]
+pub struct LiftArgs {
+    #[command(flatten)]
+    common: Common,
+    /// Index of the pair: candidates I and I+1 (wrapping).
+    #[arg(long = "pair", value_name = "I")]
+    pair_index: usize,
+    /// Centre of mass X,Y in the body frame, m (negative: --com=-0.2,0.1).
+    #[arg(long, value_name = "X,Y", value_parser = pair, allow_hyphen_values = true)]
+    com: [f64; 2],
+    /// Payload mass, kg.
+    #[arg(long, value_name = "M")]
+    mass: f64,
+}
+
+/// Runs the command.
+pub fn run(args: &LiftArgs) -> Result<()> {
+    let loaded = scenario_file::load(&args.common.scenario)?;
+    let s = &loaded.scenario;
+    let count = group_count(s);
+    let Some(group) = lift_group(s, args.pair_index) else {
+        bail!(
+            "--pair {}: the scenario has {count} pairs (0 to {})",
+            args.pair_index,
+            count.saturating_sub(1)
+        );
+    };
+    if !(args.mass.is_finite() && args.mass > 0.0) {
+        bail!("--mass {}: must be a positive number of kg", args.mass);
+    }
+    let com = Vec2::new(args.com[0] as f32, args.com[1] as f32);
+    let Some(thrust) = lift_off_thrust(
+        &s.payload.hull,
+        com,
+        args.mass as f32,
+        &group.rotor_points,
+        s.robots.mass,
+    ) else {
+        bail!(
+            "--com {},{}: lies outside the footprint's convex hull",
+            args.com[0],
+            args.com[1]
+        );
+    };
+    let feasible = thrust <= s.robots.max_thrust;
+    if args.common.json {
+        let report = json!({
+            "pair": args.pair_index,
+            "candidates": group.candidates.iter().map(|&c| s.payload.candidates[c]).collect::<Vec<_>>(),
+            "rotor_points": group.rotor_points.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>(),
+            "thrust": thrust,
+            "feasible": feasible,
+            "max_thrust": s.robots.max_thrust,
+            "reachable": group.reachable,
+        });
+        println!("{report}");
+    } else {
+        println!(
+            "pair {} (candidates {:?}): lift-off at {thrust:.3} N per robot ({} at max {} N){}",
+            args.pair_index,
+            group
+                .candidates
+                .iter()
+                .map(|&c| s.payload.candidates[c])
+                .collect::<Vec<_>>(),
+            if feasible { "feasible" } else { "NOT feasible" },
+            s.robots.max_thrust,
+            if group.reachable {
+                ""
+            } else {
+                "; robots cannot stand there (min_spacing)"
+            }
+        );
+    }
+    Ok(())
+}

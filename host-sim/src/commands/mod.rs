@@ -1,0 +1,5 @@
+//! One module per `host-sim` command: argument types, the run, and its report.
+
+pub mod estimate;
+pub mod lift;
+pub mod validate;
