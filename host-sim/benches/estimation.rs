@@ -21,7 +21,11 @@ fn load(name: &str) -> shared::scenario::Scenario {
 fn selection(c: &mut Criterion) {
     for (name, label, scale) in [
         ("L-sim1", "L-shape", None),
-        ("L-sim1", "L-shape with bias term", Some(ThrustScaleAxis::DEFAULT)),
+        (
+            "L-sim1",
+            "L-shape with bias term",
+            Some(ThrustScaleAxis::DEFAULT),
+        ),
         ("rect-sim1", "rectangle", None),
     ] {
         let scenario = load(name);
