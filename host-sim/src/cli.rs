@@ -28,6 +28,8 @@ pub enum Command {
     Lift(commands::lift::LiftArgs),
     /// Monte Carlo of the estimation: random (or given) truths, noisy model readings.
     Estimate(commands::estimate::EstimateArgs),
+    /// The formation that maximises det(B B^T), balanced about the COM, beside the even one.
+    Formation(commands::formation::FormationArgs),
 }
 
 /// Options every command takes.
@@ -61,6 +63,7 @@ where
         Command::Validate(common) => commands::validate::run(&common),
         Command::Lift(args) => commands::lift::run(&args),
         Command::Estimate(args) => commands::estimate::run(&args),
+        Command::Formation(args) => commands::formation::run(&args),
     }
     .map_err(CliError::Failed)
 }

@@ -355,12 +355,39 @@ impl Rail {
         self.wrap(to - from)
     }
 
+    /// Number of straight segments (as many as vertices: the rail is closed).
+    pub fn segment_count(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// Index of the segment holding arc length `s` (wrapped); a vertex belongs to the segment
+    /// that starts there.
+    pub fn segment_at(&self, s: f32) -> usize {
+        let s = self.wrap(s);
+        // n is small: a linear scan is fine.
+        (0..self.vertices.len())
+            .rev()
+            .find(|&i| self.cumulative[i] <= s)
+            .unwrap_or(0)
+    }
+
+    /// Arc lengths where segment `i` starts and ends (`end` may equal the perimeter).
+    pub fn segment_span(&self, i: usize) -> (f32, f32) {
+        (self.cumulative[i], self.cumulative[i + 1])
+    }
+
+    /// Unit direction of segment `i`, in the rail's direction.
+    pub fn segment_direction(&self, i: usize) -> Vec2 {
+        let n = self.vertices.len();
+        let d = self.vertices[(i + 1) % n] - self.vertices[i];
+        d * (1.0 / d.norm())
+    }
+
     /// The point at arc length `s` (wrapped onto the rail).
     pub fn point_at(&self, s: f32) -> Vec2 {
         let s = self.wrap(s);
         let n = self.vertices.len();
-        // The segment whose arc-length span holds s (n is small: a linear scan is fine).
-        let i = (0..n).rev().find(|&i| self.cumulative[i] <= s).unwrap_or(0);
+        let i = self.segment_at(s);
         let (a, b) = (self.vertices[i], self.vertices[(i + 1) % n]);
         let length = self.cumulative[i + 1] - self.cumulative[i];
         let f = if length > 0.0 {

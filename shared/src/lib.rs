@@ -10,9 +10,14 @@
 #![no_std]
 #![deny(missing_docs)]
 
+// Tests may print and format; the library itself never uses std.
+#[cfg(test)]
+extern crate std;
+
 pub mod estimation;
 #[cfg(test)]
 pub(crate) mod fixtures;
+pub mod formation;
 pub mod geometry;
 pub mod math;
 pub mod scenario;

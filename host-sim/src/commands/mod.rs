@@ -1,5 +1,6 @@
 //! One module per `host-sim` command: argument types, the run, and its report.
 
 pub mod estimate;
+pub mod formation;
 pub mod lift;
 pub mod validate;

@@ -1,0 +1,146 @@
+//! `host-sim formation [--com X,Y] [--mass M]`: the formation decision of `shared::formation`
+//! for a COM and mass (default: the scenario's truth), beside the even formation it replaces.
+
+use std::time::Instant;
+
+use anyhow::{Result, anyhow, bail};
+use clap::Args;
+use serde_json::json;
+use shared::formation::{Formation, FormationFigures, FormationProblem, figures, solve};
+use shared::geometry::{Rail, Vec2};
+use shared::scenario::GRAVITY;
+
+use crate::cli::{Common, pair};
+use crate::scenario_file;
+
+/// Arguments of `formation`.
+#[derive(Debug, Args)]
+pub struct FormationArgs {
+    #[command(flatten)]
+    common: Common,
+    /// Estimated centre of mass X,Y, m (default: the scenario's truth).
+    #[arg(long, value_name = "X,Y", value_parser = pair, allow_hyphen_values = true)]
+    com: Option<[f64; 2]>,
+    /// Estimated payload mass, kg (default: the scenario's truth).
+    #[arg(long, value_name = "M")]
+    mass: Option<f64>,
+}
+
+/// Runs the command.
+pub fn run(args: &FormationArgs) -> Result<()> {
+    let loaded = scenario_file::load(&args.common.scenario)?;
+    let s = &loaded.scenario;
+    let com = match (args.com, s.truth) {
+        (Some(c), _) => Vec2::new(c[0] as f32, c[1] as f32),
+        (None, Some(t)) => t.com,
+        (None, None) => bail!("--com: the scenario has no [truth]; give the COM"),
+    };
+    if !s.payload.hull.contains(com, 0.0) {
+        bail!(
+            "--com {},{}: lies outside the footprint's convex hull",
+            com.x,
+            com.y
+        );
+    }
+    let mass = match (args.mass, s.truth) {
+        (Some(m), _) => m as f32,
+        (None, Some(t)) => t.mass,
+        (None, None) => bail!("--mass: the scenario has no [truth]; give the mass"),
+    };
+    if !(mass.is_finite() && mass > 0.0) {
+        bail!("--mass {mass}: must be a positive number of kg");
+    }
+    let problem = FormationProblem {
+        rail: &s.payload.rail,
+        spin: &s.robots.spin,
+        min_spacing: s.robots.min_spacing,
+        com,
+        torque_per_thrust: s.robots.torque_per_thrust,
+        balance_eps: s.formation.balance_eps,
+        current: Some(&s.robots.initial),
+    };
+    let started = Instant::now();
+    let formation =
+        solve(&problem).map_err(|e| anyhow!("{}: formation: {e}", loaded.path.display()))?;
+    let solve_ms = started.elapsed().as_secs_f64() * 1e3;
+    let even = figures(
+        &s.payload.rail,
+        &s.robots.initial,
+        &s.robots.spin,
+        com,
+        s.robots.torque_per_thrust,
+    );
+    let count = s.robots.count() as f32;
+    let hover_fraction = (mass + count * s.robots.mass) * GRAVITY / (count * s.robots.max_thrust);
+    if args.common.json {
+        let report = json!({
+            "positions": formation.positions.as_slice(),
+            "points": points(&s.payload.rail, &formation.positions),
+            "det": formation.figures.det,
+            "balance": formation.figures.balance,
+            "min_gap": formation.figures.min_gap,
+            "solve_ms": solve_ms,
+            "com": [com.x, com.y],
+            "mass": mass,
+            "hover_thrust_fraction": hover_fraction,
+            "seeds_balanced": formation.seeds_balanced,
+            "sweeps": formation.sweeps,
+            "even": {
+                "positions": s.robots.initial.as_slice(),
+                "points": points(&s.payload.rail, &s.robots.initial),
+                "det": even.det,
+                "balance": even.balance,
+                "min_gap": even.min_gap,
+            },
+        });
+        println!("{report}");
+    } else {
+        print_human(
+            &loaded.name,
+            com,
+            &formation,
+            &even,
+            solve_ms,
+            hover_fraction,
+        );
+    }
+    Ok(())
+}
+
+fn points(rail: &Rail, positions: &[f32]) -> Vec<[f32; 2]> {
+    positions
+        .iter()
+        .map(|&p| {
+            let q = rail.point_at(p);
+            [q.x, q.y]
+        })
+        .collect()
+}
+
+fn print_human(
+    name: &str,
+    com: Vec2,
+    f: &Formation,
+    even: &FormationFigures,
+    solve_ms: f64,
+    hover_fraction: f32,
+) {
+    println!(
+        "{name}: formation for COM ({:.3}, {:.3}), solved in {solve_ms:.2} ms",
+        com.x, com.y
+    );
+    let list: Vec<String> = f.positions.iter().map(|p| format!("{p:.3}")).collect();
+    println!("  positions (m along the rail): {}", list.join(", "));
+    println!(
+        "  optimised: det(BB^T) {:.4e}, balance [{:.1e}, {:.1e}] m, smallest gap {:.3} m",
+        f.figures.det, f.figures.balance[0], f.figures.balance[1], f.figures.min_gap
+    );
+    println!(
+        "  even:      det(BB^T) {:.4e}, balance [{:.3}, {:.3}] m, smallest gap {:.3} m",
+        even.det, even.balance[0], even.balance[1], even.min_gap
+    );
+    println!(
+        "  hover thrust: {:.0} % of the rotors' maximum",
+        100.0 * hover_fraction
+    );
+}
