@@ -135,6 +135,53 @@ pub fn signed_area(vertices: &[Vec2]) -> f32 {
     0.5 * twice
 }
 
+/// Area moments of a simple polygon about its centroid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaMoments {
+    /// Enclosed area, m^2.
+    pub area: f32,
+    /// Centroid.
+    pub centroid: Vec2,
+    /// `integral of (x - cx)^2 dA`, m^4.
+    pub xx: f32,
+    /// `integral of (y - cy)^2 dA`, m^4.
+    pub yy: f32,
+}
+
+/// Area, centroid and second moments of a simple polygon (either orientation).
+pub fn area_moments(vertices: &[Vec2]) -> AreaMoments {
+    let n = vertices.len();
+    let (mut a2, mut cx, mut cy, mut xx, mut yy) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+    for i in 0..n {
+        let (p, q) = (vertices[i], vertices[(i + 1) % n]);
+        let c = p.cross(q);
+        a2 += c;
+        cx += (p.x + q.x) * c;
+        cy += (p.y + q.y) * c;
+        xx += c * (p.x * p.x + p.x * q.x + q.x * q.x);
+        yy += c * (p.y * p.y + p.y * q.y + q.y * q.y);
+    }
+    if a2.abs() < 1e-12 {
+        return AreaMoments {
+            area: 0.0,
+            centroid: vertices.first().copied().unwrap_or_default(),
+            xx: 0.0,
+            yy: 0.0,
+        };
+    }
+    let area = 0.5 * a2;
+    let centroid = Vec2::new(cx / (3.0 * a2), cy / (3.0 * a2));
+    // Moments about the origin carry the orientation's sign, like the area.
+    let (xx0, yy0) = (xx / 12.0 / area.signum(), yy / 12.0 / area.signum());
+    let area = area.abs();
+    AreaMoments {
+        area,
+        centroid,
+        xx: xx0 - area * centroid.x * centroid.x,
+        yy: yy0 - area * centroid.y * centroid.y,
+    }
+}
+
 /// Checks that `vertices` form a simple closed polygon: at least three finite vertices, no
 /// zero-length edge, no two edges meeting except neighbours at their shared vertex, and a
 /// non-zero area.
@@ -427,6 +474,20 @@ mod tests {
         // The inner corner's notch is inside the hull, a point beyond the diagonal is not.
         assert!(hull.contains(Vec2::new(0.35, 0.35), 0.0));
         assert!(!hull.contains(Vec2::new(0.45, 0.45), 0.0));
+    }
+
+    #[test]
+    fn rectangle_moments_by_hand() {
+        let rect = pts(&[[-0.88, -0.1], [0.88, -0.1], [0.88, 0.1], [-0.88, 0.1]]);
+        let m = area_moments(&rect);
+        assert!((m.area - 0.352).abs() < 1e-6);
+        assert!(m.centroid.norm() < 1e-6);
+        // b h^3 / 12 about each axis.
+        assert!((m.xx - 0.2 * 1.76f32.powi(3) / 12.0).abs() < 1e-5, "{m:?}");
+        assert!((m.yy - 1.76 * 0.2f32.powi(3) / 12.0).abs() < 1e-6, "{m:?}");
+        let mut reversed = rect.clone();
+        reversed.reverse();
+        assert_eq!(area_moments(&reversed).area, m.area);
     }
 
     #[test]

@@ -14,6 +14,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod control;
 pub mod estimation;
 #[cfg(test)]
 pub(crate) mod fixtures;

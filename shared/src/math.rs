@@ -58,6 +58,18 @@ pub fn cos(x: f32) -> f32 {
     libm::cosf(x)
 }
 
+/// Arc sine (radians), argument clamped to `[-1, 1]`.
+#[inline]
+pub fn asin(x: f32) -> f32 {
+    libm::asinf(x.clamp(-1.0, 1.0))
+}
+
+/// Arc cosine (radians), argument clamped to `[-1, 1]`.
+#[inline]
+pub fn acos(x: f32) -> f32 {
+    libm::acosf(x.clamp(-1.0, 1.0))
+}
+
 /// Four-quadrant arc tangent of `y / x` (radians).
 #[inline]
 pub fn atan2(y: f32, x: f32) -> f32 {

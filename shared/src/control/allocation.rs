@@ -1,0 +1,451 @@
+//! Control allocation: from the commanded wrench (collective thrust, roll, pitch, yaw torque)
+//! to one thrust per rotor (SPEC.md section 3, "Controllability and the mixer"; section 2,
+//! step 4: the mixer is rebuilt from the robots' positions).
+//!
+//! Rotor `i` at `r_i = (x_i, y_i)` from the estimated COM (body FRD), spin `s_i`, thrust `T_i`
+//! upwards produces roll torque `-y_i T_i`, pitch torque `x_i T_i` and yaw torque
+//! `s_i c_q T_i`. The effectiveness matrix `A` (4 x n) stacks `[1; -y_i; x_i; s_i c_q]`.
+//!
+//! Two mixers, built whenever the formation changes (never in the control step):
+//! - [`MixerKind::EqualSplit`], the paper's: the collective thrust split equally, the torques
+//!   through `B^+ = B^T (B B^T)^-1` of the torque rows `B` of `A`.
+//! - [`MixerKind::Allocation`]: the pseudo-inverse `A^T (A A^T)^-1` of the whole matrix, so each
+//!   rotor carries its own trim when the COM is off the robots' centroid.
+//!
+//! Saturation: thrusts stay within `[0, max_thrust]`. Roll, pitch and collective are fitted
+//! first (the collective moves along its own column to make room; roll and pitch are scaled
+//! down only if that is not enough), and yaw gets what room is left, so yaw is given up first.
+//! The caller is told which axes were cut.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::control::vector::Vec3;
+use crate::geometry::Vec2;
+use crate::scenario::MAX_ROBOTS;
+
+/// Which mixer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MixerKind {
+    /// The paper's mixer: equal collective split, torques through `B^+`.
+    EqualSplit,
+    /// Pseudo-inverse of the full effectiveness matrix.
+    Allocation,
+}
+
+/// Collective thrust and body torque.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Wrench {
+    /// Collective thrust, upwards, N.
+    pub thrust: f32,
+    /// Body torque (roll, pitch, yaw), N m.
+    pub torque: Vec3,
+}
+
+/// Which parts of a wrench the rotors could not deliver.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Saturation {
+    /// The collective thrust was moved to make room.
+    pub collective: bool,
+    /// Roll and pitch torque were cut.
+    pub roll_pitch: bool,
+    /// Yaw torque was cut.
+    pub yaw: bool,
+}
+
+impl Saturation {
+    /// True when anything was cut.
+    pub fn any(&self) -> bool {
+        self.collective || self.roll_pitch || self.yaw
+    }
+}
+
+/// One allocation's result.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Allocation {
+    /// Thrust of each rotor, N (the first `count` entries are used).
+    pub thrusts: [f32; MAX_ROBOTS],
+    /// Rotors.
+    pub count: usize,
+    /// The wrench those thrusts produce.
+    pub achieved: Wrench,
+    /// What was cut.
+    pub saturation: Saturation,
+}
+
+/// The rotors as the mixer needs them.
+#[derive(Clone, Copy, Debug)]
+pub struct RotorLayout<'a> {
+    /// Rotor points, body frame, m.
+    pub points: &'a [Vec2],
+    /// Spin of each rotor (+1 or -1).
+    pub spin: &'a [i8],
+    /// Estimated COM: the origin of the torques.
+    pub com: Vec2,
+    /// `c_q / c_t`, m.
+    pub torque_per_thrust: f32,
+    /// Largest thrust of one rotor, N.
+    pub max_thrust: f32,
+}
+
+/// Why a mixer cannot be built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AllocationError {
+    /// No rotors, more than [`MAX_ROBOTS`], or spins not matching the rotors.
+    BadLayout,
+    /// The rotors cannot produce every axis of the wrench (for example all on one line).
+    Uncontrollable,
+}
+
+impl core::fmt::Display for AllocationError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::BadLayout => write!(f, "rotor layout needs 1 to 16 rotors with a spin each"),
+            Self::Uncontrollable => write!(
+                f,
+                "the rotors cannot produce every axis of roll, pitch, yaw and thrust"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for AllocationError {}
+
+type Effectiveness = SMatrix<f32, 4, MAX_ROBOTS>;
+type Mixing = SMatrix<f32, MAX_ROBOTS, 4>;
+
+/// A mixer for one formation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mixer {
+    kind: MixerKind,
+    count: usize,
+    max_thrust: f32,
+    effectiveness: Effectiveness,
+    mixing: Mixing,
+}
+
+impl Mixer {
+    /// Builds the mixer of `kind` for `layout` (a matrix inverse: do it when the formation
+    /// changes, not in the control step).
+    pub fn build(kind: MixerKind, layout: &RotorLayout<'_>) -> Result<Self, AllocationError> {
+        let count = layout.points.len();
+        if count == 0 || count > MAX_ROBOTS || layout.spin.len() != count {
+            return Err(AllocationError::BadLayout);
+        }
+        let mut a = Effectiveness::zeros();
+        for (i, (&p, &s)) in layout.points.iter().zip(layout.spin).enumerate() {
+            let r = p - layout.com;
+            a[(0, i)] = 1.0;
+            a[(1, i)] = -r.y;
+            a[(2, i)] = r.x;
+            a[(3, i)] = f32::from(s) * layout.torque_per_thrust;
+        }
+        let mut mixing = Mixing::zeros();
+        match kind {
+            MixerKind::Allocation => {
+                let inverse = (a * a.transpose())
+                    .try_inverse()
+                    .ok_or(AllocationError::Uncontrollable)?;
+                mixing = a.transpose() * inverse;
+            }
+            MixerKind::EqualSplit => {
+                let b: SMatrix<f32, 3, MAX_ROBOTS> = a.fixed_rows::<3>(1).into_owned();
+                let inverse = (b * b.transpose())
+                    .try_inverse()
+                    .ok_or(AllocationError::Uncontrollable)?;
+                let torque_columns = b.transpose() * inverse;
+                for i in 0..count {
+                    mixing[(i, 0)] = 1.0 / count as f32;
+                    for axis in 0..3 {
+                        mixing[(i, axis + 1)] = torque_columns[(i, axis)];
+                    }
+                }
+            }
+        }
+        if mixing.iter().any(|v| !v.is_finite()) {
+            return Err(AllocationError::Uncontrollable);
+        }
+        Ok(Self {
+            kind,
+            count,
+            max_thrust: layout.max_thrust,
+            effectiveness: a,
+            mixing,
+        })
+    }
+
+    /// The mixer's kind.
+    pub fn kind(&self) -> MixerKind {
+        self.kind
+    }
+
+    /// Number of rotors.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// The wrench that rotor thrusts `thrusts` produce.
+    pub fn wrench_of(&self, thrusts: &[f32]) -> Wrench {
+        let mut u = SVector::<f32, MAX_ROBOTS>::zeros();
+        for (slot, &t) in u.iter_mut().zip(thrusts.iter().take(self.count)) {
+            *slot = t;
+        }
+        let w = self.effectiveness * u;
+        Wrench {
+            thrust: w[0],
+            torque: Vec3::new(w[1], w[2], w[3]),
+        }
+    }
+
+    fn column(&self, axis: usize) -> [f32; MAX_ROBOTS] {
+        let mut c = [0.0; MAX_ROBOTS];
+        for (i, slot) in c.iter_mut().enumerate().take(self.count) {
+            *slot = self.mixing[(i, axis)];
+        }
+        c
+    }
+
+    /// Interval of `k` keeping `base + k * dir` within `[0, max]` on every rotor.
+    fn room(&self, base: &[f32; MAX_ROBOTS], dir: &[f32; MAX_ROBOTS]) -> Option<(f32, f32)> {
+        let (mut lo, mut hi) = (f32::NEG_INFINITY, f32::INFINITY);
+        for i in 0..self.count {
+            let (b, d) = (base[i], dir[i]);
+            if d.abs() < 1e-9 {
+                if b < -1e-6 || b > self.max_thrust + 1e-6 {
+                    return None;
+                }
+                continue;
+            }
+            let (k0, k1) = ((0.0 - b) / d, (self.max_thrust - b) / d);
+            lo = lo.max(k0.min(k1));
+            hi = hi.min(k0.max(k1));
+        }
+        (lo <= hi).then_some((lo, hi))
+    }
+
+    /// Rotor thrusts for `wrench`, within limits, yaw given up first.
+    pub fn allocate(&self, wrench: &Wrench) -> Allocation {
+        let n = self.count;
+        let (collective, roll, pitch, yaw) = (
+            self.column(0),
+            self.column(1),
+            self.column(2),
+            self.column(3),
+        );
+        let mut thrust_part = [0.0f32; MAX_ROBOTS];
+        let mut tilt_part = [0.0f32; MAX_ROBOTS];
+        let mut yaw_part = [0.0f32; MAX_ROBOTS];
+        for i in 0..n {
+            thrust_part[i] = collective[i] * wrench.thrust;
+            tilt_part[i] = roll[i] * wrench.torque.x + pitch[i] * wrench.torque.y;
+            yaw_part[i] = yaw[i] * wrench.torque.z;
+        }
+        let mut saturation = Saturation::default();
+        let combine = |scale: f32| {
+            let mut base = [0.0f32; MAX_ROBOTS];
+            for i in 0..n {
+                base[i] = thrust_part[i] + scale * tilt_part[i];
+            }
+            base
+        };
+        // Roll, pitch and collective: shift the collective along its column if needed; if no
+        // shift fits, scale roll and pitch down until one does.
+        let mut base = combine(1.0);
+        let mut room = self.room(&base, &collective);
+        if room.is_none() {
+            saturation.roll_pitch = true;
+            let (mut ok, mut bad) = (0.0f32, 1.0f32);
+            if self.room(&combine(0.0), &collective).is_some() {
+                for _ in 0..20 {
+                    let mid = 0.5 * (ok + bad);
+                    if self.room(&combine(mid), &collective).is_some() {
+                        ok = mid
+                    } else {
+                        bad = mid
+                    }
+                }
+            }
+            base = combine(ok);
+            room = self.room(&base, &collective);
+        }
+        let mut thrusts = [0.0f32; MAX_ROBOTS];
+        match room {
+            Some((lo, hi)) => {
+                let shift = 0.0f32.clamp(lo, hi);
+                saturation.collective = shift != 0.0;
+                for i in 0..n {
+                    thrusts[i] = base[i] + shift * collective[i];
+                }
+                // Yaw last: as much of it as the room left allows.
+                let fit = self
+                    .room(&thrusts, &yaw_part)
+                    .map_or(0.0, |(_, hi)| hi.clamp(0.0, 1.0));
+                saturation.yaw = fit < 1.0 && yaw_part[..n].iter().any(|v| v.abs() > 1e-9);
+                for i in 0..n {
+                    thrusts[i] += fit * yaw_part[i];
+                }
+            }
+            None => {
+                // Not even the collective alone fits: clip every rotor.
+                saturation = Saturation {
+                    collective: true,
+                    roll_pitch: true,
+                    yaw: true,
+                };
+                thrusts[..n].copy_from_slice(&thrust_part[..n]);
+            }
+        }
+        for t in thrusts.iter_mut().take(n) {
+            *t = t.clamp(0.0, self.max_thrust);
+        }
+        Allocation {
+            thrusts,
+            count: n,
+            achieved: self.wrench_of(&thrusts[..n]),
+            saturation,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The paper's rectangle with 8 robots in a balanced formation about an offset COM.
+    fn layout_points() -> [Vec2; 8] {
+        [
+            Vec2::new(-0.6, -0.22),
+            Vec2::new(0.1, -0.22),
+            Vec2::new(0.7, -0.22),
+            Vec2::new(1.0, 0.05),
+            Vec2::new(0.8, 0.22),
+            Vec2::new(0.3, 0.22),
+            Vec2::new(-0.4, 0.22),
+            Vec2::new(-1.0, 0.0),
+        ]
+    }
+    const SPIN: [i8; 8] = [1, -1, 1, -1, 1, -1, 1, -1];
+
+    fn mixer(kind: MixerKind, com: Vec2) -> Mixer {
+        let points = layout_points();
+        Mixer::build(
+            kind,
+            &RotorLayout {
+                points: &points,
+                spin: &SPIN,
+                com,
+                torque_per_thrust: 0.016,
+                max_thrust: 14.2,
+            },
+        )
+        .expect("controllable")
+    }
+
+    fn close(a: &Wrench, b: &Wrench, tol: f32) -> bool {
+        (a.thrust - b.thrust).abs() < tol && (a.torque - b.torque).norm() < tol
+    }
+
+    #[test]
+    fn allocation_reproduces_the_wrench_when_not_saturated() {
+        let m = mixer(MixerKind::Allocation, Vec2::new(0.12, 0.01));
+        let w = Wrench {
+            thrust: 42.0,
+            torque: Vec3::new(0.8, -1.5, 0.05),
+        };
+        let a = m.allocate(&w);
+        assert!(!a.saturation.any(), "{:?}", a.saturation);
+        assert!(close(&a.achieved, &w, 1e-3), "{:?}", a.achieved);
+        assert!(a.thrusts[..8].iter().all(|&t| (0.0..=14.2).contains(&t)));
+    }
+
+    #[test]
+    fn equal_split_splits_the_collective_and_delivers_the_torque() {
+        // About the centroid of the rotors, equal split delivers every axis.
+        let points = layout_points();
+        let centroid = points.iter().fold(Vec2::default(), |a, &p| a + p) * (1.0 / 8.0);
+        let m = mixer(MixerKind::EqualSplit, centroid);
+        let hover = m.allocate(&Wrench {
+            thrust: 40.0,
+            torque: Vec3::ZERO,
+        });
+        assert!(
+            hover.thrusts[..8].iter().all(|&t| (t - 5.0).abs() < 1e-4),
+            "{:?}",
+            hover.thrusts
+        );
+        let w = Wrench {
+            thrust: 40.0,
+            torque: Vec3::new(0.5, 1.0, 0.03),
+        };
+        let a = m.allocate(&w);
+        assert!(
+            (a.achieved.torque - w.torque).norm() < 1e-3,
+            "{:?}",
+            a.achieved
+        );
+        // Off the centroid, the equal split itself makes a torque: the paper's weakness.
+        let off = mixer(MixerKind::EqualSplit, centroid + Vec2::new(0.3, 0.0));
+        let a = off.allocate(&Wrench {
+            thrust: 40.0,
+            torque: Vec3::ZERO,
+        });
+        assert!(a.achieved.torque.y.abs() > 5.0, "{:?}", a.achieved);
+    }
+
+    #[test]
+    fn yaw_is_given_up_before_roll_and_pitch() {
+        let m = mixer(MixerKind::Allocation, Vec2::new(0.1, 0.0));
+        // Near full collective: room for the pitch torque but not for a large yaw as well.
+        let w = Wrench {
+            thrust: 95.0,
+            torque: Vec3::new(0.0, 2.0, 0.4),
+        };
+        let a = m.allocate(&w);
+        assert!(a.saturation.yaw, "{:?}", a.saturation);
+        assert!(!a.saturation.roll_pitch, "{:?}", a.saturation);
+        assert!(
+            (a.achieved.torque.y - 2.0).abs() < 1e-3,
+            "pitch delivered: {:?}",
+            a.achieved
+        );
+        assert!(a.achieved.torque.z.abs() < 0.4, "yaw cut: {:?}", a.achieved);
+        assert!(
+            a.thrusts[..8]
+                .iter()
+                .all(|&t| (-1e-4..=14.2 + 1e-4).contains(&t))
+        );
+
+        // Beyond what fits, roll and pitch are scaled but keep their direction.
+        let w = Wrench {
+            thrust: 60.0,
+            torque: Vec3::new(6.0, 40.0, 0.0),
+        };
+        let a = m.allocate(&w);
+        assert!(a.saturation.roll_pitch);
+        let (want, got) = (w.torque, a.achieved.torque);
+        assert!(
+            (got.x * want.y - got.y * want.x).abs() < 0.05,
+            "direction kept: {got:?}"
+        );
+        assert!(got.y > 0.0 && got.y < want.y);
+    }
+
+    #[test]
+    fn rotors_on_one_line_are_uncontrollable() {
+        let points = [
+            Vec2::new(-1.0, 0.0),
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+        ];
+        let layout = RotorLayout {
+            points: &points,
+            spin: &[1, -1, 1],
+            com: Vec2::default(),
+            torque_per_thrust: 0.016,
+            max_thrust: 14.2,
+        };
+        assert_eq!(
+            Mixer::build(MixerKind::Allocation, &layout),
+            Err(AllocationError::Uncontrollable)
+        );
+    }
+}

@@ -1,0 +1,185 @@
+//! Attitude and body-rate estimation from the IMU (SPEC.md section 2, step 4): a Mahony
+//! complementary filter on the unit quaternion, with gyro bias estimation.
+//!
+//! The gyro is integrated at the IMU rate; the accelerometer's direction corrects roll and
+//! pitch (only while the specific force is close to gravity, so manoeuvres do not tilt the
+//! estimate), and the motion-capture heading corrects yaw. The integral of the correction is
+//! the gyro bias estimate.
+
+use crate::control::vector::{Quat, Vec3};
+use crate::math;
+use crate::scenario::GRAVITY;
+
+/// Filter gains.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AttitudeEstimatorGains {
+    /// Proportional correction from the accelerometer, rad/s per unit error.
+    pub accel_p: f32,
+    /// Proportional correction from the heading, rad/s per rad.
+    pub heading_p: f32,
+    /// Integral gain of the correction (gyro bias), 1/s.
+    pub bias_i: f32,
+    /// Largest gyro bias estimate, rad/s.
+    pub bias_limit: f32,
+    /// The accelerometer corrects only while `| |f| - g |` is below this fraction of `g`.
+    pub accel_trust_band: f32,
+}
+
+impl Default for AttitudeEstimatorGains {
+    fn default() -> Self {
+        Self {
+            accel_p: 1.0,
+            heading_p: 0.5,
+            bias_i: 0.05,
+            bias_limit: 0.1,
+            accel_trust_band: 0.15,
+        }
+    }
+}
+
+/// What the estimator believes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AttitudeState {
+    /// Attitude (body to world).
+    pub attitude: Quat,
+    /// Body rate with the bias removed, rad/s.
+    pub rate: Vec3,
+    /// Estimated gyro bias, rad/s.
+    pub gyro_bias: Vec3,
+}
+
+/// Mahony attitude filter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AttitudeEstimator {
+    gains: AttitudeEstimatorGains,
+    state: AttitudeState,
+    initialised: bool,
+    heading: Option<f32>,
+}
+
+impl AttitudeEstimator {
+    /// A filter that initialises its tilt from the first accelerometer sample.
+    pub fn new(gains: AttitudeEstimatorGains) -> Self {
+        Self {
+            gains,
+            state: AttitudeState {
+                attitude: Quat::IDENTITY,
+                rate: Vec3::ZERO,
+                gyro_bias: Vec3::ZERO,
+            },
+            initialised: false,
+            heading: None,
+        }
+    }
+
+    /// The current estimate.
+    pub fn state(&self) -> AttitudeState {
+        self.state
+    }
+
+    /// A heading (yaw, rad) from motion capture, used at the next IMU step.
+    pub fn set_heading(&mut self, yaw: f32) {
+        if yaw.is_finite() {
+            self.heading = Some(yaw);
+        }
+    }
+
+    /// One IMU sample: gyro (rad/s, body) and accelerometer specific force (m/s^2, body),
+    /// `dt` seconds after the previous one. Non-finite samples are skipped.
+    pub fn update(&mut self, gyro: Vec3, accel: Vec3, dt: f32) -> AttitudeState {
+        if !(gyro.is_finite() && accel.is_finite() && dt > 0.0 && dt < 0.1) {
+            return self.state;
+        }
+        // At rest an accelerometer reads the reaction to gravity, f = R^T (0, 0, -g): world
+        // down seen from the body is -f / |f| = (-sin(pitch), sin(roll) cos(pitch),
+        // cos(roll) cos(pitch)).
+        let f_norm = accel.norm();
+        if !self.initialised {
+            if f_norm > 0.5 * GRAVITY {
+                let down = -accel * (1.0 / f_norm);
+                let roll = math::atan2(down.y, down.z);
+                let pitch = math::asin(-down.x);
+                let yaw = self.heading.unwrap_or(0.0);
+                self.state.attitude = Quat::from_euler(roll, pitch, yaw);
+                self.initialised = true;
+            }
+            self.state.rate = gyro;
+            return self.state;
+        }
+        let q = self.state.attitude;
+        let mut correction = Vec3::ZERO;
+        if (f_norm - GRAVITY).abs() < self.gains.accel_trust_band * GRAVITY {
+            let measured_down = -accel * (1.0 / f_norm);
+            let estimated_down = q.inverse_rotate(Vec3::DOWN);
+            correction += measured_down.cross(estimated_down) * self.gains.accel_p;
+        }
+        if let Some(yaw) = self.heading.take() {
+            let error = wrap_pi(yaw - q.to_euler().z);
+            correction += q.inverse_rotate(Vec3::DOWN) * (error * self.gains.heading_p);
+        }
+        let bias_step = -correction * (self.gains.bias_i * dt);
+        let limit = Vec3::new(
+            self.gains.bias_limit,
+            self.gains.bias_limit,
+            self.gains.bias_limit,
+        );
+        self.state.gyro_bias = (self.state.gyro_bias + bias_step).clamp_each(limit);
+        let rate = gyro - self.state.gyro_bias;
+        let omega = rate + correction;
+        self.state.attitude = (q * Quat::from_rotation_vector(omega * dt)).normalized();
+        self.state.rate = rate;
+        self.state
+    }
+}
+
+/// `angle` wrapped into `[-pi, pi)`.
+pub fn wrap_pi(angle: f32) -> f32 {
+    let tau = core::f32::consts::TAU;
+    angle - tau * math::floor((angle + core::f32::consts::PI) / tau)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Specific force of a vehicle at rest with attitude `q` (body frame).
+    fn at_rest(q: Quat) -> Vec3 {
+        q.inverse_rotate(Vec3::new(0.0, 0.0, -GRAVITY))
+    }
+
+    #[test]
+    fn converges_to_a_tilt_and_learns_the_gyro_bias() {
+        let truth = Quat::from_euler(0.2, -0.1, 0.7);
+        let bias = Vec3::new(0.02, -0.015, 0.01);
+        let mut est = AttitudeEstimator::new(AttitudeEstimatorGains::default());
+        // Starts from the first sample with a wrong yaw, then corrects with the heading.
+        for k in 0..400 * 120 {
+            if k % 4 == 0 {
+                est.set_heading(0.7);
+            }
+            est.update(bias, at_rest(truth), 0.0025);
+        }
+        let s = est.state();
+        let e = s.attitude.to_euler();
+        assert!((e - Vec3::new(0.2, -0.1, 0.7)).norm() < 0.01, "{e:?}");
+        assert!((s.gyro_bias - bias).norm() < 3e-3, "{:?}", s.gyro_bias);
+        assert!(
+            s.rate.norm() < 3e-3,
+            "bias removed from the rate: {:?}",
+            s.rate
+        );
+    }
+
+    #[test]
+    fn tracks_a_rotation_from_the_gyro() {
+        let mut est = AttitudeEstimator::new(AttitudeEstimatorGains::default());
+        let mut truth = Quat::IDENTITY;
+        let rate = Vec3::new(0.0, 0.0, 0.5); // pure yaw keeps the accelerometer reading fixed
+        for _ in 0..800 {
+            truth = (truth * Quat::from_rotation_vector(rate * 0.0025)).normalized();
+            est.update(rate, at_rest(truth), 0.0025);
+        }
+        let yaw = est.state().attitude.to_euler().z;
+        assert!((yaw - truth.to_euler().z).abs() < 0.01, "{yaw}");
+    }
+}

@@ -1,0 +1,21 @@
+//! Flight control as the firmware runs it at 400 Hz (SPEC.md section 2, step 4).
+//!
+//! - [`vector`]: 3-vectors and quaternions (body FRD, world NED).
+//! - [`attitude_estimator`]: Mahony filter with gyro bias, heading from motion capture.
+//! - [`position_estimator`]: position and velocity from the accelerometer and late fixes.
+//! - [`pid`]: PID with derivative on the measurement and anti-windup.
+//! - [`params`]: every gain and limit, with units.
+//! - [`vehicle`]: mass, inertia and thrust of the vehicle from the estimate.
+//! - [`controller`]: the cascade, position to torque.
+//! - [`allocation`]: the two mixers, rebuilt from the formation, with desaturation.
+//! - [`trajectory`]: take-off, transit, hover, landing.
+
+pub mod allocation;
+pub mod attitude_estimator;
+pub mod controller;
+pub mod params;
+pub mod pid;
+pub mod position_estimator;
+pub mod trajectory;
+pub mod vector;
+pub mod vehicle;

@@ -1,0 +1,217 @@
+//! The reference trajectory: take-off, transit to the target, hover, landing (SPEC.md
+//! section 2, step 4; section 5, `[flight] target`).
+//!
+//! Each segment is a minimum-jerk polynomial `p(t) = a + (b - a) s(t/T)`,
+//! `s(u) = 10 u^3 - 15 u^4 + 6 u^5`, smooth in position, velocity and acceleration, with zero
+//! velocity and acceleration at both ends. Its duration gives a peak speed
+//! `1.875 |b - a| / T` of at most the segment's speed limit. Positions are world NED from the
+//! take-off point.
+
+use crate::control::vector::Vec3;
+
+/// Where the flight is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FlightPhase {
+    /// Climbing vertically to the target height.
+    Takeoff,
+    /// Moving at the target height to above the target.
+    Transit,
+    /// Holding over the target.
+    Hover,
+    /// Descending to the ground at the target.
+    Land,
+    /// The plan is over (on the ground at the target).
+    Done,
+}
+
+/// Speed limits and timing of a plan.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlanLimits {
+    /// Peak climb speed, m/s.
+    pub climb_speed: f32,
+    /// Peak horizontal speed, m/s.
+    pub cruise_speed: f32,
+    /// Peak descent speed, m/s.
+    pub descent_speed: f32,
+    /// Time over the target before landing, s.
+    pub hover_time: f32,
+}
+
+impl Default for PlanLimits {
+    fn default() -> Self {
+        Self {
+            climb_speed: 0.3,
+            cruise_speed: 0.5,
+            descent_speed: 0.25,
+            hover_time: 3.0,
+        }
+    }
+}
+
+/// What the controller should follow at one instant.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Setpoint {
+    /// Position, m.
+    pub position: Vec3,
+    /// Velocity, m/s.
+    pub velocity: Vec3,
+    /// Acceleration (feedforward), m/s^2.
+    pub acceleration: Vec3,
+    /// Heading, rad.
+    pub yaw: f32,
+}
+
+/// Peak-speed factor of the minimum-jerk profile.
+const MIN_JERK_PEAK: f32 = 1.875;
+/// Shortest segment, s.
+const MIN_DURATION: f32 = 0.5;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Segment {
+    from: Vec3,
+    to: Vec3,
+    duration: f32,
+}
+
+impl Segment {
+    fn new(from: Vec3, to: Vec3, speed: f32) -> Self {
+        let distance = (to - from).norm();
+        let duration = (MIN_JERK_PEAK * distance / speed.max(1e-3)).max(MIN_DURATION);
+        Self { from, to, duration }
+    }
+
+    fn sample(&self, t: f32) -> (Vec3, Vec3, Vec3) {
+        let u = (t / self.duration).clamp(0.0, 1.0);
+        let (u2, u3) = (u * u, u * u * u);
+        let s = 10.0 * u3 - 15.0 * u3 * u + 6.0 * u3 * u2;
+        let ds = (30.0 * u2 - 60.0 * u3 + 30.0 * u2 * u2) / self.duration;
+        let dds = (60.0 * u - 180.0 * u2 + 120.0 * u3) / (self.duration * self.duration);
+        let d = self.to - self.from;
+        (self.from + d * s, d * ds, d * dds)
+    }
+}
+
+/// Take-off at the start, transit, hover and landing at the target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlightPlan {
+    segments: [Segment; 4],
+    yaw: f32,
+}
+
+impl FlightPlan {
+    /// A plan from `start` (on the ground, NED) to `target` = [x, y, height above ground],
+    /// holding heading `yaw`.
+    pub fn new(start: Vec3, target: [f32; 3], yaw: f32, limits: PlanLimits) -> Self {
+        let height = target[2].max(0.0);
+        let top = Vec3::new(start.x, start.y, start.z - height);
+        let above = Vec3::new(target[0], target[1], start.z - height);
+        let ground = Vec3::new(target[0], target[1], start.z);
+        Self {
+            segments: [
+                Segment::new(start, top, limits.climb_speed),
+                Segment::new(top, above, limits.cruise_speed),
+                Segment {
+                    from: above,
+                    to: above,
+                    duration: limits.hover_time.max(0.0),
+                },
+                Segment::new(above, ground, limits.descent_speed),
+            ],
+            yaw,
+        }
+    }
+
+    /// Total duration, s.
+    pub fn duration(&self) -> f32 {
+        self.segments.iter().map(|s| s.duration).sum()
+    }
+
+    /// Where the hover over the target happens (NED).
+    pub fn hover_point(&self) -> Vec3 {
+        self.segments[2].from
+    }
+
+    /// The setpoint and phase `t` seconds after take-off began.
+    pub fn sample(&self, t: f32) -> (Setpoint, FlightPhase) {
+        const PHASES: [FlightPhase; 4] = [
+            FlightPhase::Takeoff,
+            FlightPhase::Transit,
+            FlightPhase::Hover,
+            FlightPhase::Land,
+        ];
+        let mut start = 0.0;
+        for (segment, phase) in self.segments.iter().zip(PHASES) {
+            if t < start + segment.duration {
+                let (position, velocity, acceleration) = segment.sample(t - start);
+                let setpoint = Setpoint {
+                    position,
+                    velocity,
+                    acceleration,
+                    yaw: self.yaw,
+                };
+                return (setpoint, phase);
+            }
+            start += segment.duration;
+        }
+        let end = Setpoint {
+            position: self.segments[3].to,
+            yaw: self.yaw,
+            ..Setpoint::default()
+        };
+        (end, FlightPhase::Done)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plan_is_continuous_and_respects_its_speed_limits() {
+        let limits = PlanLimits::default();
+        let plan = FlightPlan::new(Vec3::ZERO, [0.3, 1.98, 0.5], 0.0, limits);
+        let dt = 0.0025;
+        let mut last = plan.sample(0.0).0;
+        let mut t = dt;
+        let mut phases = heapless::Vec::<FlightPhase, 8>::new();
+        while t < plan.duration() + 1.0 {
+            let (sp, phase) = plan.sample(t);
+            if phases.last() != Some(&phase) {
+                let _ = phases.push(phase);
+            }
+            assert!(
+                (sp.position - last.position).norm() < 0.6 * dt * 2.0,
+                "jump at {t}"
+            );
+            assert!(
+                (sp.velocity - last.velocity).norm() < 0.05,
+                "velocity jump at {t}"
+            );
+            let v = sp.velocity;
+            assert!(libm::hypotf(v.x, v.y) <= limits.cruise_speed + 1e-3);
+            assert!(v.z.abs() <= limits.climb_speed.max(limits.descent_speed) + 1e-3);
+            last = sp;
+            t += dt;
+        }
+        assert_eq!(
+            phases.as_slice(),
+            &[
+                FlightPhase::Takeoff,
+                FlightPhase::Transit,
+                FlightPhase::Hover,
+                FlightPhase::Land,
+                FlightPhase::Done
+            ]
+        );
+        let top = plan.sample(plan.duration() * 0.0 + 1.875 * 0.5 / 0.3).0;
+        assert!(
+            (top.position.z + 0.5).abs() < 1e-3,
+            "reaches the target height"
+        );
+        assert!((plan.hover_point() - Vec3::new(0.3, 1.98, -0.5)).norm() < 1e-6);
+        assert!(
+            (last.position - Vec3::new(0.3, 1.98, 0.0)).norm() < 1e-6,
+            "lands at the target"
+        );
+    }
+}
