@@ -159,3 +159,24 @@ fn bad_scenarios_name_the_key_and_never_panic() {
         assert_eq!(err.trim_end().lines().count(), 1, "{tag}: one line: {err}");
     }
 }
+
+/// `shared::paper` carries rect-sim1 and L-sim1 built in (for target benchmarks); they must be
+/// the files' values.
+#[test]
+fn built_in_paper_cases_match_the_files() {
+    use shared::paper;
+    for (name, built_in) in [
+        ("rect-sim1", paper::rect_sim1()),
+        ("L-sim1", paper::l_sim1()),
+    ] {
+        let file = scenario_file::load(&scenario_path(name))
+            .expect("loads")
+            .scenario;
+        let built_in = paper::checked(built_in);
+        assert_eq!(file.payload, built_in.payload, "{name}");
+        assert_eq!(file.robots, built_in.robots, "{name}");
+        assert_eq!(file.estimation, built_in.estimation, "{name}");
+        assert_eq!(file.formation, built_in.formation, "{name}");
+        assert_eq!(file.truth, built_in.truth, "{name}");
+    }
+}

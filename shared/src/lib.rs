@@ -16,11 +16,10 @@ extern crate std;
 
 pub mod control;
 pub mod estimation;
-#[cfg(test)]
-pub(crate) mod fixtures;
 pub mod formation;
 pub mod geometry;
 pub mod math;
+pub mod paper;
 pub mod scenario;
 pub mod statics;
 pub mod timing;

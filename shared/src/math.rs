@@ -28,6 +28,19 @@ pub fn ln(x: f32) -> f32 {
     libm::logf(x)
 }
 
+/// The smaller of `a` and `b` by a plain comparison (`b` if either is NaN). On the Cortex-M7
+/// (ARMv7E-M, no `vminnm`) `f32::min` is a library call; this is two instructions.
+#[inline]
+pub fn min(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// The larger of `a` and `b` by a plain comparison (`b` if either is NaN); see [`min`].
+#[inline]
+pub fn max(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
 /// Largest integer not above `x`.
 #[inline]
 pub fn floor(x: f32) -> f32 {

@@ -666,7 +666,7 @@ impl Scenario {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fixtures::rect_sim1;
+    use crate::paper::rect_sim1;
 
     #[test]
     fn paper_rectangle_is_accepted_with_even_start() {

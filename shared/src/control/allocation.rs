@@ -21,6 +21,7 @@ use nalgebra::{SMatrix, SVector};
 
 use crate::control::vector::Vec3;
 use crate::geometry::Vec2;
+use crate::math;
 use crate::scenario::MAX_ROBOTS;
 
 /// Which mixer.
@@ -120,7 +121,8 @@ pub struct Mixer {
     count: usize,
     max_thrust: f32,
     effectiveness: Effectiveness,
-    mixing: Mixing,
+    /// Columns of the mixing matrix (collective, roll, pitch, yaw), one thrust per rotor.
+    columns: [[f32; MAX_ROBOTS]; 4],
 }
 
 impl Mixer {
@@ -164,12 +166,18 @@ impl Mixer {
         if mixing.iter().any(|v| !v.is_finite()) {
             return Err(AllocationError::Uncontrollable);
         }
+        let mut columns = [[0.0f32; MAX_ROBOTS]; 4];
+        for (axis, column) in columns.iter_mut().enumerate() {
+            for (i, slot) in column.iter_mut().enumerate().take(count) {
+                *slot = mixing[(i, axis)];
+            }
+        }
         Ok(Self {
             kind,
             count,
             max_thrust: layout.max_thrust,
             effectiveness: a,
-            mixing,
+            columns,
         })
     }
 
@@ -196,14 +204,6 @@ impl Mixer {
         }
     }
 
-    fn column(&self, axis: usize) -> [f32; MAX_ROBOTS] {
-        let mut c = [0.0; MAX_ROBOTS];
-        for (i, slot) in c.iter_mut().enumerate().take(self.count) {
-            *slot = self.mixing[(i, axis)];
-        }
-        c
-    }
-
     /// Interval of `k` keeping `base + k * dir` within `[0, max]` on every rotor.
     fn room(&self, base: &[f32; MAX_ROBOTS], dir: &[f32; MAX_ROBOTS]) -> Option<(f32, f32)> {
         let (mut lo, mut hi) = (f32::NEG_INFINITY, f32::INFINITY);
@@ -216,8 +216,9 @@ impl Mixer {
                 continue;
             }
             let (k0, k1) = ((0.0 - b) / d, (self.max_thrust - b) / d);
-            lo = lo.max(k0.min(k1));
-            hi = hi.min(k0.max(k1));
+            let (near, far) = if k0 < k1 { (k0, k1) } else { (k1, k0) };
+            lo = math::max(lo, near);
+            hi = math::min(hi, far);
         }
         (lo <= hi).then_some((lo, hi))
     }
@@ -225,12 +226,7 @@ impl Mixer {
     /// Rotor thrusts for `wrench`, within limits, yaw given up first.
     pub fn allocate(&self, wrench: &Wrench) -> Allocation {
         let n = self.count;
-        let (collective, roll, pitch, yaw) = (
-            self.column(0),
-            self.column(1),
-            self.column(2),
-            self.column(3),
-        );
+        let [collective, roll, pitch, yaw] = &self.columns;
         let mut thrust_part = [0.0f32; MAX_ROBOTS];
         let mut tilt_part = [0.0f32; MAX_ROBOTS];
         let mut yaw_part = [0.0f32; MAX_ROBOTS];
@@ -250,14 +246,15 @@ impl Mixer {
         // Roll, pitch and collective: shift the collective along its column if needed; if no
         // shift fits, scale roll and pitch down until one does.
         let mut base = combine(1.0);
-        let mut room = self.room(&base, &collective);
+        let mut room = self.room(&base, collective);
         if room.is_none() {
             saturation.roll_pitch = true;
             let (mut ok, mut bad) = (0.0f32, 1.0f32);
-            if self.room(&combine(0.0), &collective).is_some() {
-                for _ in 0..20 {
+            if self.room(&combine(0.0), collective).is_some() {
+                // 12 halvings: the scale to 1/4096, far finer than the rotors deliver.
+                for _ in 0..12 {
                     let mid = 0.5 * (ok + bad);
-                    if self.room(&combine(mid), &collective).is_some() {
+                    if self.room(&combine(mid), collective).is_some() {
                         ok = mid
                     } else {
                         bad = mid
@@ -265,7 +262,7 @@ impl Mixer {
                 }
             }
             base = combine(ok);
-            room = self.room(&base, &collective);
+            room = self.room(&base, collective);
         }
         let mut thrusts = [0.0f32; MAX_ROBOTS];
         match room {

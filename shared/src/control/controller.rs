@@ -52,6 +52,10 @@ pub struct FlightController {
     model: VehicleModel,
     velocity: Pid3,
     rate: Pid3,
+    /// `tan(max_tilt)`, computed once (trigonometry is costly on the target).
+    tan_max_tilt: f32,
+    /// The last yaw setpoint and its cosine and sine.
+    heading: (f32, f32, f32),
 }
 
 impl FlightController {
@@ -76,6 +80,8 @@ impl FlightController {
                 p.max_angular_acceleration,
                 p.rate_d_cutoff_hz,
             ),
+            tan_max_tilt: math::sin(params.max_tilt) / math::cos(params.max_tilt),
+            heading: (0.0, 1.0, 0.0),
             params,
             model,
         }
@@ -138,8 +144,8 @@ impl FlightController {
         // Specific force the rotors must make: f = a - g (NED), at most max_tilt from vertical
         // and always pushing up a little.
         let mut f = acceleration - Vec3::DOWN * GRAVITY;
-        f.z = f.z.min(-0.1 * GRAVITY);
-        let max_xy = -f.z * math::sin(p.max_tilt) / math::cos(p.max_tilt);
+        f.z = math::min(f.z, -0.1 * GRAVITY);
+        let max_xy = -f.z * self.tan_max_tilt;
         let fxy = Vec3::new(f.x, f.y, 0.0).limit_norm(max_xy);
         f = Vec3::new(fxy.x, fxy.y, f.z);
         acceleration = f + Vec3::DOWN * GRAVITY;
@@ -147,7 +153,10 @@ impl FlightController {
 
         // Attitude setpoint: body z along -force, heading from the setpoint's yaw.
         let z_body = (-force).normalized();
-        let heading = Vec3::new(math::cos(sp.yaw), math::sin(sp.yaw), 0.0);
+        if sp.yaw != self.heading.0 {
+            self.heading = (sp.yaw, math::cos(sp.yaw), math::sin(sp.yaw));
+        }
+        let heading = Vec3::new(self.heading.1, self.heading.2, 0.0);
         let y_body = z_body.cross(heading).normalized();
         let x_body = y_body.cross(z_body);
         let attitude_sp = Quat::from_axes(x_body, y_body, z_body);
@@ -181,7 +190,9 @@ impl FlightController {
 
     /// Quaternion P control with tilt before yaw: the full attitude error is replaced by the
     /// tilt that aligns the thrust axis plus only a share of the yaw error (the share is the
-    /// ratio of the yaw gain to the roll gain).
+    /// ratio of the yaw gain to the roll gain). The share of the yaw rotation is taken by
+    /// normalised linear interpolation from the identity (monotone, close to the exact slerp,
+    /// and free of trigonometry).
     fn attitude_rate_setpoint(&self, q: Quat, q_sp: Quat) -> Vec3 {
         let p = &self.params;
         let e_z = q.rotate(Vec3::DOWN);
@@ -201,18 +212,13 @@ impl FlightController {
         } else {
             0.0
         };
-        let half_angle = math::acos(yaw_part.w.clamp(-1.0, 1.0));
-        let half_angle = if yaw_part.z < 0.0 {
-            -half_angle
-        } else {
-            half_angle
-        };
         let reduced_yaw = Quat {
-            w: math::cos(share * half_angle),
+            w: 1.0 - share + share * yaw_part.w,
             x: 0.0,
             y: 0.0,
-            z: math::sin(share * half_angle),
-        };
+            z: share * yaw_part.z,
+        }
+        .normalized();
         let target = tilt_only * reduced_yaw;
         let error = q.conjugate() * target;
         let sign = if error.w < 0.0 { -1.0 } else { 1.0 };

@@ -2,6 +2,7 @@
 //! that only runs when allowed (anti-windup), and an output limit (SPEC.md section 2, step 4).
 
 use crate::control::vector::Vec3;
+use crate::math;
 
 /// One PID axis.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -51,7 +52,7 @@ impl Pid {
         if dt > 0.0 {
             if let Some(last) = self.last_measurement {
                 let raw = -(measurement - last) / dt;
-                let tau = 1.0 / (core::f32::consts::TAU * self.d_cutoff_hz.max(1e-3));
+                let tau = 1.0 / (core::f32::consts::TAU * math::max(self.d_cutoff_hz, 1e-3));
                 let alpha = dt / (dt + tau);
                 self.derivative += alpha * (raw - self.derivative);
             }

@@ -212,15 +212,22 @@ impl Quat {
     }
 
     /// The rotation vector `theta` (axis times angle) as a quaternion: integrates a rate over
-    /// one step.
+    /// one step. Below 0.2 rad (every step of the 400 Hz loop) the half-angle sine and cosine
+    /// come from their Taylor series, exact to `f32` there and far cheaper on the target than
+    /// `libm`'s `sinf`, which works in software double precision.
     pub fn from_rotation_vector(theta: Vec3) -> Self {
         let angle = theta.norm();
-        if angle < 1e-9 {
+        if angle < 0.2 {
+            let h2 = 0.25 * angle * angle; // (angle / 2)^2
+            let cos_half = 1.0 - h2 / 2.0 + h2 * h2 / 24.0 - h2 * h2 * h2 / 720.0;
+            // sin(angle / 2) / angle
+            let sin_half_over_angle =
+                0.5 * (1.0 - h2 / 6.0 + h2 * h2 / 120.0 - h2 * h2 * h2 / 5040.0);
             Self {
-                w: 1.0,
-                x: 0.5 * theta.x,
-                y: 0.5 * theta.y,
-                z: 0.5 * theta.z,
+                w: cos_half,
+                x: theta.x * sin_half_over_angle,
+                y: theta.y * sin_half_over_angle,
+                z: theta.z * sin_half_over_angle,
             }
             .normalized()
         } else {
@@ -352,6 +359,17 @@ mod tests {
         assert!((fwd - Vec3::new(0.0, 1.0, 0.0)).norm() < 1e-6);
         let back = yawed.inverse_rotate(fwd);
         assert!((back - Vec3::new(1.0, 0.0, 0.0)).norm() < 1e-6);
+    }
+
+    #[test]
+    fn rotation_vector_series_matches_the_exact_form() {
+        for angle in [0.0f32, 1e-6, 0.01, 0.1, 0.199, 0.2, 0.5] {
+            let theta = Vec3::new(0.6, -0.48, 0.64) * angle; // unit axis times angle
+            let q = Quat::from_rotation_vector(theta);
+            let exact = Quat::from_axis_angle(Vec3::new(0.6, -0.48, 0.64), angle);
+            let d = (q.w - exact.w).abs() + (q.vector() - exact.vector()).norm();
+            assert!(d < 2e-7, "angle {angle}: {q:?} vs {exact:?}");
+        }
     }
 
     #[test]

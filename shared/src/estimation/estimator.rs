@@ -296,7 +296,7 @@ impl Estimator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fixtures::{checked, l_sim1, rect_sim1};
+    use crate::paper::{checked, l_sim1, rect_sim1};
     use crate::statics::lift_off_thrust;
 
     /// The model's reading for the scenario's truth (no noise).

@@ -151,7 +151,7 @@ mod tests {
     use super::*;
     use crate::estimation::grid::Grid;
     use crate::estimation::groups::lift_group;
-    use crate::fixtures::{checked, rect_sim1};
+    use crate::paper::{checked, rect_sim1};
     use crate::scenario::MAX_GRID_POINTS;
     use crate::statics::lift_fraction;
     use proptest::prelude::*;

@@ -256,7 +256,7 @@ pub fn solve(problem: &FormationProblem<'_>) -> Result<Formation, FormationError
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fixtures::{checked, l_sim1, rect_sim1};
+    use crate::paper::{checked, l_sim1, rect_sim1};
     use proptest::prelude::*;
 
     /// Independent optimum for `n = 3` or `4` robots: the first `n - 2` robots on a fine grid

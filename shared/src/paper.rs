@@ -1,5 +1,6 @@
-//! Test fixtures: the paper's scenarios as [`ScenarioInput`]s (the same values as the files in
-//! `tests/scenarios/`).
+//! The paper's simulation cases built in (SPEC.md section 4): `rect-sim1` and `L-sim1` as
+//! [`ScenarioInput`]s, the same values as the files in `tests/scenarios/` (a test checks they
+//! agree). For unit tests and for target-side benchmarks that cannot read files.
 
 use crate::geometry::Vec2;
 use crate::scenario::{
@@ -101,7 +102,22 @@ pub fn l_sim1() -> ScenarioInput<'static> {
     }
 }
 
-/// A checked scenario from an input fixture.
+/// A built-in case, checked (the built-in values are valid; a failure here is a bug in this
+/// file, caught by its test).
 pub fn checked(input: ScenarioInput<'_>) -> Scenario {
-    Scenario::from_input(&input).expect("fixture is valid")
+    match Scenario::from_input(&input) {
+        Ok(s) => s,
+        Err(e) => panic!("built-in paper case is invalid: {e}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn built_in_cases_are_valid() {
+        assert_eq!(checked(rect_sim1()).robots.count(), 8);
+        assert_eq!(checked(l_sim1()).payload.candidates.len(), 11);
+    }
 }

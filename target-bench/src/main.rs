@@ -1,0 +1,258 @@
+//! Instruction counts of `shared`'s hot paths on a Cortex-M7 (issues: pair selection well
+//! under 10 ms at 480 MHz; formation bounded; one 400 Hz step a few microseconds).
+//!
+//! Runs under QEMU's mps2-an500 with `-icount shift=0`, where each instruction advances the
+//! virtual clock by 1 ns and SysTick counts the 25 MHz core clock: one tick is 40
+//! instructions. A calibration loop of known length checks that ratio before anything is
+//! measured. Instructions are not cycles (the M7 dual-issues; flash wait states and FPU
+//! latencies add), so the figures are an estimate of the cycle count, printed as
+//! instructions and as milliseconds at one instruction per cycle at 480 MHz.
+//!
+//! `bash .ci/target-bench` builds and runs it.
+#![no_std]
+#![no_main]
+
+use cortex_m::peripheral::{SYST, syst::SystClkSource};
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use shared::control::allocation::{Mixer, MixerKind, RotorLayout, Saturation};
+use shared::control::attitude_estimator::{AttitudeEstimator, AttitudeEstimatorGains};
+use shared::control::controller::{ControlInputs, FlightController};
+use shared::control::params::ControlParams;
+use shared::control::position_estimator::{PositionEstimator, PositionEstimatorGains};
+use shared::control::trajectory::{FlightPlan, PlanLimits};
+use shared::control::vector::Vec3;
+use shared::control::vehicle::VehicleModel;
+use shared::estimation::{Estimator, EstimatorOptions, Measurement};
+use shared::formation::{FormationProblem, solve};
+use shared::geometry::Vec2;
+use shared::paper;
+
+/// Instructions per SysTick tick under `-icount shift=0` on mps2-an500.
+const INSTRUCTIONS_PER_TICK: u32 = 40;
+/// Core clock of the Pixhawk 6C's STM32H743, Hz.
+const TARGET_HZ: f32 = 480e6;
+
+struct Timer {
+    syst: SYST,
+}
+
+impl Timer {
+    fn new(mut syst: SYST) -> Self {
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(0x00FF_FFFF);
+        syst.clear_current();
+        syst.enable_counter();
+        Self { syst }
+    }
+
+    /// Instructions spent in `f` (SysTick counts down, 24 bits; every measured section is far
+    /// shorter than one wrap of 671 million instructions).
+    fn instructions<R>(&mut self, f: impl FnOnce() -> R) -> (u32, R) {
+        self.syst.clear_current();
+        let start = SYST::get_current();
+        let r = f();
+        let end = SYST::get_current();
+        let ticks = start.wrapping_sub(end) & 0x00FF_FFFF;
+        (ticks * INSTRUCTIONS_PER_TICK, r)
+    }
+}
+
+fn report(name: &str, instructions: u32) {
+    let ms = instructions as f32 / TARGET_HZ * 1e3;
+    hprintln!(
+        "{}: {} instructions (~{} ms at 480 MHz)",
+        name,
+        instructions,
+        ms
+    );
+}
+
+#[entry]
+fn main() -> ! {
+    let peripherals = cortex_m::Peripherals::take();
+    let Some(p) = peripherals else { finish(false) };
+    let mut timer = Timer::new(p.SYST);
+
+    // Calibration: delay(n) runs n + 1 iterations of a two-instruction loop (subs, bne).
+    let (calibration, _) = timer.instructions(|| cortex_m::asm::delay(4_000_000));
+    hprintln!("calibration: 8000002 expected, {} counted", calibration);
+
+    // Cost of the scalar math every algorithm leans on (libm through shared::math).
+    {
+        use core::hint::black_box;
+        use shared::math;
+        let x = black_box(0.7f32);
+        let (n, _) = timer.instructions(|| black_box(math::sqrt(black_box(x))));
+        report("math::sqrt", n);
+        let (n, _) = timer.instructions(|| black_box(math::sin(black_box(x))));
+        report("math::sin", n);
+        let (n, _) = timer.instructions(|| black_box(math::acos(black_box(x))));
+        report("math::acos", n);
+        let (n, _) = timer.instructions(|| black_box(math::atan2(black_box(x), 0.3)));
+        report("math::atan2", n);
+        let (n, _) = timer.instructions(|| black_box(math::exp(black_box(-x))));
+        report("math::exp", n);
+        let (n, _) = timer.instructions(|| black_box(math::ln(black_box(x))));
+        report("math::ln", n);
+        let (n, _) = timer.instructions(|| black_box(math::erfc(black_box(x))));
+        report("math::erfc", n);
+        let (n, _) = timer.instructions(|| black_box(black_box(x) * 1.5 + 0.25));
+        report("multiply-add (timer overhead)", n);
+    }
+
+    let l_shape = paper::checked(paper::l_sim1());
+    let rect = paper::checked(paper::rect_sim1());
+
+    // Estimation: one full pair selection and one update on the L-shape grid.
+    for (name, scenario) in [("L-shape", &l_shape), ("rectangle", &rect)] {
+        let Ok(mut estimator) = Estimator::new(scenario, EstimatorOptions::default()) else {
+            hprintln!("estimator for {} could not start", name);
+            finish(false)
+        };
+        let _ = estimator.update(0, Measurement::Lifted { thrust: 6.0 });
+        let _ = estimator.update(3, Measurement::Lifted { thrust: 7.5 });
+        let (n, _) = timer.instructions(|| estimator.select_group());
+        hprintln!("pair selection, {}:", name);
+        report("  select", n);
+        let (n, _) =
+            timer.instructions(|| estimator.update(1, Measurement::Lifted { thrust: 6.5 }));
+        report("  update", n);
+    }
+
+    // Formation decision on the paper's cases.
+    for (name, scenario) in [("rect-sim1", &rect), ("L-sim1", &l_shape)] {
+        let com = scenario.truth.map_or(Vec2::default(), |t| t.com);
+        let problem = FormationProblem {
+            rail: &scenario.payload.rail,
+            spin: &scenario.robots.spin,
+            min_spacing: scenario.robots.min_spacing,
+            com,
+            torque_per_thrust: scenario.robots.torque_per_thrust,
+            balance_eps: scenario.formation.balance_eps,
+            current: Some(&scenario.robots.initial),
+        };
+        let (n, result) = timer.instructions(|| solve(&problem));
+        hprintln!("formation, {} (solved: {}):", name, result.is_ok());
+        report("  solve", n);
+    }
+
+    // One 400 Hz step with 8 rotors.
+    let points = [
+        Vec2::new(-0.6, -0.22),
+        Vec2::new(0.1, -0.22),
+        Vec2::new(0.7, -0.22),
+        Vec2::new(1.0, 0.05),
+        Vec2::new(0.8, 0.22),
+        Vec2::new(0.3, 0.22),
+        Vec2::new(-0.4, 0.22),
+        Vec2::new(-1.0, 0.0),
+    ];
+    let spin = [1, -1, 1, -1, 1, -1, 1, -1];
+    let com = Vec2::new(0.12, 0.01);
+    let footprint = &rect.payload.footprint;
+    let model = VehicleModel::from_payload(footprint, com, 3.5, &points, 0.1, 14.2);
+    let layout = RotorLayout {
+        points: &points,
+        spin: &spin,
+        com,
+        torque_per_thrust: 0.016,
+        max_thrust: 14.2,
+    };
+    let (n, mixer) = timer.instructions(|| Mixer::build(MixerKind::Allocation, &layout));
+    report("mixer rebuild (pseudo-inverse), 8 rotors", n);
+    let Ok(mixer) = mixer else { finish(false) };
+    let plan = FlightPlan::new(Vec3::ZERO, [0.3, 1.98, 0.5], 0.0, PlanLimits::default());
+    let mut attitude = AttitudeEstimator::new(AttitudeEstimatorGains::default());
+    let mut position = PositionEstimator::new(PositionEstimatorGains::default());
+    let mut controller = FlightController::new(ControlParams::default(), model);
+    let mut saturation = Saturation::default();
+    position.predict(Vec3::ZERO, 0.0025, 0);
+    position.correct(Vec3::ZERO, 0);
+    // Two regimes: a level hover (the usual case) and a vehicle whose IMU disagrees with its
+    // setpoint so the allocation saturates every step (the worst case: desaturation runs).
+    const STEPS: u32 = 400;
+    let mut results = [(0u64, 0u32, 0u32); 2];
+    for (regime, (gyro, accel)) in [
+        (Vec3::ZERO, Vec3::new(0.0, 0.0, -9.80665)),
+        (Vec3::new(0.3, -0.4, 0.1), Vec3::new(2.0, -1.5, -9.7)),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let mut saturated = 0u32;
+        for k in 1..=STEPS {
+            let now_us = u64::from(k) * 2500;
+            let (n, alloc) = timer.instructions(|| {
+                let dt = 0.0025;
+                let a = attitude.update(gyro, accel, dt);
+                let world_accel = a.attitude.rotate(accel) + Vec3::DOWN * 9.80665;
+                position.predict(world_accel, dt, now_us);
+                let (setpoint, _) = plan.sample(now_us as f32 * 1e-6);
+                let inputs = ControlInputs {
+                    setpoint,
+                    attitude: a,
+                    position: position.state(),
+                    airborne: true,
+                    saturation,
+                };
+                let out = controller.step(&inputs, dt);
+                mixer.allocate(&out.wrench)
+            });
+            saturation = alloc.saturation;
+            saturated += u32::from(saturation.any());
+            results[regime].0 += u64::from(n);
+            results[regime].1 = results[regime].1.max(n);
+        }
+        results[regime].2 = saturated;
+    }
+    hprintln!("400 Hz step (estimators, cascade, allocation), 8 rotors:");
+    for (label, (total, worst, saturated)) in ["level hover", "saturating"].iter().zip(results) {
+        hprintln!("  {} ({} of {} steps saturated):", label, saturated, STEPS);
+        report("    mean", (total / u64::from(STEPS)) as u32);
+        report("    worst", worst);
+    }
+    // Its parts, once more, from the state the saturating run left.
+    hprintln!("  parts of one step:");
+    let dt = 0.0025;
+    let (gyro, accel) = (Vec3::new(0.01, -0.02, 0.005), Vec3::new(0.1, -0.05, -9.7));
+    let (n, a) = timer.instructions(|| attitude.update(gyro, accel, dt));
+    report("  attitude estimator", n);
+    let (n, _) = timer.instructions(|| position.predict(a.attitude.rotate(accel), dt, 1_002_500));
+    report("  position prediction", n);
+    let (n, (setpoint, _)) = timer.instructions(|| plan.sample(1.0025));
+    report("  trajectory sample", n);
+    let inputs = ControlInputs {
+        setpoint,
+        attitude: a,
+        position: position.state(),
+        airborne: true,
+        saturation,
+    };
+    let (n, out) = timer.instructions(|| controller.step(&inputs, dt));
+    report("  cascade", n);
+    let (n, _) = timer.instructions(|| mixer.allocate(&out.wrench));
+    report("  allocation", n);
+    let thrusts = [5.0f32; 8];
+    let (n, _) = timer.instructions(|| mixer.wrench_of(core::hint::black_box(&thrusts)));
+    report("    of which wrench_of (4 x 16 matrix product)", n);
+    finish(true)
+}
+
+/// Ends the emulation with success or failure (QEMU's exit code), never returning.
+fn finish(success: bool) -> ! {
+    debug::exit(if success {
+        debug::EXIT_SUCCESS
+    } else {
+        debug::EXIT_FAILURE
+    });
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    hprintln!("panic: {}", info);
+    finish(false)
+}
