@@ -30,6 +30,8 @@ pub enum Command {
     Estimate(commands::estimate::EstimateArgs),
     /// The formation that maximises det(B B^T), balanced about the COM, beside the even one.
     Formation(commands::formation::FormationArgs),
+    /// Closed-loop flight in the physics plant: take off, fly to the target, hover, land.
+    Fly(commands::fly::FlyArgs),
 }
 
 /// Options every command takes.
@@ -64,6 +66,7 @@ where
         Command::Lift(args) => commands::lift::run(&args),
         Command::Estimate(args) => commands::estimate::run(&args),
         Command::Formation(args) => commands::formation::run(&args),
+        Command::Fly(args) => commands::fly::run(&args),
     }
     .map_err(CliError::Failed)
 }

@@ -5,5 +5,8 @@
 
 pub mod cli;
 pub mod commands;
+pub mod harness;
 pub mod monte_carlo;
+pub mod plant;
+pub mod report;
 pub mod scenario_file;

@@ -1,10 +1,12 @@
 //! Attitude and body-rate estimation from the IMU (SPEC.md section 2, step 4): a Mahony
 //! complementary filter on the unit quaternion, with gyro bias estimation.
 //!
-//! The gyro is integrated at the IMU rate; the accelerometer's direction corrects roll and
-//! pitch (only while the specific force is close to gravity, so manoeuvres do not tilt the
-//! estimate), and the motion-capture heading corrects yaw. The integral of the correction is
-//! the gyro bias estimate.
+//! The gyro is integrated at the IMU rate. The motion-capture attitude, when it comes,
+//! corrects all three axes. The accelerometer's direction corrects roll and pitch only while
+//! no motion-capture attitude has arrived for [`AttitudeEstimatorGains::reference_timeout`]
+//! (on the bench, or during a dropout): on a multirotor in flight the accelerometer measures
+//! the thrust direction, not gravity, and would pull a tilted estimate towards level during
+//! every manoeuvre. The integral of the correction is the gyro bias estimate.
 
 use crate::control::vector::{Quat, Vec3};
 use crate::math;
@@ -15,8 +17,10 @@ use crate::scenario::GRAVITY;
 pub struct AttitudeEstimatorGains {
     /// Proportional correction from the accelerometer, rad/s per unit error.
     pub accel_p: f32,
-    /// Proportional correction from the heading, rad/s per rad.
-    pub heading_p: f32,
+    /// Proportional correction from the motion-capture attitude, rad/s per rad.
+    pub reference_p: f32,
+    /// Without a motion-capture attitude for this long, the accelerometer corrects tilt, s.
+    pub reference_timeout: f32,
     /// Integral gain of the correction (gyro bias), 1/s.
     pub bias_i: f32,
     /// Largest gyro bias estimate, rad/s.
@@ -29,7 +33,8 @@ impl Default for AttitudeEstimatorGains {
     fn default() -> Self {
         Self {
             accel_p: 1.0,
-            heading_p: 0.5,
+            reference_p: 2.0,
+            reference_timeout: 0.1,
             bias_i: 0.05,
             bias_limit: 0.1,
             accel_trust_band: 0.15,
@@ -54,7 +59,8 @@ pub struct AttitudeEstimator {
     gains: AttitudeEstimatorGains,
     state: AttitudeState,
     initialised: bool,
-    heading: Option<f32>,
+    reference: Option<Quat>,
+    since_reference: f32,
 }
 
 impl AttitudeEstimator {
@@ -68,7 +74,8 @@ impl AttitudeEstimator {
                 gyro_bias: Vec3::ZERO,
             },
             initialised: false,
-            heading: None,
+            reference: None,
+            since_reference: f32::INFINITY,
         }
     }
 
@@ -77,10 +84,10 @@ impl AttitudeEstimator {
         self.state
     }
 
-    /// A heading (yaw, rad) from motion capture, used at the next IMU step.
-    pub fn set_heading(&mut self, yaw: f32) {
-        if yaw.is_finite() {
-            self.heading = Some(yaw);
+    /// An attitude from motion capture, used at the next IMU step.
+    pub fn set_reference(&mut self, attitude: Quat) {
+        if attitude.is_finite() {
+            self.reference = Some(attitude.normalized());
         }
     }
 
@@ -99,7 +106,7 @@ impl AttitudeEstimator {
                 let down = -accel * (1.0 / f_norm);
                 let roll = math::atan2(down.y, down.z);
                 let pitch = math::asin(-down.x);
-                let yaw = self.heading.unwrap_or(0.0);
+                let yaw = self.reference.map_or(0.0, |q| q.to_euler().z);
                 self.state.attitude = Quat::from_euler(roll, pitch, yaw);
                 self.initialised = true;
             }
@@ -108,14 +115,19 @@ impl AttitudeEstimator {
         }
         let q = self.state.attitude;
         let mut correction = Vec3::ZERO;
-        if (f_norm - GRAVITY).abs() < self.gains.accel_trust_band * GRAVITY {
+        self.since_reference += dt;
+        if let Some(reference) = self.reference.take() {
+            // Body-frame rotation vector from the estimate to the reference.
+            let error = q.conjugate() * reference;
+            let sign = if error.w < 0.0 { -1.0 } else { 1.0 };
+            correction += error.vector() * (2.0 * sign * self.gains.reference_p);
+            self.since_reference = 0.0;
+        }
+        let accel_trusted = (f_norm - GRAVITY).abs() < self.gains.accel_trust_band * GRAVITY;
+        if self.since_reference > self.gains.reference_timeout && accel_trusted {
             let measured_down = -accel * (1.0 / f_norm);
             let estimated_down = q.inverse_rotate(Vec3::DOWN);
             correction += measured_down.cross(estimated_down) * self.gains.accel_p;
-        }
-        if let Some(yaw) = self.heading.take() {
-            let error = wrap_pi(yaw - q.to_euler().z);
-            correction += q.inverse_rotate(Vec3::DOWN) * (error * self.gains.heading_p);
         }
         let bias_step = -correction * (self.gains.bias_i * dt);
         let limit = Vec3::new(
@@ -152,10 +164,11 @@ mod tests {
         let truth = Quat::from_euler(0.2, -0.1, 0.7);
         let bias = Vec3::new(0.02, -0.015, 0.01);
         let mut est = AttitudeEstimator::new(AttitudeEstimatorGains::default());
-        // Starts from the first sample with a wrong yaw, then corrects with the heading.
+        // Starts from the first sample with a wrong yaw; the accelerometer levels it, then
+        // motion capture brings the yaw.
         for k in 0..400 * 120 {
-            if k % 4 == 0 {
-                est.set_heading(0.7);
+            if k % 4 == 0 && k > 400 * 60 {
+                est.set_reference(truth); // motion capture for the second minute
             }
             est.update(bias, at_rest(truth), 0.0025);
         }

@@ -9,10 +9,12 @@
 //! - [`controller`]: the cascade, position to torque.
 //! - [`allocation`]: the two mixers, rebuilt from the formation, with desaturation.
 //! - [`trajectory`]: take-off, transit, hover, landing.
+//! - [`land_detector`]: on the ground, airborne, landed.
 
 pub mod allocation;
 pub mod attitude_estimator;
 pub mod controller;
+pub mod land_detector;
 pub mod params;
 pub mod pid;
 pub mod position_estimator;

@@ -20,7 +20,8 @@ pub enum FlightPhase {
     Hover,
     /// Descending to the ground at the target.
     Land,
-    /// The plan is over (on the ground at the target).
+    /// The plan is over: the setpoint sits [`SETTLE_DEPTH`] below the ground at the target, so
+    /// the controller lets the weight rest on the ground until the landing is detected.
     Done,
 }
 
@@ -60,6 +61,11 @@ pub struct Setpoint {
     /// Heading, rad.
     pub yaw: f32,
 }
+
+/// How far below the ground the setpoint goes once the landing segment is over, m: the
+/// position loop then asks for less thrust than the weight and the payload settles, where a
+/// setpoint on the ground would keep it hovering at zero height, skating on its contact.
+pub const SETTLE_DEPTH: f32 = 0.3;
 
 /// Peak-speed factor of the minimum-jerk profile.
 const MIN_JERK_PEAK: f32 = 1.875;
@@ -154,7 +160,7 @@ impl FlightPlan {
             start += segment.duration;
         }
         let end = Setpoint {
-            position: self.segments[3].to,
+            position: self.segments[3].to + Vec3::DOWN * SETTLE_DEPTH,
             yaw: self.yaw,
             ..Setpoint::default()
         };
@@ -179,10 +185,10 @@ mod tests {
             if phases.last() != Some(&phase) {
                 let _ = phases.push(phase);
             }
-            assert!(
-                (sp.position - last.position).norm() < 0.6 * dt * 2.0,
-                "jump at {t}"
-            );
+            // Smooth everywhere but at the end, where the setpoint drops below the ground.
+            let jump = (sp.position - last.position).norm();
+            let settling = phase == FlightPhase::Done;
+            assert!(jump < 0.6 * dt * 2.0 || settling, "jump at {t}");
             assert!(
                 (sp.velocity - last.velocity).norm() < 0.05,
                 "velocity jump at {t}"
@@ -209,9 +215,15 @@ mod tests {
             "reaches the target height"
         );
         assert!((plan.hover_point() - Vec3::new(0.3, 1.98, -0.5)).norm() < 1e-6);
+        let settled = Vec3::new(0.3, 1.98, SETTLE_DEPTH);
         assert!(
-            (last.position - Vec3::new(0.3, 1.98, 0.0)).norm() < 1e-6,
-            "lands at the target"
+            (last.position - settled).norm() < 1e-6,
+            "settles at the target"
+        );
+        let touchdown = plan.sample(plan.duration() - 1e-3).0.position;
+        assert!(
+            (touchdown - Vec3::new(0.3, 1.98, 0.0)).norm() < 5e-3,
+            "lands at the target: {touchdown:?}"
         );
     }
 }

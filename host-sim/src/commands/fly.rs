@@ -1,0 +1,159 @@
+//! `host-sim fly --formation even|optimized [--mixer equal-split|allocation] [--com X,Y]
+//! [--mass M]`: one closed-loop flight in the physics plant (SPEC.md section 5), with the
+//! time series as CSV and figures when `--output DIR` is given.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Result, bail};
+use clap::{Args, ValueEnum};
+use serde_json::json;
+use shared::control::allocation::MixerKind;
+use shared::geometry::Vec2;
+
+use crate::cli::{Common, pair};
+use crate::harness::{self, FlightSetup, FormationChoice};
+use crate::report;
+use crate::scenario_file;
+
+/// Formation on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum FormationArg {
+    /// Robot j at j * perimeter / count (or the scenario's initial positions).
+    Even,
+    /// The formation that maximises det(B B^T), balanced about the believed COM.
+    Optimized,
+}
+
+/// Mixer on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum MixerArg {
+    /// The paper's: collective split equally, torques through B^T (B B^T)^-1.
+    EqualSplit,
+    /// Pseudo-inverse of the full effectiveness matrix: each rotor its own trim.
+    Allocation,
+}
+
+/// Arguments of `fly`.
+#[derive(Debug, Args)]
+pub struct FlyArgs {
+    #[command(flatten)]
+    common: Common,
+    /// Formation to fly.
+    #[arg(long, value_enum)]
+    formation: FormationArg,
+    /// Mixer.
+    #[arg(long, value_enum, default_value = "equal-split")]
+    mixer: MixerArg,
+    /// COM the controller believes, X,Y (default: the truth).
+    #[arg(long, value_name = "X,Y", value_parser = pair, allow_hyphen_values = true)]
+    com: Option<[f64; 2]>,
+    /// Payload mass the controller believes, kg (default: the truth).
+    #[arg(long, value_name = "M")]
+    mass: Option<f64>,
+    /// Seed of sensor noise and disturbance.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// The rotors' command-to-thrust map over-reads by this factor.
+    #[arg(long, value_name = "S", default_value_t = 1.0)]
+    map_error: f64,
+    /// Write the time series (flight.csv) and figures (PNG) into this folder.
+    #[arg(long, value_name = "DIR")]
+    output: Option<PathBuf>,
+}
+
+/// Runs the command.
+pub fn run(args: &FlyArgs) -> Result<()> {
+    let loaded = scenario_file::load(&args.common.scenario)?;
+    let s = &loaded.scenario;
+    let Some(truth) = s.truth else {
+        bail!(
+            "{}: [truth]: fly needs the scenario's truth",
+            loaded.path.display()
+        );
+    };
+    let com = args
+        .com
+        .map_or(truth.com, |c| Vec2::new(c[0] as f32, c[1] as f32));
+    if !s.payload.hull.contains(com, 0.0) {
+        bail!(
+            "--com {},{}: lies outside the footprint's convex hull",
+            com.x,
+            com.y
+        );
+    }
+    let mass = args.mass.map_or(truth.mass, |m| m as f32);
+    if !(mass.is_finite() && mass > 0.0) {
+        bail!("--mass {mass}: must be a positive number of kg");
+    }
+    if !(args.map_error.is_finite() && args.map_error > 0.0) {
+        bail!("--map-error {}: must be a positive factor", args.map_error);
+    }
+    let setup = FlightSetup {
+        formation: match args.formation {
+            FormationArg::Even => FormationChoice::Even,
+            FormationArg::Optimized => FormationChoice::Optimized,
+        },
+        mixer: match args.mixer {
+            MixerArg::EqualSplit => MixerKind::EqualSplit,
+            MixerArg::Allocation => MixerKind::Allocation,
+        },
+        believed_com: com,
+        believed_mass: mass,
+        seed: args.seed,
+        map_error: args.map_error as f32,
+    };
+    let started = Instant::now();
+    let outcome = harness::fly(s, &setup)?;
+    let wall_s = started.elapsed().as_secs_f64();
+    let mut written = Vec::new();
+    if let Some(dir) = &args.output {
+        written = report::write_flight(dir, &loaded.name, &setup, &outcome)?;
+    }
+    let realtime = f64::from(outcome.simulated_s) / wall_s.max(1e-9);
+    if args.common.json {
+        let v = json!({
+            "scenario": loaded.name,
+            "formation": format!("{:?}", setup.formation).to_lowercase(),
+            "mixer": match setup.mixer { MixerKind::EqualSplit => "equal-split", MixerKind::Allocation => "allocation" },
+            "dropped": outcome.dropped,
+            "max_tilt_deg": outcome.max_tilt_deg,
+            "rms_tracking_error_m": outcome.rms_tracking_error_m,
+            "final_position_error_m": outcome.final_position_error_m,
+            "max_thrust_fraction": outcome.max_thrust_fraction,
+            "landed": outcome.landed,
+            "positions": outcome.positions,
+            "simulated_s": outcome.simulated_s,
+            "wall_s": wall_s,
+            "realtime_factor": realtime,
+            "files": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+        });
+        println!("{v}");
+    } else {
+        println!(
+            "{}: {:?} formation, {:?} mixer: {}; max tilt {:.1} deg, rms tracking {:.3} m, final error {:.3} m, max thrust {:.0} %",
+            loaded.name,
+            setup.formation,
+            setup.mixer,
+            if outcome.dropped {
+                "DROPPED"
+            } else if outcome.landed {
+                "delivered"
+            } else {
+                "flew, not landed"
+            },
+            outcome.max_tilt_deg,
+            outcome.rms_tracking_error_m,
+            outcome.final_position_error_m,
+            100.0 * outcome.max_thrust_fraction
+        );
+        println!(
+            "  {:.1} s simulated in {:.2} s ({:.0}x real time)",
+            outcome.simulated_s, wall_s, realtime
+        );
+        for p in &written {
+            println!("  wrote {}", p.display());
+        }
+    }
+    Ok(())
+}

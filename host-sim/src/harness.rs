@@ -1,0 +1,305 @@
+//! Runs `shared`'s flight software against the physics plant at the firmware's rates (SPEC.md
+//! section 2, step 4; section 5, `fly`): IMU and control at 400 Hz, physics at 2 kHz,
+//! motion capture at 100 Hz with latency.
+//!
+//! The vehicle takes off from the ground, follows the reference trajectory to the target,
+//! hovers, lands and disarms. The controller believes the COM and mass it is given; the plant
+//! always has the truth. Nothing here decides anything: estimators, controller, mixer, plan and
+//! land detector are `shared`'s.
+
+use anyhow::{Result, anyhow, bail};
+use shared::control::allocation::{Mixer, MixerKind, RotorLayout, Saturation};
+use shared::control::attitude_estimator::{AttitudeEstimator, AttitudeEstimatorGains};
+use shared::control::controller::{ControlInputs, FlightController};
+use shared::control::land_detector::{Contact, LandDetector};
+use shared::control::params::ControlParams;
+use shared::control::position_estimator::{PositionEstimator, PositionEstimatorGains};
+use shared::control::trajectory::{FlightPhase, FlightPlan, PlanLimits, Setpoint};
+use shared::control::vector::Vec3;
+use shared::control::vehicle::VehicleModel;
+use shared::formation::{FormationProblem, solve};
+use shared::geometry::Vec2;
+use shared::scenario::{GRAVITY, Scenario};
+
+use crate::plant::sensors::Sensors;
+use crate::plant::{PHYSICS_DT, Plant, PlantConfig};
+
+/// Control rate, Hz (the firmware's).
+pub const CONTROL_HZ: u32 = shared::timing::CONTROL_RATE_HZ;
+/// Time on the ground, rotors off, before the plan starts (the estimators settle), s.
+pub const ARM_DELAY: f32 = 1.0;
+/// Roll or pitch beyond this counts as dropped (the paper), degrees.
+pub const DROP_TILT_DEG: f32 = 45.0;
+/// Time allowed after the plan ends for the landing to be detected, s.
+const LANDING_GRACE: f32 = 3.0;
+
+/// Which formation the robots fly in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FormationChoice {
+    /// Robot `j` at `j * perimeter / count` (or the scenario's `initial`).
+    Even,
+    /// `shared::formation`'s optimum for the believed COM.
+    Optimized,
+}
+
+/// One flight to simulate.
+#[derive(Clone, Copy, Debug)]
+pub struct FlightSetup {
+    /// Formation.
+    pub formation: FormationChoice,
+    /// Mixer.
+    pub mixer: MixerKind,
+    /// COM the controller believes, m.
+    pub believed_com: Vec2,
+    /// Payload mass the controller believes, kg.
+    pub believed_mass: f32,
+    /// Seed of sensor noise and disturbance phase.
+    pub seed: u64,
+    /// Command-to-thrust over-read factor of the plant's rotors.
+    pub map_error: f32,
+}
+
+/// One row of the time series (100 Hz).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Time since the start, s.
+    pub t: f32,
+    /// True position, NED, m.
+    pub position: Vec3,
+    /// Reference position, NED, m.
+    pub reference: Vec3,
+    /// True roll, pitch, yaw, degrees.
+    pub attitude_deg: Vec3,
+    /// Largest rotor command as a fraction of the maximum.
+    pub max_thrust_fraction: f32,
+    /// Collective commanded, N.
+    pub collective: f32,
+    /// Whether the allocation cut anything.
+    pub saturated: bool,
+}
+
+/// What a flight produced.
+#[derive(Clone, Debug)]
+pub struct FlightOutcome {
+    /// Roll or pitch exceeded 45 degrees.
+    pub dropped: bool,
+    /// Largest tilt of the body from level, degrees.
+    pub max_tilt_deg: f32,
+    /// RMS of the distance between truth and reference over the plan, m.
+    pub rms_tracking_error_m: f32,
+    /// Distance of the payload from its landing point at the end, m.
+    pub final_position_error_m: f32,
+    /// Largest rotor command over the flight as a fraction of the maximum.
+    pub max_thrust_fraction: f32,
+    /// The formation flown (arc lengths).
+    pub positions: Vec<f32>,
+    /// Whether the landing was detected and the rotors stopped.
+    pub landed: bool,
+    /// Simulated time, s.
+    pub simulated_s: f32,
+    /// The time series.
+    pub samples: Vec<Sample>,
+}
+
+/// The formation's arc lengths for `choice`.
+pub fn formation_positions(
+    scenario: &Scenario,
+    choice: FormationChoice,
+    com: Vec2,
+) -> Result<Vec<f32>> {
+    match choice {
+        FormationChoice::Even => Ok(scenario.robots.initial.to_vec()),
+        FormationChoice::Optimized => {
+            let problem = FormationProblem {
+                rail: &scenario.payload.rail,
+                spin: &scenario.robots.spin,
+                min_spacing: scenario.robots.min_spacing,
+                com,
+                torque_per_thrust: scenario.robots.torque_per_thrust,
+                balance_eps: scenario.formation.balance_eps,
+                current: Some(&scenario.robots.initial),
+            };
+            let f = solve(&problem).map_err(|e| anyhow!("formation: {e}"))?;
+            Ok(f.positions.to_vec())
+        }
+    }
+}
+
+/// Flies `setup` on `scenario`'s truth and flight set-up.
+pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
+    let Some(truth) = scenario.truth else {
+        bail!("[truth]: the scenario has no truth to simulate");
+    };
+    let Some(flight) = scenario.flight else {
+        bail!("[flight]: the scenario has no flight target");
+    };
+    let positions = formation_positions(scenario, setup.formation, setup.believed_com)?;
+    let rail = &scenario.payload.rail;
+    let points: Vec<Vec2> = positions.iter().map(|&s| rail.point_at(s)).collect();
+    let robots = &scenario.robots;
+    let mut seed_rng = setup.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let mut phase = || {
+        seed_rng ^= seed_rng << 13;
+        seed_rng ^= seed_rng >> 7;
+        seed_rng ^= seed_rng << 17;
+        (seed_rng % 6283) as f32 * 1e-3
+    };
+    let mut plant = Plant::new(PlantConfig {
+        footprint: scenario.payload.footprint.to_vec(),
+        com: truth.com,
+        mass: truth.mass,
+        robot_mass: robots.mass,
+        rotor_points: points.clone(),
+        spin: robots.spin.to_vec(),
+        torque_per_thrust: robots.torque_per_thrust,
+        max_thrust: robots.max_thrust,
+        map_error: setup.map_error,
+        disturbance_peak: flight.disturbance_torque,
+        disturbance_phase: [phase(), phase()],
+    });
+    let mut sensors = Sensors::new(setup.seed);
+
+    // The flight software, as the firmware builds it after the formation decision.
+    let model = VehicleModel::from_payload(
+        &scenario.payload.footprint,
+        setup.believed_com,
+        setup.believed_mass,
+        &points,
+        robots.mass,
+        robots.max_thrust,
+    );
+    let layout = RotorLayout {
+        points: &points,
+        spin: &robots.spin,
+        com: setup.believed_com,
+        torque_per_thrust: robots.torque_per_thrust,
+        max_thrust: robots.max_thrust,
+    };
+    let mixer = Mixer::build(setup.mixer, &layout).map_err(|e| anyhow!("mixer: {e}"))?;
+    let mut controller = FlightController::new(ControlParams::default(), model);
+    let mut attitude = AttitudeEstimator::new(AttitudeEstimatorGains::default());
+    let mut position = PositionEstimator::new(PositionEstimatorGains::default());
+    let start = plant.state().position;
+    let plan = FlightPlan::new(start, flight.target, 0.0, PlanLimits::default());
+    let mut land = LandDetector::new(start.z);
+    let landing_point = Vec3::new(flight.target[0], flight.target[1], start.z);
+
+    let dt = 1.0 / CONTROL_HZ as f32;
+    let physics_per_tick = (dt / PHYSICS_DT).round() as usize;
+    let end = ARM_DELAY + plan.duration() + LANDING_GRACE;
+    let n = points.len();
+    let mut commands = vec![0.0f32; n];
+    let mut saturation = Saturation::default();
+    let (mut dropped, mut max_tilt, mut max_fraction) = (false, 0.0f32, 0.0f32);
+    let (mut squared_error, mut error_samples) = (0.0f64, 0u64);
+    let mut samples = Vec::new();
+    let mut tick: u64 = 0;
+    loop {
+        let t = plant.time();
+        if t >= end {
+            break;
+        }
+        let now_us = tick * u64::from(1_000_000 / CONTROL_HZ);
+        let truth_now = plant.state();
+        let imu = sensors.imu(&truth_now, dt);
+        for fix in sensors.mocap(&truth_now, t) {
+            attitude.set_reference(fix.attitude);
+            position.correct(fix.position, fix.stamp_us);
+        }
+        let a = attitude.update(imu.gyro, imu.accel, dt);
+        position.predict(
+            a.attitude.rotate(imu.accel) + Vec3::DOWN * GRAVITY,
+            dt,
+            now_us,
+        );
+        let estimate = position.state();
+        let armed = t >= ARM_DELAY;
+        let (setpoint, phase) = if armed {
+            plan.sample(t - ARM_DELAY)
+        } else {
+            (
+                Setpoint {
+                    position: start,
+                    ..Setpoint::default()
+                },
+                FlightPhase::Takeoff,
+            )
+        };
+        let descending = matches!(phase, FlightPhase::Land | FlightPhase::Done);
+        let contact = land.update(estimate.position, estimate.velocity, descending, dt);
+        let mut collective = 0.0;
+        if armed && contact != Contact::Landed {
+            let inputs = ControlInputs {
+                setpoint,
+                attitude: a,
+                position: estimate,
+                airborne: land.airborne(),
+                saturation,
+            };
+            let out = controller.step(&inputs, dt);
+            let alloc = mixer.allocate(&out.wrench);
+            saturation = alloc.saturation;
+            commands.copy_from_slice(&alloc.thrusts[..n]);
+            collective = out.wrench.thrust;
+        } else {
+            commands.iter_mut().for_each(|c| *c = 0.0);
+        }
+
+        let tilt = truth_now
+            .attitude
+            .rotate(Vec3::DOWN)
+            .z
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees();
+        max_tilt = max_tilt.max(tilt);
+        let fraction = commands.iter().fold(0.0f32, |m, &c| m.max(c)) / robots.max_thrust;
+        max_fraction = max_fraction.max(fraction);
+        if armed && phase != FlightPhase::Done {
+            let e = (truth_now.position - setpoint.position).norm();
+            squared_error += f64::from(e * e);
+            error_samples += 1;
+        }
+        if tick % 4 == 0 {
+            let e = truth_now.attitude.to_euler();
+            samples.push(Sample {
+                t,
+                position: truth_now.position,
+                reference: setpoint.position,
+                attitude_deg: Vec3::new(e.x.to_degrees(), e.y.to_degrees(), e.z.to_degrees()),
+                max_thrust_fraction: fraction,
+                collective,
+                saturated: saturation.any(),
+            });
+        }
+        let euler = truth_now.attitude.to_euler();
+        if euler.x.abs().to_degrees() > DROP_TILT_DEG || euler.y.abs().to_degrees() > DROP_TILT_DEG
+        {
+            dropped = true;
+            break;
+        }
+        if contact == Contact::Landed && phase == FlightPhase::Done {
+            break;
+        }
+        for _ in 0..physics_per_tick {
+            plant.step(&commands);
+        }
+        tick += 1;
+    }
+    let final_state = plant.state();
+    Ok(FlightOutcome {
+        dropped,
+        max_tilt_deg: max_tilt,
+        rms_tracking_error_m: if error_samples > 0 {
+            (squared_error / error_samples as f64).sqrt() as f32
+        } else {
+            0.0
+        },
+        final_position_error_m: (final_state.position - landing_point).norm(),
+        max_thrust_fraction: max_fraction,
+        positions,
+        landed: land.contact() == Contact::Landed,
+        simulated_s: plant.time(),
+        samples,
+    })
+}

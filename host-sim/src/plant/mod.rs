@@ -1,0 +1,243 @@
+//! The simulated world the flight software is tested against (SPEC.md section 2, step 4;
+//! section 4, "Flight simulation").
+//!
+//! A rapier3d rigid body for the payload (its footprint as a thin plate; the support on flat
+//! ground is the footprint's convex hull, as SPEC.md section 3 has it), with the payload's mass
+//! at the scenario's true COM and each robot as a point mass at its rotor. Flat ground with
+//! contact and friction, so the payload rests, pivots on an edge and takes off. Rotors push
+//! along the body's up axis at their rotor points and twist the body about its z axis by
+//! `s_i c_q T_i`; each follows its command through a first-order lag, within its limits, and an
+//! optional command-to-thrust map error (the paper's bias: the map over-reads by `map_error`, so
+//! the rotor makes `command / map_error`). A smooth body torque disturbance of the scenario's
+//! peak acts on roll and pitch.
+//!
+//! Frames: rapier runs directly in the flight software's frames: world NED (gravity along +z,
+//! the ground's top face at z = 0) and body FRD, so nothing is converted.
+
+pub mod sensors;
+
+use rapier3d::prelude::*;
+use shared::control::vector::{Quat, Vec3};
+use shared::geometry::{Vec2, area_moments};
+use shared::scenario::GRAVITY;
+
+/// Rotor time constant, s: a 20 ms first-order lag, typical of 10-inch props on 4S ESCs
+/// (5 to 50 ms in the field).
+pub const MOTOR_TIME_CONSTANT: f32 = 0.02;
+/// Thickness of the payload plate, m.
+pub const PLATE_THICKNESS: f32 = 0.03;
+/// Physics step, s (2 kHz: five steps per 400 Hz control tick).
+pub const PHYSICS_DT: f32 = 0.0005;
+/// Frequencies of the disturbance on roll and pitch, Hz.
+const DISTURBANCE_HZ: [f32; 2] = [0.37, 0.53];
+
+/// What the plant is made of.
+#[derive(Clone, Debug)]
+pub struct PlantConfig {
+    /// Payload outline, body frame, m.
+    pub footprint: Vec<Vec2>,
+    /// True COM of the payload, m.
+    pub com: Vec2,
+    /// True payload mass, kg.
+    pub mass: f32,
+    /// One robot's mass, kg.
+    pub robot_mass: f32,
+    /// Rotor points, body frame, m.
+    pub rotor_points: Vec<Vec2>,
+    /// Spin of each rotor.
+    pub spin: Vec<i8>,
+    /// `c_q / c_t`, m.
+    pub torque_per_thrust: f32,
+    /// Largest commanded thrust of one rotor, N.
+    pub max_thrust: f32,
+    /// Command-to-thrust over-read factor (1: exact map).
+    pub map_error: f32,
+    /// Peak body torque of the disturbance, N m.
+    pub disturbance_peak: f32,
+    /// Phase of the disturbance (from the run's seed), rad.
+    pub disturbance_phase: [f32; 2],
+}
+
+/// The truth, as the sensors see it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrueState {
+    /// Position of the payload frame's origin, NED, m.
+    pub position: Vec3,
+    /// Its velocity, m/s.
+    pub velocity: Vec3,
+    /// Attitude, body FRD to world NED.
+    pub attitude: Quat,
+    /// Body rate, rad/s.
+    pub rate: Vec3,
+}
+
+/// The world: ground, payload, rotors.
+pub struct Plant {
+    world: PhysicsWorld,
+    body: RigidBodyHandle,
+    config: PlantConfig,
+    thrusts: Vec<f32>,
+    time: f32,
+}
+
+fn vector(v: Vec3) -> Vector {
+    Vector::new(v.x, v.y, v.z)
+}
+
+fn vec3(v: Vector) -> Vec3 {
+    Vec3::new(v.x, v.y, v.z)
+}
+
+impl Plant {
+    /// A payload resting on flat ground at the world origin, rotors off.
+    pub fn new(config: PlantConfig) -> Self {
+        let mut world = PhysicsWorld::default();
+        world.gravity = Vector::new(0.0, 0.0, GRAVITY);
+        world.integration_parameters.dt = PHYSICS_DT;
+        let ground = ColliderBuilder::cuboid(50.0, 50.0, 0.5)
+            .translation(Vector::new(0.0, 0.0, 0.5))
+            .friction(0.8)
+            .build();
+        world.colliders.insert(ground);
+
+        let half = 0.5 * PLATE_THICKNESS;
+        let mid = -half; // the plate spans z in [-thickness, 0]: resting on the ground
+        let plate = area_moments(&config.footprint);
+        let density = if plate.area > 0.0 {
+            config.mass / plate.area
+        } else {
+            0.0
+        };
+        let inertia = Vector::new(
+            density * plate.yy + config.mass * PLATE_THICKNESS * PLATE_THICKNESS / 12.0,
+            density * plate.xx + config.mass * PLATE_THICKNESS * PLATE_THICKNESS / 12.0,
+            density * (plate.xx + plate.yy),
+        );
+        let mut mass = MassProperties::new(
+            Vector::new(config.com.x, config.com.y, mid),
+            config.mass,
+            inertia,
+        );
+        for p in &config.rotor_points {
+            mass +=
+                MassProperties::new(Vector::new(p.x, p.y, mid), config.robot_mass, Vector::ZERO);
+        }
+        let body = world.bodies.insert(
+            RigidBodyBuilder::dynamic()
+                .additional_mass_properties(mass)
+                .can_sleep(false)
+                .build(),
+        );
+        let mut hull_points = Vec::with_capacity(2 * config.footprint.len());
+        for p in &config.footprint {
+            hull_points.push(Vector::new(p.x, p.y, 0.0));
+            hull_points.push(Vector::new(p.x, p.y, -PLATE_THICKNESS));
+        }
+        if let Some(shape) = ColliderBuilder::convex_hull(&hull_points) {
+            let collider = shape.density(0.0).friction(0.8).build();
+            world
+                .colliders
+                .insert_with_parent(collider, body, &mut world.bodies);
+        }
+        let n = config.rotor_points.len();
+        Self {
+            world,
+            body,
+            config,
+            thrusts: vec![0.0; n],
+            time: 0.0,
+        }
+    }
+
+    /// Simulated time, s.
+    pub fn time(&self) -> f32 {
+        self.time
+    }
+
+    /// Each rotor's actual thrust, N.
+    pub fn thrusts(&self) -> &[f32] {
+        &self.thrusts
+    }
+
+    /// Total mass of payload and robots, kg.
+    pub fn total_mass(&self) -> f32 {
+        self.config.mass + self.config.robot_mass * self.config.rotor_points.len() as f32
+    }
+
+    /// The disturbance torque at time `t` (body frame), N m.
+    pub fn disturbance(&self, t: f32) -> Vec3 {
+        let peak = self.config.disturbance_peak;
+        let [fx, fy] = DISTURBANCE_HZ;
+        let [px, py] = self.config.disturbance_phase;
+        let tau = std::f32::consts::TAU;
+        Vec3::new(
+            peak * (tau * fx * t + px).sin(),
+            peak * (tau * fy * t + py).sin(),
+            0.0,
+        )
+    }
+
+    /// One physics step of `PHYSICS_DT` with rotor commands `commands` (N, commanded units).
+    pub fn step(&mut self, commands: &[f32]) {
+        let alpha = PHYSICS_DT / MOTOR_TIME_CONSTANT;
+        let scale = 1.0 / self.config.map_error;
+        for (t, &c) in self.thrusts.iter_mut().zip(commands) {
+            let target = c.clamp(0.0, self.config.max_thrust) * scale;
+            *t += (target - *t) * alpha;
+        }
+        let disturbance = self.disturbance(self.time);
+        let Some(rb) = self.world.bodies.get_mut(self.body) else {
+            return;
+        };
+        rb.reset_forces(false);
+        rb.reset_torques(false);
+        let pose = *rb.position();
+        let rotation = pose.rotation;
+        let mut yaw_torque = 0.0;
+        for ((p, &t), &s) in self
+            .config
+            .rotor_points
+            .iter()
+            .zip(&self.thrusts)
+            .zip(&self.config.spin)
+        {
+            let at = pose * Vector::new(p.x, p.y, -0.5 * PLATE_THICKNESS);
+            let force = rotation * Vector::new(0.0, 0.0, -t);
+            rb.add_force_at_point(force, at, true);
+            yaw_torque += f32::from(s) * self.config.torque_per_thrust * t;
+        }
+        let body_torque = vector(disturbance) + Vector::new(0.0, 0.0, yaw_torque);
+        rb.add_torque(rotation * body_torque, true);
+        self.world.step();
+        self.time += PHYSICS_DT;
+    }
+
+    /// The truth at the payload frame's origin.
+    pub fn state(&self) -> TrueState {
+        let Some(rb) = self.world.bodies.get(self.body) else {
+            return TrueState {
+                position: Vec3::ZERO,
+                velocity: Vec3::ZERO,
+                attitude: Quat::IDENTITY,
+                rate: Vec3::ZERO,
+            };
+        };
+        let pose = rb.position();
+        let r = pose.rotation;
+        let attitude = Quat {
+            w: r.w,
+            x: r.x,
+            y: r.y,
+            z: r.z,
+        };
+        let origin = pose.translation;
+        let omega = rb.angvel();
+        let velocity = rb.linvel() + omega.cross(origin - rb.center_of_mass());
+        TrueState {
+            position: vec3(origin),
+            velocity: vec3(velocity),
+            attitude,
+            rate: attitude.inverse_rotate(vec3(omega)),
+        }
+    }
+}

@@ -1,0 +1,131 @@
+//! The sensors of the simulated vehicle, seeded and reproducible (SPEC.md section 4,
+//! "Flight simulation"): an IMU at the payload frame's origin and a motion-capture system.
+//!
+//! - IMU: gyro with a constant bias and white noise; accelerometer reading the specific force
+//!   (acceleration minus gravity) in the body frame, with white noise. Sampled at the control
+//!   rate; its acceleration is the origin's velocity change over the sample period.
+//! - Motion capture: position and attitude of the payload frame at [`MOCAP_HZ`], with noise,
+//!   delivered [`MOCAP_LATENCY`] after it was taken.
+
+use std::collections::VecDeque;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use shared::control::vector::{Quat, Vec3};
+use shared::scenario::GRAVITY;
+
+use crate::plant::TrueState;
+
+/// Gyro white noise, rad/s (1 sigma).
+pub const GYRO_NOISE: f32 = 0.005;
+/// Gyro bias magnitude per axis, rad/s.
+pub const GYRO_BIAS: f32 = 0.01;
+/// Accelerometer white noise, m/s^2 (1 sigma).
+pub const ACCEL_NOISE: f32 = 0.05;
+/// Motion-capture rate, Hz.
+pub const MOCAP_HZ: f32 = 100.0;
+/// Motion-capture latency, s.
+pub const MOCAP_LATENCY: f32 = 0.01;
+/// Motion-capture position noise, m (1 sigma).
+pub const MOCAP_POSITION_NOISE: f32 = 0.001;
+/// Motion-capture attitude noise, rad per axis (1 sigma).
+pub const MOCAP_ATTITUDE_NOISE: f32 = 0.005;
+
+/// One IMU sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuSample {
+    /// Body rate with bias and noise, rad/s.
+    pub gyro: Vec3,
+    /// Specific force in the body frame with noise, m/s^2.
+    pub accel: Vec3,
+}
+
+/// One motion-capture fix.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MocapFix {
+    /// Position of the payload frame, NED, m.
+    pub position: Vec3,
+    /// Attitude of the payload frame.
+    pub attitude: Quat,
+    /// When it was taken, us.
+    pub stamp_us: u64,
+}
+
+/// The vehicle's sensors.
+pub struct Sensors {
+    rng: ChaCha8Rng,
+    gyro_bias: Vec3,
+    last_velocity: Option<Vec3>,
+    pending: VecDeque<(f32, MocapFix)>,
+    next_fix: f32,
+}
+
+fn noise(rng: &mut ChaCha8Rng, sigma: f32) -> f32 {
+    Normal::new(0.0, sigma).map_or(0.0, |n| n.sample(rng))
+}
+
+impl Sensors {
+    /// Sensors with noise streams from `seed`.
+    pub fn new(seed: u64) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut bias = || noise(&mut rng, GYRO_BIAS);
+        let gyro_bias = Vec3::new(bias(), bias(), bias());
+        Self {
+            rng,
+            gyro_bias,
+            last_velocity: None,
+            pending: VecDeque::new(),
+            next_fix: 0.0,
+        }
+    }
+
+    /// An IMU sample of `truth`, `dt` seconds after the previous one.
+    pub fn imu(&mut self, truth: &TrueState, dt: f32) -> ImuSample {
+        let acceleration = match self.last_velocity.replace(truth.velocity) {
+            Some(v) if dt > 0.0 => (truth.velocity - v) * (1.0 / dt),
+            _ => Vec3::ZERO,
+        };
+        let specific = truth
+            .attitude
+            .inverse_rotate(acceleration - Vec3::DOWN * GRAVITY);
+        let rng = &mut self.rng;
+        let mut n = |s: f32| Vec3::new(noise(rng, s), noise(rng, s), noise(rng, s));
+        ImuSample {
+            gyro: truth.rate + self.gyro_bias + n(GYRO_NOISE),
+            accel: specific + n(ACCEL_NOISE),
+        }
+    }
+
+    /// Takes a fix when one is due at time `t` and returns the fixes whose latency has passed.
+    pub fn mocap(&mut self, truth: &TrueState, t: f32) -> Vec<MocapFix> {
+        if t + 1e-6 >= self.next_fix {
+            self.next_fix += 1.0 / MOCAP_HZ;
+            let rng = &mut self.rng;
+            let p = truth.position
+                + Vec3::new(
+                    noise(rng, MOCAP_POSITION_NOISE),
+                    noise(rng, MOCAP_POSITION_NOISE),
+                    noise(rng, MOCAP_POSITION_NOISE),
+                );
+            let tremor = Vec3::new(
+                noise(rng, MOCAP_ATTITUDE_NOISE),
+                noise(rng, MOCAP_ATTITUDE_NOISE),
+                noise(rng, MOCAP_ATTITUDE_NOISE),
+            );
+            let fix = MocapFix {
+                position: p,
+                attitude: truth.attitude * Quat::from_rotation_vector(tremor),
+                stamp_us: (f64::from(t) * 1e6).round() as u64,
+            };
+            self.pending.push_back((t + MOCAP_LATENCY, fix));
+        }
+        let mut ready = Vec::new();
+        while self.pending.front().is_some_and(|(at, _)| *at <= t + 1e-6) {
+            if let Some((_, fix)) = self.pending.pop_front() {
+                ready.push(fix);
+            }
+        }
+        ready
+    }
+}
