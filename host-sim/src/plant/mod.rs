@@ -91,8 +91,10 @@ fn vec3(v: Vector) -> Vec3 {
 impl Plant {
     /// A payload resting on flat ground at the world origin, rotors off.
     pub fn new(config: PlantConfig) -> Self {
-        let mut world = PhysicsWorld::default();
-        world.gravity = Vector::new(0.0, 0.0, GRAVITY);
+        let mut world = PhysicsWorld {
+            gravity: Vector::new(0.0, 0.0, GRAVITY),
+            ..PhysicsWorld::default()
+        };
         world.integration_parameters.dt = PHYSICS_DT;
         let ground = ColliderBuilder::cuboid(50.0, 50.0, 0.5)
             .translation(Vector::new(0.0, 0.0, 0.5))
