@@ -91,6 +91,8 @@ pub struct FlightOutcome {
     pub final_position_error_m: f32,
     /// Largest rotor command over the flight as a fraction of the maximum.
     pub max_thrust_fraction: f32,
+    /// Greatest height of the payload frame above the ground, m (near 0: never took off).
+    pub max_height_m: f32,
     /// The formation flown (arc lengths).
     pub positions: Vec<f32>,
     /// Whether the landing was detected and the rotors stopped.
@@ -191,6 +193,7 @@ pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
     let mut commands = vec![0.0f32; n];
     let mut saturation = Saturation::default();
     let (mut dropped, mut max_tilt, mut max_fraction) = (false, 0.0f32, 0.0f32);
+    let mut max_height = 0.0f32;
     let (mut squared_error, mut error_samples) = (0.0f64, 0u64);
     let mut samples = Vec::new();
     let mut tick: u64 = 0;
@@ -253,6 +256,7 @@ pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
             .acos()
             .to_degrees();
         max_tilt = max_tilt.max(tilt);
+        max_height = max_height.max(start.z - truth_now.position.z);
         let fraction = commands.iter().fold(0.0f32, |m, &c| m.max(c)) / robots.max_thrust;
         max_fraction = max_fraction.max(fraction);
         if armed && phase != FlightPhase::Done {
@@ -297,6 +301,7 @@ pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
         },
         final_position_error_m: (final_state.position - landing_point).norm(),
         max_thrust_fraction: max_fraction,
+        max_height_m: max_height,
         positions,
         landed: land.contact() == Contact::Landed,
         simulated_s: plant.time(),

@@ -5,6 +5,7 @@
 
 pub mod cli;
 pub mod commands;
+pub mod figures;
 pub mod harness;
 pub mod monte_carlo;
 pub mod plant;

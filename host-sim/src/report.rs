@@ -1,4 +1,4 @@
-//! Flight reports on disk: the time series as CSV (figures follow in `figures`).
+//! Flight reports on disk: the time series as CSV and the figures of [`crate::figures`].
 
 use std::fs;
 use std::io::Write;
@@ -8,7 +8,9 @@ use anyhow::{Context, Result};
 
 use crate::harness::{FlightOutcome, FlightSetup};
 
-/// Writes `<dir>/<name>-<formation>-<mixer>.csv` and returns the files written.
+/// Writes `<dir>/<stem>.csv`, `<stem>-height.png` and `<stem>-attitude.png` with
+/// `stem = <name>-<formation>-<mixer>`, and returns the files written. A figure that cannot be
+/// drawn (no font) is reported on stderr; the CSV always is written.
 pub fn write_flight(
     dir: &Path,
     name: &str,
@@ -43,5 +45,38 @@ pub fn write_flight(
             u8::from(s.saturated)
         )?;
     }
-    Ok(vec![csv])
+    let mut written = vec![csv];
+    let label = format!("{:?} formation, {:?} mixer", setup.formation, setup.mixer);
+    let height = crate::figures::height(
+        &dir.join(format!("{stem}-height.png")),
+        &format!("{name}: height, {label}"),
+        &[(label.as_str(), outcome)],
+    );
+    let attitude = crate::figures::attitude(
+        &dir.join(format!("{stem}-attitude.png")),
+        &format!("{name}: roll and pitch, {label}"),
+        outcome,
+    );
+    for figure in [height, attitude] {
+        match figure {
+            Ok(path) => written.push(path),
+            Err(e) => eprintln!("warning: figure skipped: {e:#}"),
+        }
+    }
+    Ok(written)
+}
+
+/// Writes the paper's comparison figure, height over time for several flights, to
+/// `<dir>/<name>-height-comparison.png`.
+pub fn write_comparison(
+    dir: &Path,
+    name: &str,
+    flights: &[(&str, &FlightOutcome)],
+) -> Result<PathBuf> {
+    fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    crate::figures::height(
+        &dir.join(format!("{name}-height-comparison.png")),
+        &format!("{name}: height, even vs optimised formation"),
+        flights,
+    )
 }

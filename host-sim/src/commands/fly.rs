@@ -57,9 +57,12 @@ pub struct FlyArgs {
     /// The rotors' command-to-thrust map over-reads by this factor.
     #[arg(long, value_name = "S", default_value_t = 1.0)]
     map_error: f64,
-    /// Write the time series (flight.csv) and figures (PNG) into this folder.
+    /// Write the time series (CSV) and figures (PNG) into this folder.
     #[arg(long, value_name = "DIR")]
     output: Option<PathBuf>,
+    /// Also fly the other formation and draw both heights in one figure (needs --output).
+    #[arg(long, requires = "output")]
+    compare: bool,
 }
 
 /// Runs the command.
@@ -109,6 +112,31 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     let mut written = Vec::new();
     if let Some(dir) = &args.output {
         written = report::write_flight(dir, &loaded.name, &setup, &outcome)?;
+        if args.compare {
+            let other_choice = match setup.formation {
+                FormationChoice::Even => FormationChoice::Optimized,
+                FormationChoice::Optimized => FormationChoice::Even,
+            };
+            let other = harness::fly(
+                s,
+                &FlightSetup {
+                    formation: other_choice,
+                    ..setup
+                },
+            )?;
+            let label = |c: FormationChoice| match c {
+                FormationChoice::Even => "even formation",
+                FormationChoice::Optimized => "optimised formation",
+            };
+            let flights = [
+                (label(setup.formation), &outcome),
+                (label(other_choice), &other),
+            ];
+            match report::write_comparison(dir, &loaded.name, &flights) {
+                Ok(path) => written.push(path),
+                Err(e) => eprintln!("warning: figure skipped: {e:#}"),
+            }
+        }
     }
     let realtime = f64::from(outcome.simulated_s) / wall_s.max(1e-9);
     if args.common.json {
@@ -122,6 +150,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
             "final_position_error_m": outcome.final_position_error_m,
             "max_thrust_fraction": outcome.max_thrust_fraction,
             "landed": outcome.landed,
+            "max_height_m": outcome.max_height_m,
             "positions": outcome.positions,
             "simulated_s": outcome.simulated_s,
             "wall_s": wall_s,

@@ -5,7 +5,10 @@
 //! acceleration (m/s^2), the attitude loop a body rate, and the rate loop an angular
 //! acceleration that the estimated inertia turns into a torque. So the gains below carry
 //! over between payloads of different mass and inertia; the defaults fly the paper's payloads
-//! (2.4 to 4 kg on eight 14.2 N rotors, 1.76 m x 0.2 m plate or the 0.62 m L).
+//! (2.4 to 4 kg on eight 14.2 N rotors, 1.76 m x 0.2 m plate or the 0.62 m L). Tuned in the
+//! physics plant (`host-sim fly`, 20 ms rotor lag, 10 ms motion-capture latency, the paper's
+//! 0.3 N m disturbance): the roll axis of the narrow plate (inertia ~0.04 kg m^2) sets the
+//! rate-loop gains.
 
 use crate::control::vector::Vec3;
 
@@ -63,10 +66,10 @@ impl Default for ControlParams {
             velocity_integral_limit: Vec3::new(1.5, 1.5, 3.0),
             velocity_d_cutoff_hz: 5.0,
             max_tilt: 0.35,
-            attitude_p: Vec3::new(6.0, 6.0, 2.5),
+            attitude_p: Vec3::new(10.0, 10.0, 2.5),
             max_rate: Vec3::new(2.5, 2.5, 1.0),
-            rate_p: Vec3::new(18.0, 18.0, 6.0),
-            rate_i: Vec3::new(12.0, 12.0, 3.0),
+            rate_p: Vec3::new(30.0, 30.0, 6.0),
+            rate_i: Vec3::new(40.0, 40.0, 3.0),
             rate_d: Vec3::new(0.25, 0.25, 0.0),
             rate_integral_limit: Vec3::new(8.0, 8.0, 3.0),
             max_angular_acceleration: Vec3::new(40.0, 40.0, 10.0),

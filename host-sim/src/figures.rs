@@ -1,0 +1,140 @@
+//! Figures like the paper's (SPEC.md section 4, "Flight simulation"): height over time for
+//! several flights against their reference, and roll and pitch over time, as PNG files drawn
+//! with plotters.
+//!
+//! Text is drawn with the system's sans-serif font (plotters' `ttf` feature, through
+//! fontconfig). Where no font can be found the figure is skipped with a message; the CSV files
+//! carry the same data.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Result, anyhow, bail};
+use plotters::prelude::*;
+
+use crate::harness::FlightOutcome;
+
+const COLOURS: [RGBColor; 4] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+];
+
+/// Picks one angle out of a sample.
+type AngleOf = fn(&crate::harness::Sample) -> f32;
+
+fn draw_error<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow!("drawing failed: {e:?}")
+}
+
+/// Height above ground over time for each `(label, flight)`, with the first flight's
+/// reference dashed; written to `path`.
+pub fn height(path: &Path, title: &str, flights: &[(&str, &FlightOutcome)]) -> Result<PathBuf> {
+    let Some(&(_, first)) = flights.first() else {
+        bail!("no flight to draw");
+    };
+    let t_end = flights
+        .iter()
+        .filter_map(|(_, f)| f.samples.last().map(|s| s.t))
+        .fold(1.0f32, f32::max);
+    let top = flights
+        .iter()
+        .flat_map(|(_, f)| f.samples.iter().map(|s| -s.position.z.min(s.reference.z)))
+        .fold(0.6f32, f32::max);
+    let root = BitMapBackend::new(path, (900, 500)).into_drawing_area();
+    root.fill(&WHITE).map_err(draw_error)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(55)
+        .build_cartesian_2d(0f32..t_end, -0.05f32..top * 1.1)
+        .map_err(draw_error)?;
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .y_desc("height (m)")
+        .draw()
+        .map_err(draw_error)?;
+    chart
+        .draw_series(DashedLineSeries::new(
+            first.samples.iter().map(|s| (s.t, -s.reference.z)),
+            6,
+            4,
+            BLACK.stroke_width(1),
+        ))
+        .map_err(draw_error)?
+        .label("reference")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+    for (i, (label, flight)) in flights.iter().enumerate() {
+        let colour = COLOURS[i % COLOURS.len()];
+        chart
+            .draw_series(LineSeries::new(
+                flight.samples.iter().map(|s| (s.t, -s.position.z)),
+                colour.stroke_width(2),
+            ))
+            .map_err(draw_error)?
+            .label(*label)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(draw_error)?;
+    root.present().map_err(draw_error)?;
+    Ok(path.to_path_buf())
+}
+
+/// Roll and pitch over time of one flight; written to `path`.
+pub fn attitude(path: &Path, title: &str, flight: &FlightOutcome) -> Result<PathBuf> {
+    let t_end = flight.samples.last().map_or(1.0, |s| s.t.max(1.0));
+    let peak = flight
+        .samples
+        .iter()
+        .map(|s| s.attitude_deg.x.abs().max(s.attitude_deg.y.abs()))
+        .fold(5.0f32, f32::max);
+    let root = BitMapBackend::new(path, (900, 500)).into_drawing_area();
+    root.fill(&WHITE).map_err(draw_error)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(55)
+        .build_cartesian_2d(0f32..t_end, -peak * 1.1..peak * 1.1)
+        .map_err(draw_error)?;
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .y_desc("angle (deg)")
+        .draw()
+        .map_err(draw_error)?;
+    let series: [(&str, AngleOf); 2] = [
+        ("roll", |s| s.attitude_deg.x),
+        ("pitch", |s| s.attitude_deg.y),
+    ];
+    for (i, (label, value)) in series.into_iter().enumerate() {
+        let colour = COLOURS[i];
+        chart
+            .draw_series(LineSeries::new(
+                flight.samples.iter().map(|s| (s.t, value(s))),
+                colour.stroke_width(2),
+            ))
+            .map_err(draw_error)?
+            .label(label)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(draw_error)?;
+    root.present().map_err(draw_error)?;
+    Ok(path.to_path_buf())
+}
