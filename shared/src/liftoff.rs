@@ -1,0 +1,180 @@
+//! Lift-off detection during an estimation lift (SPEC.md section 2, step 1.3): the pair's
+//! thrust ramps slowly while the other robots hold their own weight; the IMU's attitude shows
+//! when the payload starts to tilt, and the thrust at that moment is the measurement.
+//!
+//! The detector first holds the pair at its own weight while the attitude settles and takes
+//! the resting attitude as reference. It then ramps at `ramp_rate` and watches the angle
+//! between the body's z axis and the reference's. Crossing `tilt_threshold` is the lift-off.
+//! Tilt shows up late: the rack's backlash must close and the threshold must be crossed, both
+//! after the equilibrium was lost, and the thrust has ramped on meanwhile. That delay is
+//! compensated: the reading is the thrust at detection minus `ramp_rate * detection_delay`.
+//! If the ramp reaches the robots' maximum and holds it for `settle_time` without a tilt, the
+//! reading is "could not lift" (a censored measurement).
+
+use crate::control::vector::{Quat, Vec3};
+use crate::estimation::Measurement;
+
+/// Tuning of the detector.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LiftoffConfig {
+    /// Thrust ramp of each robot of the pair, N/s.
+    pub ramp_rate: f32,
+    /// Tilt from the resting attitude that counts as lift-off, rad.
+    pub tilt_threshold: f32,
+    /// Time from losing equilibrium to crossing the threshold, compensated in the reading, s.
+    pub detection_delay: f32,
+    /// Time held at the start (reference) and at maximum thrust (before giving up), s.
+    pub settle_time: f32,
+}
+
+impl Default for LiftoffConfig {
+    fn default() -> Self {
+        Self {
+            ramp_rate: 1.0,
+            tilt_threshold: 0.01,
+            detection_delay: 0.12,
+            settle_time: 0.5,
+        }
+    }
+}
+
+/// Where a lift stands.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LiftState {
+    /// Holding the pair at its own weight while the resting attitude is taken.
+    Settling,
+    /// Ramping the pair's thrust.
+    Ramping,
+    /// Holding maximum thrust, waiting for a tilt that has not come.
+    HoldingMaximum,
+    /// Done: the measurement for the estimator.
+    Measured(Measurement),
+}
+
+/// One lift.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LiftoffDetector {
+    config: LiftoffConfig,
+    start_thrust: f32,
+    max_thrust: f32,
+    thrust: f32,
+    timer: f32,
+    reference_axis: Vec3,
+    samples: u32,
+    state: LiftState,
+}
+
+impl LiftoffDetector {
+    /// A lift whose pair starts at `start_thrust` (the robots' own weight, N) and may go up
+    /// to `max_thrust` (N, per robot).
+    pub fn new(config: LiftoffConfig, start_thrust: f32, max_thrust: f32) -> Self {
+        Self {
+            config,
+            start_thrust,
+            max_thrust,
+            thrust: start_thrust,
+            timer: 0.0,
+            reference_axis: Vec3::ZERO,
+            samples: 0,
+            state: LiftState::Settling,
+        }
+    }
+
+    /// Where the lift stands.
+    pub fn state(&self) -> LiftState {
+        self.state
+    }
+
+    /// Thrust to command on each robot of the pair now, N.
+    pub fn pair_thrust(&self) -> f32 {
+        self.thrust
+    }
+
+    /// One step with the current attitude estimate, `dt` seconds after the previous one.
+    /// Returns the state after the step.
+    pub fn step(&mut self, attitude: Quat, dt: f32) -> LiftState {
+        let axis = attitude.rotate(Vec3::DOWN);
+        match self.state {
+            LiftState::Settling => {
+                self.reference_axis += axis;
+                self.samples += 1;
+                self.timer += dt;
+                if self.timer >= self.config.settle_time {
+                    self.reference_axis = self.reference_axis.normalized();
+                    self.timer = 0.0;
+                    self.state = LiftState::Ramping;
+                }
+            }
+            LiftState::Ramping | LiftState::HoldingMaximum => {
+                let cos = axis.normalized().dot(self.reference_axis).clamp(-1.0, 1.0);
+                let tilt = crate::math::acos(cos);
+                if tilt > self.config.tilt_threshold {
+                    let compensated =
+                        self.thrust - self.config.ramp_rate * self.config.detection_delay;
+                    let thrust = crate::math::max(compensated, self.start_thrust);
+                    self.state = LiftState::Measured(Measurement::Lifted { thrust });
+                } else if self.state == LiftState::Ramping {
+                    self.thrust =
+                        crate::math::min(self.thrust + self.config.ramp_rate * dt, self.max_thrust);
+                    if self.thrust >= self.max_thrust {
+                        self.state = LiftState::HoldingMaximum;
+                    }
+                } else {
+                    self.timer += dt;
+                    if self.timer >= self.config.settle_time {
+                        self.state = LiftState::Measured(Measurement::CouldNotLift);
+                    }
+                }
+            }
+            LiftState::Measured(_) => {}
+        }
+        self.state
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A payload that starts tilting `lag` seconds after the pair passes `lift_at`.
+    fn run(lift_at: f32, lag: f32, max: f32) -> (Measurement, f32) {
+        let config = LiftoffConfig {
+            detection_delay: lag + 0.01,
+            ..LiftoffConfig::default()
+        };
+        let mut d = LiftoffDetector::new(config, 0.98, max);
+        let dt = 0.0025;
+        let mut tilt_start: Option<f32> = None;
+        let mut t = 0.0;
+        loop {
+            let thrust = d.pair_thrust();
+            if thrust >= lift_at && tilt_start.is_none() {
+                tilt_start = Some(t + lag);
+            }
+            // Tilts at 1 rad/s once it goes.
+            let tilt = tilt_start.map_or(0.0, |s| (t - s).max(0.0));
+            let q = Quat::from_euler(0.02 + tilt, -0.01, 0.3); // resting slightly off level
+            if let LiftState::Measured(m) = d.step(q, dt) {
+                return (m, t);
+            }
+            t += dt;
+            assert!(t < 60.0, "the lift must end");
+        }
+    }
+
+    #[test]
+    fn reads_the_lift_off_thrust_with_the_delay_compensated() {
+        let (m, _) = run(6.0, 0.1, 14.2);
+        let Measurement::Lifted { thrust } = m else {
+            panic!("{m:?}");
+        };
+        assert!((thrust - 6.0).abs() < 0.03, "{thrust}");
+    }
+
+    #[test]
+    fn a_pair_that_cannot_lift_is_a_censored_reading() {
+        let (m, t) = run(20.0, 0.1, 14.2);
+        assert_eq!(m, Measurement::CouldNotLift);
+        assert!(t > (14.2 - 0.98) / 1.0, "ramped all the way first: {t}");
+    }
+}
