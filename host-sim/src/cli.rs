@@ -32,6 +32,8 @@ pub enum Command {
     Formation(commands::formation::FormationArgs),
     /// Closed-loop flight in the physics plant: take off, fly to the target, hover, land.
     Fly(commands::fly::FlyArgs),
+    /// The whole autonomous mission in the physics plant (default: the paper's rect-ex1).
+    Mission(commands::mission::MissionArgs),
 }
 
 /// Options every command takes.
@@ -67,6 +69,7 @@ where
         Command::Estimate(args) => commands::estimate::run(&args),
         Command::Formation(args) => commands::formation::run(&args),
         Command::Fly(args) => commands::fly::run(&args),
+        Command::Mission(args) => commands::mission::run(&args),
     }
     .map_err(CliError::Failed)
 }

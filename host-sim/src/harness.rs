@@ -308,3 +308,111 @@ pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
         samples,
     })
 }
+
+/// One estimation lift in the plant: what the detector read and what the model predicts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LiftOutcome {
+    /// The detector's reading (in commanded units).
+    pub measured: shared::estimation::Measurement,
+    /// The model's lift-off thrust for the truth (actual thrust), N.
+    pub model: f32,
+    /// Simulated time of the lift, s.
+    pub duration_s: f32,
+}
+
+/// Lifts with group `group` (robots placed by `shared::rail::moves::lift_targets` from the
+/// scenario's initial formation) on the plant, reading lift-off with `shared`'s detector.
+pub fn lift(scenario: &Scenario, group: usize, seed: u64, map_error: f32) -> Result<LiftOutcome> {
+    lift_from(scenario, group, &scenario.robots.initial, seed, map_error)
+}
+
+/// [`lift`] with the robots starting from `from` instead of the initial formation.
+pub fn lift_from(
+    scenario: &Scenario,
+    group: usize,
+    from: &[f32],
+    seed: u64,
+    map_error: f32,
+) -> Result<LiftOutcome> {
+    use shared::estimation::groups::lift_group;
+    use shared::liftoff::{LiftState, LiftoffConfig, LiftoffDetector};
+    use shared::statics::lift_off_thrust;
+
+    let Some(truth) = scenario.truth else {
+        bail!("[truth]: the scenario has no truth to simulate");
+    };
+    let g = lift_group(scenario, group)
+        .ok_or_else(|| anyhow!("lifting group {group} does not exist"))?;
+    let rail = &scenario.payload.rail;
+    let candidates: Vec<f32> = g
+        .candidates
+        .iter()
+        .map(|&c| scenario.payload.candidates[c])
+        .collect();
+    let robots = &scenario.robots;
+    let targets = shared::rail::moves::lift_targets(rail, from, &candidates, robots.min_spacing)
+        .ok_or_else(|| anyhow!("lifting group {group} cannot be reached by the robots"))?;
+    let points: Vec<Vec2> = targets.iter().map(|&s| rail.point_at(s)).collect();
+    let pair: Vec<usize> = candidates
+        .iter()
+        .filter_map(|c| targets.iter().position(|t| (t - c).abs() < 1e-5))
+        .collect();
+    let model = lift_off_thrust(
+        &scenario.payload.hull,
+        truth.com,
+        truth.mass,
+        &g.rotor_points,
+        robots.mass,
+    )
+    .ok_or_else(|| anyhow!("the truth's COM lies outside the hull"))?;
+    let mut plant = Plant::new(PlantConfig {
+        footprint: scenario.payload.footprint.to_vec(),
+        com: truth.com,
+        mass: truth.mass,
+        robot_mass: robots.mass,
+        rotor_points: points,
+        spin: robots.spin.to_vec(),
+        torque_per_thrust: robots.torque_per_thrust,
+        max_thrust: robots.max_thrust,
+        map_error,
+        disturbance_peak: 0.0,
+        disturbance_phase: [0.0, 0.0],
+    });
+    let mut sensors = Sensors::new(seed);
+    let mut attitude = AttitudeEstimator::new(AttitudeEstimatorGains::default());
+    let own_weight = robots.mass * GRAVITY;
+    let mut detector =
+        LiftoffDetector::new(LiftoffConfig::default(), own_weight, robots.max_thrust);
+    let dt = 1.0 / CONTROL_HZ as f32;
+    let physics_per_tick = (dt / PHYSICS_DT).round() as usize;
+    let n = targets.len();
+    let mut commands = vec![own_weight; n];
+    let started = ARM_DELAY;
+    loop {
+        let t = plant.time();
+        if t > 120.0 {
+            bail!("lift with group {group} did not end");
+        }
+        let truth_now = plant.state();
+        let imu = sensors.imu(&truth_now, dt);
+        for fix in sensors.mocap(&truth_now, t) {
+            attitude.set_reference(fix.attitude);
+        }
+        let a = attitude.update(imu.gyro, imu.accel, dt);
+        if t >= started {
+            if let LiftState::Measured(m) = detector.step(a.attitude, dt) {
+                return Ok(LiftOutcome {
+                    measured: m,
+                    model,
+                    duration_s: t - started,
+                });
+            }
+            for &i in &pair {
+                commands[i] = detector.pair_thrust();
+            }
+        }
+        for _ in 0..physics_per_tick {
+            plant.step(&commands);
+        }
+    }
+}

@@ -20,6 +20,7 @@ pub mod formation;
 pub mod geometry;
 pub mod liftoff;
 pub mod math;
+pub mod mission;
 pub mod paper;
 pub mod rail;
 pub mod scenario;

@@ -5,9 +5,11 @@
 //! The detector first holds the pair at its own weight while the attitude settles and takes
 //! the resting attitude as reference. It then ramps at `ramp_rate` and watches the angle
 //! between the body's z axis and the reference's. Crossing `tilt_threshold` is the lift-off.
-//! Tilt shows up late: the rack's backlash must close and the threshold must be crossed, both
-//! after the equilibrium was lost, and the thrust has ramped on meanwhile. That delay is
-//! compensated: the reading is the thrust at detection minus `ramp_rate * detection_delay`.
+//! Tilt shows up late: after equilibrium is lost the payload must turn far enough to cross the
+//! threshold, slowly for a heavy axis, while the thrust ramps on. So the detector keeps the
+//! last second of (thrust, tilt) and, on crossing, walks back to where the tilt last sat within
+//! `onset_fraction` of the threshold: the onset of the tilt. The reading is the thrust there,
+//! minus `ramp_rate * detection_delay` for the sensor's own latency.
 //! If the ramp reaches the robots' maximum and holds it for `settle_time` without a tilt, the
 //! reading is "could not lift" (a censored measurement).
 
@@ -21,8 +23,10 @@ pub struct LiftoffConfig {
     pub ramp_rate: f32,
     /// Tilt from the resting attitude that counts as lift-off, rad.
     pub tilt_threshold: f32,
-    /// Time from losing equilibrium to crossing the threshold, compensated in the reading, s.
+    /// Latency of the attitude estimate behind the payload (the IMU's), compensated, s.
     pub detection_delay: f32,
+    /// Share of the threshold below which the tilt counts as not yet started.
+    pub onset_fraction: f32,
     /// Time held at the start (reference) and at maximum thrust (before giving up), s.
     pub settle_time: f32,
 }
@@ -32,7 +36,8 @@ impl Default for LiftoffConfig {
         Self {
             ramp_rate: 1.0,
             tilt_threshold: 0.01,
-            detection_delay: 0.12,
+            detection_delay: 0.005,
+            onset_fraction: 0.2,
             settle_time: 0.5,
         }
     }
@@ -51,8 +56,11 @@ pub enum LiftState {
     Measured(Measurement),
 }
 
+/// Samples of (thrust, tilt) kept to find the tilt's onset (one second at 400 Hz).
+pub const HISTORY: usize = 400;
+
 /// One lift.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct LiftoffDetector {
     config: LiftoffConfig,
     start_thrust: f32,
@@ -62,6 +70,7 @@ pub struct LiftoffDetector {
     reference_axis: Vec3,
     samples: u32,
     state: LiftState,
+    history: heapless::Deque<(f32, f32), HISTORY>,
 }
 
 impl LiftoffDetector {
@@ -77,6 +86,7 @@ impl LiftoffDetector {
             reference_axis: Vec3::ZERO,
             samples: 0,
             state: LiftState::Settling,
+            history: heapless::Deque::new(),
         }
     }
 
@@ -108,9 +118,20 @@ impl LiftoffDetector {
             LiftState::Ramping | LiftState::HoldingMaximum => {
                 let cos = axis.normalized().dot(self.reference_axis).clamp(-1.0, 1.0);
                 let tilt = crate::math::acos(cos);
+                if self.history.is_full() {
+                    self.history.pop_front();
+                }
+                let _ = self.history.push_back((self.thrust, tilt));
                 if tilt > self.config.tilt_threshold {
-                    let compensated =
-                        self.thrust - self.config.ramp_rate * self.config.detection_delay;
+                    // Walk back to the tilt's onset.
+                    let floor = self.config.onset_fraction * self.config.tilt_threshold;
+                    let onset = self
+                        .history
+                        .iter()
+                        .rev()
+                        .find(|&&(_, t)| t <= floor)
+                        .map_or(self.thrust, |&(thrust, _)| thrust);
+                    let compensated = onset - self.config.ramp_rate * self.config.detection_delay;
                     let thrust = crate::math::max(compensated, self.start_thrust);
                     self.state = LiftState::Measured(Measurement::Lifted { thrust });
                 } else if self.state == LiftState::Ramping {
@@ -139,7 +160,7 @@ mod tests {
     /// A payload that starts tilting `lag` seconds after the pair passes `lift_at`.
     fn run(lift_at: f32, lag: f32, max: f32) -> (Measurement, f32) {
         let config = LiftoffConfig {
-            detection_delay: lag + 0.01,
+            detection_delay: lag,
             ..LiftoffConfig::default()
         };
         let mut d = LiftoffDetector::new(config, 0.98, max);
@@ -151,8 +172,8 @@ mod tests {
             if thrust >= lift_at && tilt_start.is_none() {
                 tilt_start = Some(t + lag);
             }
-            // Tilts at 1 rad/s once it goes.
-            let tilt = tilt_start.map_or(0.0, |s| (t - s).max(0.0));
+            // Once it goes the tilt grows slowly at first (a heavy axis): 0.5 t^2 rad.
+            let tilt = tilt_start.map_or(0.0, |s| 0.5 * (t - s).max(0.0).powi(2));
             let q = Quat::from_euler(0.02 + tilt, -0.01, 0.3); // resting slightly off level
             if let LiftState::Measured(m) = d.step(q, dt) {
                 return (m, t);
@@ -164,16 +185,19 @@ mod tests {
 
     #[test]
     fn reads_the_lift_off_thrust_with_the_delay_compensated() {
-        let (m, _) = run(6.0, 0.1, 14.2);
+        let (m, _) = run(6.0, 0.005, 14.2);
         let Measurement::Lifted { thrust } = m else {
             panic!("{m:?}");
         };
-        assert!((thrust - 6.0).abs() < 0.03, "{thrust}");
+        // The threshold is crossed at 6 + sqrt(0.02) = 6.14 N; the onset walk-back reads from
+        // where the tilt left 20 % of it, 6 + sqrt(0.004) = 6.06 N.
+        assert!((thrust - 6.0).abs() < 0.08, "{thrust}");
+        assert!(thrust < 6.1, "better than the raw crossing: {thrust}");
     }
 
     #[test]
     fn a_pair_that_cannot_lift_is_a_censored_reading() {
-        let (m, t) = run(20.0, 0.1, 14.2);
+        let (m, t) = run(20.0, 0.005, 14.2);
         assert_eq!(m, Measurement::CouldNotLift);
         assert!(t > (14.2 - 0.98) / 1.0, "ramped all the way first: {t}");
     }

@@ -34,6 +34,16 @@ pub enum MixerArg {
     Allocation,
 }
 
+impl MixerArg {
+    /// The mixer it names.
+    pub fn kind(self) -> MixerKind {
+        match self {
+            Self::EqualSplit => MixerKind::EqualSplit,
+            Self::Allocation => MixerKind::Allocation,
+        }
+    }
+}
+
 /// Arguments of `fly`.
 #[derive(Debug, Args)]
 pub struct FlyArgs {
@@ -97,10 +107,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
             FormationArg::Even => FormationChoice::Even,
             FormationArg::Optimized => FormationChoice::Optimized,
         },
-        mixer: match args.mixer {
-            MixerArg::EqualSplit => MixerKind::EqualSplit,
-            MixerArg::Allocation => MixerKind::Allocation,
-        },
+        mixer: args.mixer.kind(),
         believed_com: com,
         believed_mass: mass,
         seed: args.seed,

@@ -4,4 +4,5 @@ pub mod estimate;
 pub mod fly;
 pub mod formation;
 pub mod lift;
+pub mod mission;
 pub mod validate;

@@ -11,6 +11,13 @@
 //! the rotor makes `command / map_error`). A smooth body torque disturbance of the scenario's
 //! peak acts on roll and pitch.
 //!
+//! Backlash: each robot hangs in its rack with [`BACKLASH`] of vertical play. Resting (thrust
+//! below its weight) it sits on the lower stop and the payload carries it; lifting, it presses
+//! on the upper stop and the payload takes its thrust. In between it floats in the gap: the
+//! payload carries neither its weight nor its thrust until the play is taken up. This delays
+//! a lift's effect on the payload, as on the real rack. The robots can be moved along the rail
+//! ([`Plant::set_rotor_points`]).
+//!
 //! Frames: rapier runs directly in the flight software's frames: world NED (gravity along +z,
 //! the ground's top face at z = 0) and body FRD, so nothing is converted.
 
@@ -28,6 +35,8 @@ pub const MOTOR_TIME_CONSTANT: f32 = 0.02;
 pub const PLATE_THICKNESS: f32 = 0.03;
 /// Physics step, s (2 kHz: five steps per 400 Hz control tick).
 pub const PHYSICS_DT: f32 = 0.0005;
+/// Vertical play of each robot in its rack, m.
+pub const BACKLASH: f32 = 0.0015;
 /// Frequencies of the disturbance on roll and pitch, Hz.
 const DISTURBANCE_HZ: [f32; 2] = [0.37, 0.53];
 
@@ -77,7 +86,36 @@ pub struct Plant {
     body: RigidBodyHandle,
     config: PlantConfig,
     thrusts: Vec<f32>,
+    /// Each robot's place in its play (0: lower stop, BACKLASH: upper stop) and speed in it.
+    play: Vec<(f32, f32)>,
     time: f32,
+}
+
+/// Mass properties of payload and robots: the payload's mass at its true COM with the inertia
+/// of a uniform plate of its footprint, each robot a point mass at its rotor.
+fn mass_properties(config: &PlantConfig) -> MassProperties {
+    let mid = -0.5 * PLATE_THICKNESS;
+    let plate = area_moments(&config.footprint);
+    let density = if plate.area > 0.0 {
+        config.mass / plate.area
+    } else {
+        0.0
+    };
+    let flat = config.mass * PLATE_THICKNESS * PLATE_THICKNESS / 12.0;
+    let inertia = Vector::new(
+        density * plate.yy + flat,
+        density * plate.xx + flat,
+        density * (plate.xx + plate.yy),
+    );
+    let mut mass = MassProperties::new(
+        Vector::new(config.com.x, config.com.y, mid),
+        config.mass,
+        inertia,
+    );
+    for p in &config.rotor_points {
+        mass += MassProperties::new(Vector::new(p.x, p.y, mid), config.robot_mass, Vector::ZERO);
+    }
+    mass
 }
 
 fn vector(v: Vec3) -> Vector {
@@ -102,28 +140,7 @@ impl Plant {
             .build();
         world.colliders.insert(ground);
 
-        let half = 0.5 * PLATE_THICKNESS;
-        let mid = -half; // the plate spans z in [-thickness, 0]: resting on the ground
-        let plate = area_moments(&config.footprint);
-        let density = if plate.area > 0.0 {
-            config.mass / plate.area
-        } else {
-            0.0
-        };
-        let inertia = Vector::new(
-            density * plate.yy + config.mass * PLATE_THICKNESS * PLATE_THICKNESS / 12.0,
-            density * plate.xx + config.mass * PLATE_THICKNESS * PLATE_THICKNESS / 12.0,
-            density * (plate.xx + plate.yy),
-        );
-        let mut mass = MassProperties::new(
-            Vector::new(config.com.x, config.com.y, mid),
-            config.mass,
-            inertia,
-        );
-        for p in &config.rotor_points {
-            mass +=
-                MassProperties::new(Vector::new(p.x, p.y, mid), config.robot_mass, Vector::ZERO);
-        }
+        let mass = mass_properties(&config);
         let body = world.bodies.insert(
             RigidBodyBuilder::dynamic()
                 .additional_mass_properties(mass)
@@ -147,7 +164,20 @@ impl Plant {
             body,
             config,
             thrusts: vec![0.0; n],
+            play: vec![(0.0, 0.0); n],
             time: 0.0,
+        }
+    }
+
+    /// Moves the robots to new rotor points (body frame): their forces and masses follow.
+    pub fn set_rotor_points(&mut self, points: &[Vec2]) {
+        if points.len() != self.config.rotor_points.len() {
+            return;
+        }
+        self.config.rotor_points = points.to_vec();
+        let mass = mass_properties(&self.config);
+        if let Some(rb) = self.world.bodies.get_mut(self.body) {
+            rb.set_additional_mass_properties(mass, true);
         }
     }
 
@@ -196,17 +226,34 @@ impl Plant {
         let pose = *rb.position();
         let rotation = pose.rotation;
         let mut yaw_torque = 0.0;
-        for ((p, &t), &s) in self
+        let weight = self.config.robot_mass * GRAVITY;
+        for (i, (p, &t)) in self
             .config
             .rotor_points
             .iter()
             .zip(&self.thrusts)
-            .zip(&self.config.spin)
+            .enumerate()
         {
             let at = pose * Vector::new(p.x, p.y, -0.5 * PLATE_THICKNESS);
-            let force = rotation * Vector::new(0.0, 0.0, -t);
+            // The robot in its play: its own vertical motion relative to the payload.
+            let (mut x, mut v) = self.play[i];
+            let net = t - weight;
+            let engaged_up = x >= BACKLASH && net >= 0.0;
+            let resting = x <= 0.0 && net <= 0.0;
+            let transmitted = if engaged_up || resting {
+                v = 0.0;
+                t
+            } else {
+                v += net / self.config.robot_mass * PHYSICS_DT;
+                x = (x + v * PHYSICS_DT).clamp(0.0, BACKLASH);
+                // Floating: the payload carries neither the robot's weight nor its thrust.
+                weight
+            };
+            self.play[i] = (x, v);
+            let force = rotation * Vector::new(0.0, 0.0, -transmitted);
             rb.add_force_at_point(force, at, true);
-            yaw_torque += f32::from(s) * self.config.torque_per_thrust * t;
+            let spin = f32::from(self.config.spin.get(i).copied().unwrap_or(1));
+            yaw_torque += spin * self.config.torque_per_thrust * t;
         }
         let body_torque = vector(disturbance) + Vector::new(0.0, 0.0, yaw_torque);
         rb.add_torque(rotation * body_torque, true);

@@ -3,7 +3,9 @@
 //!
 //! - IMU: gyro with a constant bias and white noise; accelerometer reading the specific force
 //!   (acceleration minus gravity) in the body frame, with white noise. Sampled at the control
-//!   rate; its acceleration is the origin's velocity change over the sample period.
+//!   rate; its acceleration is the origin's velocity change over the sample period. Its output
+//!   lags [`IMU_DELAY_SAMPLES`] samples (the sensor's filter and transfer): part of the delay
+//!   the lift-off detection must live with.
 //! - Motion capture: position and attitude of the payload frame at [`MOCAP_HZ`], with noise,
 //!   delivered [`MOCAP_LATENCY`] after it was taken.
 
@@ -23,6 +25,8 @@ pub const GYRO_NOISE: f32 = 0.005;
 pub const GYRO_BIAS: f32 = 0.01;
 /// Accelerometer white noise, m/s^2 (1 sigma).
 pub const ACCEL_NOISE: f32 = 0.05;
+/// IMU output delay, samples (5 ms at 400 Hz).
+pub const IMU_DELAY_SAMPLES: usize = 2;
 /// Motion-capture rate, Hz.
 pub const MOCAP_HZ: f32 = 100.0;
 /// Motion-capture latency, s.
@@ -57,6 +61,7 @@ pub struct Sensors {
     rng: ChaCha8Rng,
     gyro_bias: Vec3,
     last_velocity: Option<Vec3>,
+    imu_queue: VecDeque<ImuSample>,
     pending: VecDeque<(f32, MocapFix)>,
     next_fix: f32,
 }
@@ -75,6 +80,7 @@ impl Sensors {
             rng,
             gyro_bias,
             last_velocity: None,
+            imu_queue: VecDeque::new(),
             pending: VecDeque::new(),
             next_fix: 0.0,
         }
@@ -91,9 +97,15 @@ impl Sensors {
             .inverse_rotate(acceleration - Vec3::DOWN * GRAVITY);
         let rng = &mut self.rng;
         let mut n = |s: f32| Vec3::new(noise(rng, s), noise(rng, s), noise(rng, s));
-        ImuSample {
+        let sample = ImuSample {
             gyro: truth.rate + self.gyro_bias + n(GYRO_NOISE),
             accel: specific + n(ACCEL_NOISE),
+        };
+        self.imu_queue.push_back(sample);
+        if self.imu_queue.len() > IMU_DELAY_SAMPLES {
+            self.imu_queue.pop_front().unwrap_or(sample)
+        } else {
+            self.imu_queue.front().copied().unwrap_or(sample)
         }
     }
 

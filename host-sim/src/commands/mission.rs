@@ -1,0 +1,143 @@
+//! `host-sim mission`: the whole autonomous pipeline in the physics plant (SPEC.md section 5):
+//! estimation by real lift-off detection, formation decision, rearrangement, flight. Without
+//! `--scenario` it runs the paper's experiment case rect-ex1 (built into the binary), printing
+//! each phase as it happens. This is the project's main job.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Result;
+use clap::Args;
+use serde_json::json;
+use shared::estimation::{EstimatorOptions, ThrustScaleAxis};
+use shared::mission::{MissionConfig, Reason};
+
+use crate::commands::fly::MixerArg;
+use crate::mission_run::{self, MissionSetup};
+use crate::scenario_file;
+
+/// The paper's experiment case, built in.
+const RECT_EX1: &str = include_str!("../../../tests/scenarios/rect-ex1.toml");
+
+/// Arguments of `mission`.
+#[derive(Debug, Args)]
+pub struct MissionArgs {
+    /// Scenario file (default: the paper's experiment case rect-ex1, built in).
+    #[arg(long, value_name = "FILE")]
+    scenario: Option<PathBuf>,
+    /// Print one JSON object on stdout and nothing else.
+    #[arg(long)]
+    json: bool,
+    /// Seed of sensor noise and disturbance.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// The rotors' command-to-thrust map over-reads by this factor.
+    #[arg(long, value_name = "S", default_value_t = 1.0)]
+    map_error: f64,
+    /// Estimate the thrust-scale factor alongside theta (axis 0.9..1.2 step 0.05).
+    #[arg(long)]
+    bias_term: bool,
+    /// Mixer for the flight.
+    #[arg(long, value_enum, default_value = "equal-split")]
+    mixer: MixerArg,
+}
+
+/// Runs the command.
+pub fn run(args: &MissionArgs) -> Result<()> {
+    let loaded = match &args.scenario {
+        Some(path) => scenario_file::load(path)?,
+        None => scenario_file::parse(RECT_EX1, std::path::Path::new("rect-ex1 (built in)"))?,
+    };
+    if !(args.map_error.is_finite() && args.map_error > 0.0) {
+        anyhow::bail!("--map-error {}: must be a positive factor", args.map_error);
+    }
+    let config = MissionConfig {
+        estimator: EstimatorOptions {
+            thrust_scale: args.bias_term.then_some(ThrustScaleAxis::DEFAULT),
+        },
+        mixer: args.mixer.kind(),
+        ..MissionConfig::default()
+    };
+    let setup = MissionSetup {
+        seed: args.seed,
+        map_error: args.map_error as f32,
+        config,
+    };
+    let json = args.json;
+    if !json {
+        println!("mission on {}", loaded.name);
+    }
+    let started = Instant::now();
+    let outcome = mission_run::run(&loaded.scenario, &setup, &mut |t, tr| {
+        if !json {
+            println!("  {t:7.2} s  {:<17} {}", tr.to.name(), describe(&tr.reason));
+        }
+    })?;
+    let wall_s = started.elapsed().as_secs_f64();
+    if json {
+        let v = json!({
+            "scenario": loaded.name,
+            "estimate": outcome.estimate,
+            "measurements": outcome.measurements,
+            "positions": outcome.positions,
+            "delivered": outcome.delivered,
+            "dropped": outcome.dropped,
+            "final_position_error_m": outcome.final_position_error_m,
+            "phases": outcome.phases.iter().map(|(name, d)| json!({"name": name, "duration_s": d})).collect::<Vec<_>>(),
+            "lifts": outcome.lifts.iter().map(|(g, r, m)| json!({"pair": g, "reading": r, "model": m})).collect::<Vec<_>>(),
+            "aborted": outcome.aborted,
+            "simulated_s": outcome.simulated_s,
+            "wall_s": wall_s,
+        });
+        println!("{v}");
+    } else {
+        for (g, r, m) in &outcome.lifts {
+            match r {
+                Some(r) => println!("lift with pair {g}: read {r:.3} N, the model says {m:.3} N"),
+                None => println!("lift with pair {g}: could not lift, the model says {m:.3} N"),
+            }
+        }
+        match outcome.estimate {
+            Some(e) => println!(
+                "estimate: COM ({:.3}, {:.3}) m, mass {:.2} kg after {} lifts",
+                e[0], e[1], e[2], outcome.measurements
+            ),
+            None => println!("no estimate ({} lifts)", outcome.measurements),
+        }
+        println!(
+            "{}: final position error {:.3} m; {:.1} s simulated in {:.1} s",
+            if outcome.delivered {
+                "delivered"
+            } else if outcome.dropped {
+                "DROPPED"
+            } else {
+                "NOT delivered"
+            },
+            outcome.final_position_error_m,
+            outcome.simulated_s,
+            wall_s
+        );
+        if let Some(why) = &outcome.aborted {
+            println!("aborted: {why}");
+        }
+    }
+    Ok(())
+}
+
+fn describe(reason: &Reason) -> String {
+    match reason {
+        Reason::PairChosen { group, information } => {
+            format!("pair {group} (information {information:.2} nats)")
+        }
+        Reason::LiftRead(m) => format!("reading {m:?}"),
+        Reason::Converged(t) => {
+            format!(
+                "estimate COM ({:.3}, {:.3}) m, mass {:.2} kg",
+                t[0], t[1], t[2]
+            )
+        }
+        Reason::FormationChosen(det) => format!("formation det(BB^T) {det:.3e}"),
+        Reason::Abort(why) => format!("ABORT: {why:?}"),
+        other => format!("{other:?}"),
+    }
+}
