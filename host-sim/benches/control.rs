@@ -60,7 +60,7 @@ fn control_step(c: &mut Criterion) {
                 let dt = 0.0025;
                 let gyro = black_box(Vec3::new(0.01, -0.02, 0.005));
                 let accel = black_box(Vec3::new(0.1, -0.05, -9.7));
-                let a = attitude.update(gyro, accel, dt);
+                let a = attitude.update(gyro, accel, dt, now_us);
                 let world_accel = a.attitude.rotate(accel) + Vec3::DOWN * 9.80665;
                 position.predict(world_accel, dt, now_us);
                 let (setpoint, _) = plan.sample(now_us as f32 * 1e-6);

@@ -202,14 +202,14 @@ pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
         if t >= end {
             break;
         }
-        let now_us = tick * u64::from(1_000_000 / CONTROL_HZ);
+        let now_us = plant.time_us();
         let truth_now = plant.state();
         let imu = sensors.imu(&truth_now, dt);
-        for fix in sensors.mocap(&truth_now, t) {
-            attitude.set_reference(fix.attitude);
+        for fix in sensors.mocap(&truth_now, plant.time_us()) {
+            attitude.set_reference(fix.attitude, fix.stamp_us);
             position.correct(fix.position, fix.stamp_us);
         }
-        let a = attitude.update(imu.gyro, imu.accel, dt);
+        let a = attitude.update(imu.gyro, imu.accel, dt, plant.time_us());
         position.predict(
             a.attitude.rotate(imu.accel) + Vec3::DOWN * GRAVITY,
             dt,
@@ -387,7 +387,8 @@ pub fn lift_from(
     let physics_per_tick = (dt / PHYSICS_DT).round() as usize;
     let n = targets.len();
     let mut commands = vec![own_weight; n];
-    let started = ARM_DELAY;
+    // The attitude estimator settles (gyro bias) before the lift, as in the mission's checks.
+    let started = 5.0;
     loop {
         let t = plant.time();
         if t > 120.0 {
@@ -395,10 +396,10 @@ pub fn lift_from(
         }
         let truth_now = plant.state();
         let imu = sensors.imu(&truth_now, dt);
-        for fix in sensors.mocap(&truth_now, t) {
-            attitude.set_reference(fix.attitude);
+        for fix in sensors.mocap(&truth_now, plant.time_us()) {
+            attitude.set_reference(fix.attitude, fix.stamp_us);
         }
-        let a = attitude.update(imu.gyro, imu.accel, dt);
+        let a = attitude.update(imu.gyro, imu.accel, dt, plant.time_us());
         if t >= started {
             if let LiftState::Measured(m) = detector.step(a.attitude, dt) {
                 return Ok(LiftOutcome {

@@ -105,16 +105,15 @@ pub fn run(
     let mut lifts = Vec::new();
     let mut group = 0usize;
     let mut dropped = false;
-    let mut tick: u64 = 0;
     loop {
         let t = plant.time();
         if t > MISSION_TIME_LIMIT {
             break;
         }
-        let now_us = tick * u64::from(1_000_000 / CONTROL_HZ);
+        let now_us = plant.time_us();
         let truth_now = plant.state();
         let imu = sensors.imu(&truth_now, dt);
-        for fix in sensors.mocap(&truth_now, t) {
+        for fix in sensors.mocap(&truth_now, plant.time_us()) {
             mission.motion_capture(fix.position, fix.attitude, fix.stamp_us);
         }
         let out = mission.step(
@@ -167,7 +166,6 @@ pub fn run(
         for _ in 0..physics_per_tick {
             plant.step(&out.thrusts[..n]);
         }
-        tick += 1;
     }
     let end = plant.time();
     if let Some(last) = phases.last_mut() {

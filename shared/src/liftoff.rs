@@ -6,15 +6,21 @@
 //! the resting attitude as reference. It then ramps at `ramp_rate` and watches the angle
 //! between the body's z axis and the reference's. Crossing `tilt_threshold` is the lift-off.
 //! Tilt shows up late: after equilibrium is lost the payload must turn far enough to cross the
-//! threshold, slowly for a heavy axis, while the thrust ramps on. So the detector keeps the
-//! last second of (thrust, tilt) and, on crossing, walks back to where the tilt last sat within
-//! `onset_fraction` of the threshold: the onset of the tilt. The reading is the thrust there,
-//! minus `ramp_rate * detection_delay` for the sensor's own latency.
+//! threshold, slowly for a heavy axis, while the thrust ramps on. Past lift-off the unbalanced
+//! torque grows with the ramp, `(T - lambda) ~ ramp_rate (t - t0)`, so the tilt grows as
+//! `k (t - t0)^3`. The detector keeps the last second of (time, thrust, tilt vector); on
+//! crossing the threshold at `t2` it projects that history onto the direction the payload tipped
+//! (so the estimate's noise averages out instead of adding to a magnitude), smooths it over a
+//! few samples, finds where it first rose above `onset_fraction` of the threshold, `t1`, and
+//! solves the cubic through both for the onset `t0 = (t2 - r t1) / (1 - r)`,
+//! `r = (tilt2 / tilt1)^(1/3)`. The reading is the ramp's thrust at `t0`, minus
+//! `ramp_rate * detection_delay` for the sensor's own latency.
 //! If the ramp reaches the robots' maximum and holds it for `settle_time` without a tilt, the
 //! reading is "could not lift" (a censored measurement).
 
 use crate::control::vector::{Quat, Vec3};
 use crate::estimation::Measurement;
+use crate::math;
 
 /// Tuning of the detector.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,7 +43,7 @@ impl Default for LiftoffConfig {
             ramp_rate: 1.0,
             tilt_threshold: 0.01,
             detection_delay: 0.005,
-            onset_fraction: 0.2,
+            onset_fraction: 0.3,
             settle_time: 0.5,
         }
     }
@@ -58,6 +64,13 @@ pub enum LiftState {
 
 /// Samples of (thrust, tilt) kept to find the tilt's onset (one second at 400 Hz).
 pub const HISTORY: usize = 400;
+/// Samples averaged when the history is projected (20 ms at 400 Hz).
+const SMOOTHING: usize = 8;
+
+/// Thrust of a linear ramp `back` seconds before it reached `thrust`.
+fn ramp_back(thrust: f32, rate: f32, back: f32) -> f32 {
+    thrust - rate * back
+}
 
 /// One lift.
 #[derive(Clone, Debug, PartialEq)]
@@ -70,7 +83,8 @@ pub struct LiftoffDetector {
     reference_axis: Vec3,
     samples: u32,
     state: LiftState,
-    history: heapless::Deque<(f32, f32), HISTORY>,
+    history: heapless::Deque<(f32, f32, Vec3), HISTORY>,
+    clock: f32,
 }
 
 impl LiftoffDetector {
@@ -87,6 +101,7 @@ impl LiftoffDetector {
             samples: 0,
             state: LiftState::Settling,
             history: heapless::Deque::new(),
+            clock: 0.0,
         }
     }
 
@@ -98,6 +113,46 @@ impl LiftoffDetector {
     /// Thrust to command on each robot of the pair now, N.
     pub fn pair_thrust(&self) -> f32 {
         self.thrust
+    }
+
+    /// The onset of the tilt (detector clock, s) from the history, the tilt now being
+    /// `tilt_vector` (change of the body z axis since the reference).
+    fn onset(&self, tilt_vector: Vec3) -> f32 {
+        let direction = tilt_vector.normalized();
+        // Project once, then smooth with a trailing moving average.
+        let mut raw = [0.0f32; HISTORY];
+        let mut times = [0.0f32; HISTORY];
+        let mut n: usize = 0;
+        for (slot, (time, &(t, _, v))) in raw
+            .iter_mut()
+            .zip(times.iter_mut().zip(self.history.iter()))
+        {
+            *slot = v.dot(direction);
+            *time = t;
+            n += 1;
+        }
+        let smoothed = |i: usize| -> f32 {
+            let from = i.saturating_sub(SMOOTHING - 1);
+            raw[from..=i].iter().sum::<f32>() / (i - from + 1) as f32
+        };
+        let floor = self.config.onset_fraction * self.config.tilt_threshold;
+        let (t2, tilt2) = (self.clock, smoothed(n.saturating_sub(1)));
+        let mut first = (t2, tilt2);
+        for i in (0..n).rev() {
+            let p = smoothed(i);
+            if p <= floor {
+                break;
+            }
+            first = (times[i], p);
+        }
+        // Cubic growth through (t1, tilt1) and (t2, tilt2): the onset t0.
+        let (t1, tilt1) = first;
+        let r = libm::cbrtf(tilt2 / math::max(tilt1, 1e-9));
+        if r > 1.0 + 1e-3 && t2 > t1 {
+            math::min((t2 - r * t1) / (1.0 - r), t1)
+        } else {
+            t1
+        }
     }
 
     /// One step with the current attitude estimate, `dt` seconds after the previous one.
@@ -118,20 +173,20 @@ impl LiftoffDetector {
             LiftState::Ramping | LiftState::HoldingMaximum => {
                 let cos = axis.normalized().dot(self.reference_axis).clamp(-1.0, 1.0);
                 let tilt = crate::math::acos(cos);
+                self.clock += dt;
                 if self.history.is_full() {
                     self.history.pop_front();
                 }
-                let _ = self.history.push_back((self.thrust, tilt));
+                let tilt_vector = axis.normalized() - self.reference_axis;
+                let _ = self
+                    .history
+                    .push_back((self.clock, self.thrust, tilt_vector));
                 if tilt > self.config.tilt_threshold {
-                    // Walk back to the tilt's onset.
-                    let floor = self.config.onset_fraction * self.config.tilt_threshold;
-                    let onset = self
-                        .history
-                        .iter()
-                        .rev()
-                        .find(|&&(_, t)| t <= floor)
-                        .map_or(self.thrust, |&(thrust, _)| thrust);
-                    let compensated = onset - self.config.ramp_rate * self.config.detection_delay;
+                    let onset = self.onset(tilt_vector);
+                    let at_onset =
+                        ramp_back(self.thrust, self.config.ramp_rate, self.clock - onset);
+                    let compensated =
+                        at_onset - self.config.ramp_rate * self.config.detection_delay;
                     let thrust = crate::math::max(compensated, self.start_thrust);
                     self.state = LiftState::Measured(Measurement::Lifted { thrust });
                 } else if self.state == LiftState::Ramping {
@@ -172,8 +227,8 @@ mod tests {
             if thrust >= lift_at && tilt_start.is_none() {
                 tilt_start = Some(t + lag);
             }
-            // Once it goes the tilt grows slowly at first (a heavy axis): 0.5 t^2 rad.
-            let tilt = tilt_start.map_or(0.0, |s| 0.5 * (t - s).max(0.0).powi(2));
+            // Once it goes the tilt grows as the cube of time (the torque grows with the ramp).
+            let tilt = tilt_start.map_or(0.0, |s| 0.2 * (t - s).max(0.0).powi(3));
             let q = Quat::from_euler(0.02 + tilt, -0.01, 0.3); // resting slightly off level
             if let LiftState::Measured(m) = d.step(q, dt) {
                 return (m, t);
@@ -189,10 +244,9 @@ mod tests {
         let Measurement::Lifted { thrust } = m else {
             panic!("{m:?}");
         };
-        // The threshold is crossed at 6 + sqrt(0.02) = 6.14 N; the onset walk-back reads from
-        // where the tilt left 20 % of it, 6 + sqrt(0.004) = 6.06 N.
-        assert!((thrust - 6.0).abs() < 0.08, "{thrust}");
-        assert!(thrust < 6.1, "better than the raw crossing: {thrust}");
+        // The threshold is crossed at 6 + (0.01 / 0.2)^(1/3) = 6.37 N; the cubic fit through
+        // the onset floor finds the lift-off itself.
+        assert!((thrust - 6.0).abs() < 0.03, "{thrust}");
     }
 
     #[test]

@@ -185,7 +185,7 @@ fn main() -> ! {
             let now_us = u64::from(k) * 2500;
             let (n, alloc) = timer.instructions(|| {
                 let dt = 0.0025;
-                let a = attitude.update(gyro, accel, dt);
+                let a = attitude.update(gyro, accel, dt, now_us);
                 let world_accel = a.attitude.rotate(accel) + Vec3::DOWN * 9.80665;
                 position.predict(world_accel, dt, now_us);
                 let (setpoint, _) = plan.sample(now_us as f32 * 1e-6);
@@ -216,7 +216,7 @@ fn main() -> ! {
     hprintln!("  parts of one step:");
     let dt = 0.0025;
     let (gyro, accel) = (Vec3::new(0.01, -0.02, 0.005), Vec3::new(0.1, -0.05, -9.7));
-    let (n, a) = timer.instructions(|| attitude.update(gyro, accel, dt));
+    let (n, a) = timer.instructions(|| attitude.update(gyro, accel, dt, 1_002_500));
     report("  attitude estimator", n);
     let (n, _) = timer.instructions(|| position.predict(a.attitude.rotate(accel), dt, 1_002_500));
     report("  position prediction", n);

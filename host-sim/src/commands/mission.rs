@@ -37,6 +37,10 @@ pub struct MissionArgs {
     /// Estimate the thrust-scale factor alongside theta (axis 0.9..1.2 step 0.05).
     #[arg(long)]
     bias_term: bool,
+    /// Standard deviation of this detector's lift readings, N (default: the scenario's
+    /// noise_sigma).
+    #[arg(long, value_name = "N")]
+    lift_sigma: Option<f64>,
     /// Mixer for the flight.
     #[arg(long, value_enum, default_value = "equal-split")]
     mixer: MixerArg,
@@ -56,6 +60,7 @@ pub fn run(args: &MissionArgs) -> Result<()> {
             thrust_scale: args.bias_term.then_some(ThrustScaleAxis::DEFAULT),
         },
         mixer: args.mixer.kind(),
+        lift_noise_sigma: args.lift_sigma.map(|s| s as f32),
         ..MissionConfig::default()
     };
     let setup = MissionSetup {

@@ -88,7 +88,8 @@ pub struct Plant {
     thrusts: Vec<f32>,
     /// Each robot's place in its play (0: lower stop, BACKLASH: upper stop) and speed in it.
     play: Vec<(f32, f32)>,
-    time: f32,
+    /// Physics steps taken: time is counted, not summed, so it never drifts.
+    steps: u64,
 }
 
 /// Mass properties of payload and robots: the payload's mass at its true COM with the inertia
@@ -165,7 +166,7 @@ impl Plant {
             config,
             thrusts: vec![0.0; n],
             play: vec![(0.0, 0.0); n],
-            time: 0.0,
+            steps: 0,
         }
     }
 
@@ -183,7 +184,12 @@ impl Plant {
 
     /// Simulated time, s.
     pub fn time(&self) -> f32 {
-        self.time
+        (self.steps as f64 * f64::from(PHYSICS_DT)) as f32
+    }
+
+    /// Simulated time, microseconds (exact).
+    pub fn time_us(&self) -> u64 {
+        self.steps * (f64::from(PHYSICS_DT) * 1e6).round() as u64
     }
 
     /// Each rotor's actual thrust, N.
@@ -217,7 +223,7 @@ impl Plant {
             let target = c.clamp(0.0, self.config.max_thrust) * scale;
             *t += (target - *t) * alpha;
         }
-        let disturbance = self.disturbance(self.time);
+        let disturbance = self.disturbance(self.time());
         let Some(rb) = self.world.bodies.get_mut(self.body) else {
             return;
         };
@@ -258,7 +264,7 @@ impl Plant {
         let body_torque = vector(disturbance) + Vector::new(0.0, 0.0, yaw_torque);
         rb.add_torque(rotation * body_torque, true);
         self.world.step();
-        self.time += PHYSICS_DT;
+        self.steps += 1;
     }
 
     /// The truth at the payload frame's origin.

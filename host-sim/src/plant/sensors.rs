@@ -109,8 +109,10 @@ impl Sensors {
         }
     }
 
-    /// Takes a fix when one is due at time `t` and returns the fixes whose latency has passed.
-    pub fn mocap(&mut self, truth: &TrueState, t: f32) -> Vec<MocapFix> {
+    /// Takes a fix when one is due at time `now_us` and returns the fixes whose latency has
+    /// passed.
+    pub fn mocap(&mut self, truth: &TrueState, now_us: u64) -> Vec<MocapFix> {
+        let t = now_us as f32 * 1e-6;
         if t + 1e-6 >= self.next_fix {
             self.next_fix += 1.0 / MOCAP_HZ;
             let rng = &mut self.rng;
@@ -128,7 +130,7 @@ impl Sensors {
             let fix = MocapFix {
                 position: p,
                 attitude: truth.attitude * Quat::from_rotation_vector(tremor),
-                stamp_us: (f64::from(t) * 1e6).round() as u64,
+                stamp_us: now_us,
             };
             self.pending.push_back((t + MOCAP_LATENCY, fix));
         }

@@ -2,7 +2,9 @@
 //! complementary filter on the unit quaternion, with gyro bias estimation.
 //!
 //! The gyro is integrated at the IMU rate. The motion-capture attitude, when it comes,
-//! corrects all three axes. The accelerometer's direction corrects roll and pitch only while
+//! corrects all three axes; it is compared with the estimate the filter had when the fix was
+//! taken (a short history of estimates), so its latency does not pull the estimate during
+//! fast motion. The accelerometer's direction corrects roll and pitch only while
 //! no motion-capture attitude has arrived for [`AttitudeEstimatorGains::reference_timeout`]
 //! (on the bench, or during a dropout): on a multirotor in flight the accelerometer measures
 //! the thrust direction, not gravity, and would pull a tilted estimate towards level during
@@ -35,7 +37,7 @@ impl Default for AttitudeEstimatorGains {
             accel_p: 1.0,
             reference_p: 2.0,
             reference_timeout: 0.1,
-            bias_i: 0.05,
+            bias_i: 1.0,
             bias_limit: 0.1,
             accel_trust_band: 0.15,
         }
@@ -54,14 +56,20 @@ pub struct AttitudeState {
 }
 
 /// Mahony attitude filter.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct AttitudeEstimator {
     gains: AttitudeEstimatorGains,
     state: AttitudeState,
     initialised: bool,
-    reference: Option<Quat>,
+    /// Body-frame rotation vector from the estimate (at the fix's time) to the latest fix.
+    reference_error: Option<Vec3>,
+    initial_yaw: Option<f32>,
     since_reference: f32,
+    history: heapless::Deque<(u64, Quat), ATTITUDE_HISTORY>,
 }
+
+/// Estimates kept to meet late motion-capture fixes (0.16 s at 400 Hz).
+pub const ATTITUDE_HISTORY: usize = 64;
 
 impl AttitudeEstimator {
     /// A filter that initialises its tilt from the first accelerometer sample.
@@ -74,8 +82,10 @@ impl AttitudeEstimator {
                 gyro_bias: Vec3::ZERO,
             },
             initialised: false,
-            reference: None,
+            reference_error: None,
+            initial_yaw: None,
             since_reference: f32::INFINITY,
+            history: heapless::Deque::new(),
         }
     }
 
@@ -84,16 +94,34 @@ impl AttitudeEstimator {
         self.state
     }
 
-    /// An attitude from motion capture, used at the next IMU step.
-    pub fn set_reference(&mut self, attitude: Quat) {
-        if attitude.is_finite() {
-            self.reference = Some(attitude.normalized());
+    /// An attitude from motion capture taken at `stamp_us` (the clock `update` is given): it
+    /// is compared with the estimate of that instant and the difference corrects every IMU
+    /// step until a newer fix comes or it grows older than `reference_timeout`.
+    pub fn set_reference(&mut self, attitude: Quat, stamp_us: u64) {
+        if !attitude.is_finite() {
+            return;
         }
+        let then = self
+            .history
+            .iter()
+            .rev()
+            .find(|&&(t, _)| t <= stamp_us)
+            .map(|&(_, q)| q)
+            .unwrap_or(self.state.attitude);
+        if !self.initialised {
+            self.reference_error = None;
+            self.initial_yaw = Some(attitude.to_euler().z);
+            return;
+        }
+        let error = then.conjugate() * attitude.normalized();
+        let sign = if error.w < 0.0 { -1.0 } else { 1.0 };
+        self.reference_error = Some(error.vector() * (2.0 * sign));
+        self.since_reference = 0.0;
     }
 
-    /// One IMU sample: gyro (rad/s, body) and accelerometer specific force (m/s^2, body),
-    /// `dt` seconds after the previous one. Non-finite samples are skipped.
-    pub fn update(&mut self, gyro: Vec3, accel: Vec3, dt: f32) -> AttitudeState {
+    /// One IMU sample at `now_us`: gyro (rad/s, body) and accelerometer specific force
+    /// (m/s^2, body), `dt` seconds after the previous one. Non-finite samples are skipped.
+    pub fn update(&mut self, gyro: Vec3, accel: Vec3, dt: f32, now_us: u64) -> AttitudeState {
         if !(gyro.is_finite() && accel.is_finite() && dt > 0.0 && dt < 0.1) {
             return self.state;
         }
@@ -106,7 +134,7 @@ impl AttitudeEstimator {
                 let down = -accel * (1.0 / f_norm);
                 let roll = math::atan2(down.y, down.z);
                 let pitch = math::asin(-down.x);
-                let yaw = self.reference.map_or(0.0, |q| q.to_euler().z);
+                let yaw = self.initial_yaw.unwrap_or(0.0);
                 self.state.attitude = Quat::from_euler(roll, pitch, yaw);
                 self.initialised = true;
             }
@@ -115,13 +143,12 @@ impl AttitudeEstimator {
         }
         let q = self.state.attitude;
         let mut correction = Vec3::ZERO;
-        self.since_reference += dt;
-        if let Some(reference) = self.reference.take() {
-            // Body-frame rotation vector from the estimate to the reference.
-            let error = q.conjugate() * reference;
-            let sign = if error.w < 0.0 { -1.0 } else { 1.0 };
-            correction += error.vector() * (2.0 * sign * self.gains.reference_p);
-            self.since_reference = 0.0;
+        // The latest fix corrects every step while it is fresh (fixes come slower than IMU
+        // samples; correcting only on arrival would cut the gain by the rate ratio).
+        if let Some(error) = self.reference_error {
+            if self.since_reference <= self.gains.reference_timeout {
+                correction += error * self.gains.reference_p;
+            }
         }
         let accel_trusted = (f_norm - GRAVITY).abs() < self.gains.accel_trust_band * GRAVITY;
         if self.since_reference > self.gains.reference_timeout && accel_trusted {
@@ -140,6 +167,11 @@ impl AttitudeEstimator {
         let omega = rate + correction;
         self.state.attitude = (q * Quat::from_rotation_vector(omega * dt)).normalized();
         self.state.rate = rate;
+        self.since_reference += dt;
+        if self.history.is_full() {
+            self.history.pop_front();
+        }
+        let _ = self.history.push_back((now_us, self.state.attitude));
         self.state
     }
 }
@@ -167,10 +199,11 @@ mod tests {
         // Starts from the first sample with a wrong yaw; the accelerometer levels it, then
         // motion capture brings the yaw.
         for k in 0..400 * 120 {
+            let now = k * 2500;
             if k % 4 == 0 && k > 400 * 60 {
-                est.set_reference(truth); // motion capture for the second minute
+                est.set_reference(truth, now); // motion capture for the second minute
             }
-            est.update(bias, at_rest(truth), 0.0025);
+            est.update(bias, at_rest(truth), 0.0025, now);
         }
         let s = est.state();
         let e = s.attitude.to_euler();
@@ -183,14 +216,41 @@ mod tests {
         );
     }
 
+    /// Motion capture at 100 Hz, IMU at 400 Hz, a gyro bias: the estimate of a resting payload
+    /// must settle within 2 mrad and stop drifting (a lift-off detector watches for 10 mrad).
+    #[test]
+    fn slower_reference_still_holds_a_resting_payload_steady() {
+        let truth = Quat::from_euler(0.01, -0.02, 0.4);
+        let bias = Vec3::new(0.01, -0.012, 0.008);
+        let mut est = AttitudeEstimator::new(AttitudeEstimatorGains::default());
+        let tilt_error = |e: &AttitudeEstimator| {
+            let a = e.state().attitude.rotate(Vec3::DOWN);
+            let b = truth.rotate(Vec3::DOWN);
+            math::acos(a.dot(b).clamp(-1.0, 1.0))
+        };
+        let mut at_15 = 0.0;
+        for k in 0..400 * 25 {
+            if k % 4 == 0 {
+                est.set_reference(truth, k * 2500);
+            }
+            est.update(bias, at_rest(truth), 0.0025, k * 2500);
+            if k == 400 * 15 {
+                at_15 = tilt_error(&est);
+            }
+        }
+        let at_25 = tilt_error(&est);
+        assert!(at_25 < 2e-3, "{at_25}");
+        assert!((at_25 - at_15).abs() < 1e-3, "drift {at_15} -> {at_25}");
+    }
+
     #[test]
     fn tracks_a_rotation_from_the_gyro() {
         let mut est = AttitudeEstimator::new(AttitudeEstimatorGains::default());
         let mut truth = Quat::IDENTITY;
         let rate = Vec3::new(0.0, 0.0, 0.5); // pure yaw keeps the accelerometer reading fixed
-        for _ in 0..800 {
+        for k in 0..800u64 {
             truth = (truth * Quat::from_rotation_vector(rate * 0.0025)).normalized();
-            est.update(rate, at_rest(truth), 0.0025);
+            est.update(rate, at_rest(truth), 0.0025, k * 2500);
         }
         let yaw = est.state().attitude.to_euler().z;
         assert!((yaw - truth.to_euler().z).abs() < 0.01, "{yaw}");

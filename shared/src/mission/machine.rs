@@ -35,6 +35,10 @@ use crate::scenario::{GRAVITY, MAX_ROBOTS, Scenario};
 pub struct MissionConfig {
     /// Estimator options (the thrust-scale bias term).
     pub estimator: EstimatorOptions,
+    /// Standard deviation of a lift reading from this vehicle's detector, N, when it has been
+    /// characterised (repeated lifts of a known load); `None` uses the scenario's
+    /// `noise_sigma`.
+    pub lift_noise_sigma: Option<f32>,
     /// Lift-off detection.
     pub liftoff: LiftoffConfig,
     /// Rail motion limits.
@@ -48,10 +52,14 @@ pub struct MissionConfig {
     /// Largest share of the rotors' total thrust the heaviest plausible payload may need to
     /// hover; above it the mission refuses to take off.
     pub max_hover_fraction: f32,
-    /// Time on the ground, rotors off, before the estimation starts, s.
+    /// Time on the ground, rotors off, before the estimation starts (the attitude estimator
+    /// learns the gyro bias meanwhile), s.
     pub checks_time: f32,
     /// Time with rotors off after each lift, s.
     pub relax_time: f32,
+    /// Consecutive lifts after which the stopping rule must hold before the estimate is taken
+    /// (1: the paper's rule; 2: one confirmation lift after it first holds).
+    pub confirmations: u32,
     /// Time armed on the ground before take-off, s.
     pub arm_time: f32,
 }
@@ -60,14 +68,16 @@ impl Default for MissionConfig {
     fn default() -> Self {
         Self {
             estimator: EstimatorOptions::default(),
+            lift_noise_sigma: None,
             liftoff: LiftoffConfig::default(),
             rail_limits: MotionLimits::default(),
             control: ControlParams::default(),
             mixer: MixerKind::EqualSplit,
             plan: PlanLimits::default(),
             max_hover_fraction: 0.7,
-            checks_time: 1.0,
-            relax_time: 1.0,
+            checks_time: 5.0,
+            relax_time: 2.0,
+            confirmations: 1,
             arm_time: 1.0,
         }
     }
@@ -93,6 +103,8 @@ pub struct MissionOutputs {
     pub phase: Phase,
     /// The transition this tick made, if any.
     pub transition: Option<Transition>,
+    /// The attitude estimate (for telemetry).
+    pub attitude: Quat,
 }
 
 /// The flight part, built once the formation is known.
@@ -121,6 +133,7 @@ pub struct Mission {
     pair_robots: Vec<usize, MAX_ROBOTS>,
     lift: Option<LiftoffDetector>,
     last_status: Status,
+    converged_in_a_row: u32,
     estimate: Option<Estimate>,
     formation: Option<Positions>,
     flight: Option<Flight>,
@@ -133,7 +146,14 @@ pub struct Mission {
 impl Mission {
     /// A mission for `scenario` with the robots at their initial positions.
     pub fn new(scenario: &Scenario, config: MissionConfig) -> Result<Self, AbortReason> {
-        let estimator = Estimator::new(scenario, config.estimator)
+        let mut measured = scenario.clone();
+        if let Some(sigma) = config.lift_noise_sigma {
+            if !(sigma.is_finite() && sigma > 0.0) {
+                return Err(AbortReason::EstimationFailed);
+            }
+            measured.estimation.noise_sigma = sigma;
+        }
+        let estimator = Estimator::new(&measured, config.estimator)
             .map_err(|_| AbortReason::EstimationFailed)?;
         Ok(Self {
             scenario: scenario.clone(),
@@ -149,6 +169,7 @@ impl Mission {
             pair_robots: Vec::new(),
             lift: None,
             last_status: Status::Measuring,
+            converged_in_a_row: 0,
             estimate: None,
             formation: None,
             flight: None,
@@ -185,7 +206,7 @@ impl Mission {
 
     /// A motion-capture fix of the payload frame (NED position, attitude) taken at `stamp_us`.
     pub fn motion_capture(&mut self, position: Vec3, attitude: Quat, stamp_us: u64) {
-        self.attitude.set_reference(attitude);
+        self.attitude.set_reference(attitude, stamp_us);
         self.position.correct(position, stamp_us);
     }
 
@@ -220,7 +241,7 @@ impl Mission {
     pub fn step(&mut self, imu: ImuReading, now_us: u64, dt: f32) -> MissionOutputs {
         self.now_us = now_us;
         self.phase_time += dt;
-        let a = self.attitude.update(imu.gyro, imu.accel, dt);
+        let a = self.attitude.update(imu.gyro, imu.accel, dt, now_us);
         self.position.predict(
             a.attitude.rotate(imu.accel) + Vec3::DOWN * GRAVITY,
             dt,
@@ -248,6 +269,7 @@ impl Mission {
             robots: self.robots.clone(),
             phase: self.phase,
             transition,
+            attitude: a.attitude,
         }
     }
 
@@ -342,6 +364,11 @@ impl Mission {
         match self.estimator.update(self.group, m) {
             Ok(status) => {
                 self.last_status = status;
+                self.converged_in_a_row = if status == Status::Converged {
+                    self.converged_in_a_row + 1
+                } else {
+                    0
+                };
                 Some(self.enter(Phase::Relaxing, Reason::LiftRead(m)))
             }
             Err(_) => Some(self.abort(AbortReason::EstimationFailed)),
@@ -354,6 +381,9 @@ impl Mission {
         }
         Some(match self.last_status {
             Status::Measuring => self.enter(Phase::SelectingPair, Reason::NeedMoreLifts),
+            Status::Converged if self.converged_in_a_row < self.config.confirmations => {
+                self.enter(Phase::SelectingPair, Reason::NeedMoreLifts)
+            }
             Status::Converged => {
                 let e = self.estimator.estimate();
                 self.estimate = Some(e);
