@@ -56,12 +56,12 @@ fn optimised_formation_delivers_and_even_formation_does_much_worse() {
         assert!(opt.landed, "{name}: landed and disarmed at the target");
         assert!(opt.max_tilt_deg < 8.0, "{name}: {}", opt.max_tilt_deg);
         assert!(
-            opt.rms_tracking_error_m < 0.2,
+            opt.rms_tracking_error_m < 0.1,
             "{name}: {}",
             opt.rms_tracking_error_m
         );
         assert!(
-            opt.final_position_error_m < 0.15,
+            opt.final_position_error_m < 0.1,
             "{name}: {}",
             opt.final_position_error_m
         );
@@ -71,9 +71,11 @@ fn optimised_formation_delivers_and_even_formation_does_much_worse() {
             opt.max_thrust_fraction
         );
 
-        // Even, same mixer: larger attitude excursions and far worse tracking.
+        // Even, same mixer: it cannot take off (it pivots on an edge) or it tilts at least
+        // twice as far; either way it tracks far worse.
+        let grounded = even.max_height_m < 0.1;
         assert!(
-            even.max_tilt_deg > opt.max_tilt_deg,
+            grounded || even.max_tilt_deg > 2.0 * opt.max_tilt_deg,
             "{name}: even {} vs optimised {}",
             even.max_tilt_deg,
             opt.max_tilt_deg
