@@ -79,7 +79,8 @@ pub fn run(
         torque_per_thrust: robots.torque_per_thrust,
         max_thrust: robots.max_thrust,
         map_error: setup.map_error,
-        disturbance_peak: flight.disturbance_torque,
+        // The paper's disturbance acts on the flight; it is switched on at take-off.
+        disturbance_peak: 0.0,
         disturbance_phase: [0.4 + setup.seed as f32 % 3.0, 1.9],
     });
     let mut sensors = Sensors::new(setup.seed);
@@ -125,6 +126,9 @@ pub fn run(
             dt,
         );
         if let Some(tr) = out.transition {
+            if matches!(tr.to, Phase::Flying(_)) {
+                plant.set_disturbance_peak(flight.disturbance_torque);
+            }
             on_transition(t, &tr);
             record(t, &tr, &mut phases);
             match tr.reason {

@@ -182,6 +182,12 @@ impl Plant {
         }
     }
 
+    /// Sets the peak of the body-torque disturbance, N m (the mission turns it on in flight:
+    /// it is the paper's flight disturbance, not a load on the ground lifts).
+    pub fn set_disturbance_peak(&mut self, peak: f32) {
+        self.config.disturbance_peak = peak.max(0.0);
+    }
+
     /// Simulated time, s.
     pub fn time(&self) -> f32 {
         (self.steps as f64 * f64::from(PHYSICS_DT)) as f32
