@@ -37,10 +37,13 @@ pub struct MissionArgs {
     /// Estimate the thrust-scale factor alongside theta (axis 0.9..1.2 step 0.05).
     #[arg(long)]
     bias_term: bool,
-    /// Standard deviation of this detector's lift readings, N (default: the scenario's
-    /// noise_sigma).
-    #[arg(long, value_name = "N")]
+    /// Standard deviation of the lift detector's readings, N: the estimator's noise model for
+    /// the lifts (default 0.5, the detector's characterised bound).
+    #[arg(long, value_name = "N", conflicts_with = "scenario_sigma")]
     lift_sigma: Option<f64>,
+    /// Use the scenario's noise_sigma (the paper's simulated noise) as the lifts' noise model.
+    #[arg(long)]
+    scenario_sigma: bool,
     /// Mixer for the flight.
     #[arg(long, value_enum, default_value = "equal-split")]
     mixer: MixerArg,
@@ -60,7 +63,14 @@ pub fn run(args: &MissionArgs) -> Result<()> {
             thrust_scale: args.bias_term.then_some(ThrustScaleAxis::DEFAULT),
         },
         mixer: args.mixer.kind(),
-        lift_noise_sigma: args.lift_sigma.map(|s| s as f32),
+        lift_noise_sigma: if args.scenario_sigma {
+            None
+        } else {
+            Some(
+                args.lift_sigma
+                    .map_or(shared::mission::machine::DETECTOR_SIGMA, |s| s as f32),
+            )
+        },
         ..MissionConfig::default()
     };
     let setup = MissionSetup {

@@ -30,14 +30,19 @@ use crate::rail::moves::{Positions, RailMove, lift_targets};
 use crate::rail::stepper::MotionLimits;
 use crate::scenario::{GRAVITY, MAX_ROBOTS, Scenario};
 
+/// Default standard deviation of a lift reading, N (see [`MissionConfig::lift_noise_sigma`]).
+pub const DETECTOR_SIGMA: f32 = 0.5;
+
 /// Everything the mission may be tuned with beyond the scenario.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MissionConfig {
     /// Estimator options (the thrust-scale bias term).
     pub estimator: EstimatorOptions,
-    /// Standard deviation of a lift reading from this vehicle's detector, N, when it has been
-    /// characterised (repeated lifts of a known load); `None` uses the scenario's
-    /// `noise_sigma`.
+    /// Standard deviation of a lift reading from this vehicle's detector, N: the estimator's
+    /// noise model for the lifts. `None` uses the scenario's `noise_sigma` (the paper's
+    /// simulated measurement noise). A real vehicle sets it from bench lifts of a known load.
+    /// The default, 0.5 N, bounds what the detector showed in the simulated vehicle: 63 lifts
+    /// over 18 missions read the model's lift-off with an RMS error of 0.14 N, worst 0.77 N.
     pub lift_noise_sigma: Option<f32>,
     /// Lift-off detection.
     pub liftoff: LiftoffConfig,
@@ -68,7 +73,7 @@ impl Default for MissionConfig {
     fn default() -> Self {
         Self {
             estimator: EstimatorOptions::default(),
-            lift_noise_sigma: None,
+            lift_noise_sigma: Some(DETECTOR_SIGMA),
             liftoff: LiftoffConfig::default(),
             rail_limits: MotionLimits::default(),
             control: ControlParams::default(),
