@@ -86,6 +86,9 @@ pub struct Estimate {
     pub confidence: f32,
     /// Posterior mean of the thrust-scale factor (1 when the bias term is off).
     pub thrust_scale: f32,
+    /// Mass the payload exceeds with at most 5 % posterior probability (upper edge of the cell
+    /// where the mass marginal's cumulative reaches 95 %), kg.
+    pub mass_upper_95: f32,
     /// Lifts taken.
     pub measurements: u32,
     /// Where the estimation stands.
@@ -112,6 +115,7 @@ pub struct Estimator {
     posterior: Posterior,
     measurements: u32,
     summary: Concentration,
+    mass_upper_95: f32,
     probabilities: Vec<f32, MAX_GRID_POINTS>,
     fractions: Vec<f32, MAX_GRID_POINTS>,
     scratch: InformationScratch,
@@ -159,6 +163,7 @@ impl Estimator {
                 mass_near_map: 0.0,
                 local_mean: [0.0; 3],
             },
+            mass_upper_95: 0.0,
             probabilities,
             fractions,
             scratch: InformationScratch::default(),
@@ -266,6 +271,23 @@ impl Estimator {
         let marginal = &mut self.probabilities[..self.grid.theta_len()];
         self.posterior.theta_marginal(&self.grid, marginal);
         self.summary = concentration(&self.grid, marginal);
+        // The mass marginal's 95 % quantile (cell upper edge).
+        let [_, _, nm] = self.grid.shape();
+        let mut cumulative = 0.0;
+        let mut upper = self.grid.mass(nm - 1);
+        for im in 0..nm {
+            cumulative += marginal
+                .iter()
+                .enumerate()
+                .filter(|(t, _)| t % nm == im)
+                .map(|(_, p)| *p)
+                .sum::<f32>();
+            if cumulative >= 0.95 {
+                upper = self.grid.mass(im);
+                break;
+            }
+        }
+        self.mass_upper_95 = upper + 0.5 * self.grid.resolution()[2];
     }
 
     /// Where the estimation stands: converged once the mass near the MAP exceeds the threshold,
@@ -287,6 +309,7 @@ impl Estimator {
             map: self.summary.map,
             confidence: self.summary.mass_near_map,
             thrust_scale: self.posterior.mean_scale(&self.grid),
+            mass_upper_95: self.mass_upper_95,
             measurements: self.measurements,
             status: self.status(),
         }

@@ -54,8 +54,9 @@ pub struct MissionConfig {
     pub mixer: MixerKind,
     /// Reference trajectory limits.
     pub plan: PlanLimits,
-    /// Largest share of the rotors' total thrust the heaviest plausible payload may need to
-    /// hover; above it the mission refuses to take off.
+    /// Largest share of the rotors' total thrust the heaviest plausible payload (the
+    /// posterior's 95 % upper bound on the mass) may need to hover; above it the mission
+    /// refuses to take off.
     pub max_hover_fraction: f32,
     /// Time on the ground, rotors off, before the estimation starts (the attitude estimator
     /// learns the gyro bias meanwhile), s.
@@ -404,8 +405,8 @@ impl Mission {
         };
         let robots = &self.scenario.robots;
         let n = robots.count() as f32;
-        // The heaviest payload the estimate allows: one mass resolution above it.
-        let heaviest = e.theta[2] + self.scenario.estimation.resolution[2];
+        // The heaviest payload the posterior allows (95 % upper bound of the mass).
+        let heaviest = e.mass_upper_95.max(e.theta[2]);
         let needed = (heaviest + n * robots.mass) * GRAVITY;
         let allowed = self.config.max_hover_fraction * n * robots.max_thrust;
         if needed > allowed {

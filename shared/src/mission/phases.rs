@@ -69,7 +69,7 @@ pub enum AbortReason {
     EstimationNotConverged,
     /// The heaviest payload the estimate allows needs more than the allowed share of thrust.
     ThrustMarginTooSmall {
-        /// Hover thrust of the heaviest payload within one resolution of the estimate, N.
+        /// Hover thrust of the heaviest payload the posterior allows (95 % bound), N.
         needed: f32,
         /// Thrust allowed for hover, N.
         allowed: f32,

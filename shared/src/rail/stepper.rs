@@ -182,6 +182,38 @@ impl Iterator for StepSchedule {
     }
 }
 
+/// Where a robot is, counted in the steps the firmware has sent its driver.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepCounter {
+    steps: i32,
+}
+
+impl StepCounter {
+    /// A counter at `arc_length` (m) on a drive with `config`.
+    pub fn at(arc_length: f32, config: &DriveConfig) -> Self {
+        Self {
+            steps: config.to_steps(arc_length),
+        }
+    }
+
+    /// One step sent in `direction` (+1 forward, -1 backward).
+    pub fn step(&mut self, direction: i8) {
+        self.steps = self.steps.saturating_add(i32::from(direction.signum()));
+    }
+
+    /// Steps from the rail's origin.
+    pub fn steps(&self) -> i32 {
+        self.steps
+    }
+
+    /// Arc length along a closed rail of `perimeter`, m, in `[0, perimeter)`.
+    pub fn arc_length(&self, config: &DriveConfig, perimeter: f32) -> f32 {
+        let s = config.to_metres(self.steps);
+        let w = s - perimeter * math::floor(s / perimeter);
+        if w >= perimeter { 0.0 } else { w }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -227,6 +259,25 @@ mod tests {
                 "{distance}"
             );
         }
+    }
+
+    #[test]
+    fn counting_a_schedule_s_steps_tracks_the_robot_to_its_target() {
+        let drive = DriveConfig::default();
+        let perimeter = 4.88;
+        let mut robot = StepCounter::at(0.1, &drive);
+        // Backward across the rail's origin: 0.1 -> 4.68 (wrapped).
+        let schedule =
+            StepSchedule::new(TrapezoidProfile::new(-0.3, MotionLimits::default()), &drive);
+        let direction = schedule.direction();
+        for _ in schedule {
+            robot.step(direction);
+        }
+        let s = robot.arc_length(&drive, perimeter);
+        assert!(
+            (s - 4.68).abs() <= 1.0 / drive.steps_per_metre() + 1e-4,
+            "{s}"
+        );
     }
 
     #[test]
