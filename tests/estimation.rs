@@ -3,25 +3,12 @@
 //! noise; the mean and the standard deviation of the error, in resolutions, must stay below 1 on
 //! every axis. Also the `lift` and `estimate` command lines.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+use common::{host_sim, scenario_path};
 
 use host_sim::monte_carlo::{self, MonteCarloSetup, Summary};
 use host_sim::scenario_file;
 use shared::estimation::{EstimatorOptions, ThrustScaleAxis};
-
-fn scenario_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/scenarios")
-        .join(format!("{name}.toml"))
-}
-
-fn host_sim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(args)
-        .output()
-        .expect("host-sim runs")
-}
 
 fn monte_carlo(name: &str, map_error: f32, scale: Option<ThrustScaleAxis>) -> Summary {
     let loaded = scenario_file::load(&scenario_path(name)).expect("paper scenario");

@@ -1,21 +1,8 @@
 //! Formation decision through the command line (SPEC.md section 5, `formation`): the JSON keys,
 //! the constraints on every paper case, the comparison with the even formation, and errors.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn scenario_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/scenarios")
-        .join(format!("{name}.toml"))
-}
-
-fn host_sim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(args)
-        .output()
-        .expect("host-sim runs")
-}
+mod common;
+use common::{host_sim, scenario_path};
 
 fn formation_json(name: &str, extra: &[&str]) -> serde_json::Value {
     let path = scenario_path(name);

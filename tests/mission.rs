@@ -2,7 +2,10 @@
 //! `mission`): estimation by real lift-off detection, formation decision, rearrangement,
 //! flight, delivery; and the refusals that keep a real vehicle on the ground.
 
-use std::path::{Path, PathBuf};
+mod common;
+use common::{load, scenario_path};
+
+use std::path::Path;
 use std::process::Command;
 
 use host_sim::mission_run::{self, MissionOutcome, MissionSetup};
@@ -10,18 +13,6 @@ use host_sim::scenario_file;
 use shared::estimation::{EstimatorOptions, ThrustScaleAxis};
 use shared::mission::{MissionConfig, Reason};
 use shared::scenario::Scenario;
-
-fn scenario_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/scenarios")
-        .join(format!("{name}.toml"))
-}
-
-fn load(name: &str) -> Scenario {
-    scenario_file::load(&scenario_path(name))
-        .expect("paper scenario")
-        .scenario
-}
 
 fn run(scenario: &Scenario, map_error: f32, bias_term: bool) -> (MissionOutcome, Vec<Reason>) {
     let setup = MissionSetup {

@@ -2,8 +2,10 @@
 //! SPEC.md's set into `tests/scenarios/`) and the command line's handling of bad input
 //! (SPEC.md section 5: a one-line error naming the key, a non-zero exit, never a panic).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+use common::{host_sim, scenario_path};
+
+use std::path::PathBuf;
 
 use host_sim::scenario_file;
 
@@ -15,19 +17,6 @@ const PAPER_CASES: [&str; 6] = [
     "rect-ex1",
     "rect-ex2",
 ];
-
-fn scenario_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/scenarios")
-        .join(format!("{name}.toml"))
-}
-
-fn host_sim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(args)
-        .output()
-        .expect("host-sim runs")
-}
 
 /// Writes `text` to a fresh temporary scenario file and returns its path.
 fn temp_scenario(tag: &str, text: &str) -> PathBuf {

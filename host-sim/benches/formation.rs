@@ -17,15 +17,7 @@ fn formation(c: &mut Criterion) {
             .join(format!("{name}.toml"));
         let s = scenario_file::load(&path).expect("paper scenario").scenario;
         let truth = s.truth.expect("paper cases carry their truth");
-        let problem = FormationProblem {
-            rail: &s.payload.rail,
-            spin: &s.robots.spin,
-            min_spacing: s.robots.min_spacing,
-            com: truth.com,
-            torque_per_thrust: s.robots.torque_per_thrust,
-            balance_eps: s.formation.balance_eps,
-            current: Some(&s.robots.initial),
-        };
+        let problem = FormationProblem::for_scenario(&s, truth.com, Some(&s.robots.initial));
         let f = solve(&problem).expect("a formation");
         println!(
             "{name}: det {:.4e}, {} seeds balanced, {} sweeps",

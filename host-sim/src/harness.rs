@@ -112,15 +112,8 @@ pub fn formation_positions(
     match choice {
         FormationChoice::Even => Ok(scenario.robots.initial.to_vec()),
         FormationChoice::Optimized => {
-            let problem = FormationProblem {
-                rail: &scenario.payload.rail,
-                spin: &scenario.robots.spin,
-                min_spacing: scenario.robots.min_spacing,
-                com,
-                torque_per_thrust: scenario.robots.torque_per_thrust,
-                balance_eps: scenario.formation.balance_eps,
-                current: Some(&scenario.robots.initial),
-            };
+            let problem =
+                FormationProblem::for_scenario(scenario, com, Some(&scenario.robots.initial));
             let f = solve(&problem).map_err(|e| anyhow!("formation: {e}"))?;
             Ok(f.positions.to_vec())
         }

@@ -123,15 +123,7 @@ fn main() -> ! {
     // Formation decision on the paper's cases.
     for (name, scenario) in [("rect-sim1", &rect), ("L-sim1", &l_shape)] {
         let com = scenario.truth.map_or(Vec2::default(), |t| t.com);
-        let problem = FormationProblem {
-            rail: &scenario.payload.rail,
-            spin: &scenario.robots.spin,
-            min_spacing: scenario.robots.min_spacing,
-            com,
-            torque_per_thrust: scenario.robots.torque_per_thrust,
-            balance_eps: scenario.formation.balance_eps,
-            current: Some(&scenario.robots.initial),
-        };
+        let problem = FormationProblem::for_scenario(scenario, com, Some(&scenario.robots.initial));
         let (n, result) = timer.instructions(|| solve(&problem));
         hprintln!("formation, {} (solved: {}):", name, result.is_ok());
         report("  solve", n);

@@ -50,15 +50,7 @@ pub fn run(args: &FormationArgs) -> Result<()> {
     if !(mass.is_finite() && mass > 0.0) {
         bail!("--mass {mass}: must be a positive number of kg");
     }
-    let problem = FormationProblem {
-        rail: &s.payload.rail,
-        spin: &s.robots.spin,
-        min_spacing: s.robots.min_spacing,
-        com,
-        torque_per_thrust: s.robots.torque_per_thrust,
-        balance_eps: s.formation.balance_eps,
-        current: Some(&s.robots.initial),
-    };
+    let problem = FormationProblem::for_scenario(s, com, Some(&s.robots.initial));
     let started = Instant::now();
     let formation =
         solve(&problem).map_err(|e| anyhow!("{}: formation: {e}", loaded.path.display()))?;

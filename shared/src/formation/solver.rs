@@ -16,7 +16,7 @@ use crate::formation::balance::project_to_balance;
 use crate::formation::objective::{FormationFigures, Moments, figures};
 use crate::formation::search::{SPACING_MARGIN, SearchSpace, order_and_spacing_hold};
 use crate::geometry::{Rail, Vec2};
-use crate::scenario::MAX_ROBOTS;
+use crate::scenario::{MAX_ROBOTS, Scenario};
 
 /// Most sweeps of the local search per seed.
 const MAX_SWEEPS: u32 = 40;
@@ -47,6 +47,21 @@ pub struct FormationProblem<'a> {
     pub balance_eps: f32,
     /// Where the robots stand now (a seed), if known.
     pub current: Option<&'a [f32]>,
+}
+
+impl<'a> FormationProblem<'a> {
+    /// The problem of `scenario`'s rail and robots about the COM `com`, starting from `current`.
+    pub fn for_scenario(scenario: &'a Scenario, com: Vec2, current: Option<&'a [f32]>) -> Self {
+        Self {
+            rail: &scenario.payload.rail,
+            spin: &scenario.robots.spin,
+            min_spacing: scenario.robots.min_spacing,
+            com,
+            torque_per_thrust: scenario.robots.torque_per_thrust,
+            balance_eps: scenario.formation.balance_eps,
+            current,
+        }
+    }
 }
 
 /// Why no formation can be given.
@@ -429,15 +444,7 @@ mod tests {
             let scenario = if use_l { checked(l_sim1()) } else { checked(rect_sim1()) };
             let com = if use_l { Vec2::new(lx, ly) } else { Vec2::new(x, y) };
             prop_assume!(scenario.payload.hull.contains(com, 0.0));
-            let problem = FormationProblem {
-                rail: &scenario.payload.rail,
-                spin: &scenario.robots.spin,
-                min_spacing: scenario.robots.min_spacing,
-                com,
-                torque_per_thrust: scenario.robots.torque_per_thrust,
-                balance_eps: scenario.formation.balance_eps,
-                current: Some(&scenario.robots.initial),
-            };
+            let problem = FormationProblem::for_scenario(scenario, com, Some(&scenario.robots.initial));
             match solve(&problem) {
                 Ok(f) => {
                     prop_assert_eq!(f.positions.len(), 8);

@@ -413,15 +413,8 @@ impl Mission {
             return self.abort(AbortReason::ThrustMarginTooSmall { needed, allowed });
         }
         let rail = &self.scenario.payload.rail;
-        let problem = FormationProblem {
-            rail,
-            spin: &robots.spin,
-            min_spacing: robots.min_spacing,
-            com: Vec2::new(e.theta[0], e.theta[1]),
-            torque_per_thrust: robots.torque_per_thrust,
-            balance_eps: self.scenario.formation.balance_eps,
-            current: Some(&self.robots),
-        };
+        let com = Vec2::new(e.theta[0], e.theta[1]);
+        let problem = FormationProblem::for_scenario(&self.scenario, com, Some(&self.robots));
         let Ok(formation) = solve(&problem) else {
             return self.abort(AbortReason::NoBalancedFormation);
         };
