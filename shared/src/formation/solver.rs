@@ -444,7 +444,8 @@ mod tests {
             let scenario = if use_l { checked(l_sim1()) } else { checked(rect_sim1()) };
             let com = if use_l { Vec2::new(lx, ly) } else { Vec2::new(x, y) };
             prop_assume!(scenario.payload.hull.contains(com, 0.0));
-            let problem = FormationProblem::for_scenario(scenario, com, Some(&scenario.robots.initial));
+            let problem =
+                FormationProblem::for_scenario(&scenario, com, Some(&scenario.robots.initial));
             match solve(&problem) {
                 Ok(f) => {
                     prop_assert_eq!(f.positions.len(), 8);
