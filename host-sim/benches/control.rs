@@ -18,17 +18,8 @@ use shared::control::vehicle::VehicleModel;
 use shared::geometry::Vec2;
 
 fn control_step(c: &mut Criterion) {
-    let points = [
-        Vec2::new(-0.6, -0.22),
-        Vec2::new(0.1, -0.22),
-        Vec2::new(0.7, -0.22),
-        Vec2::new(1.0, 0.05),
-        Vec2::new(0.8, 0.22),
-        Vec2::new(0.3, 0.22),
-        Vec2::new(-0.4, 0.22),
-        Vec2::new(-1.0, 0.0),
-    ];
-    let spin = [1, -1, 1, -1, 1, -1, 1, -1];
+    let points = shared::paper::RECT_ROTORS;
+    let spin = shared::paper::ALTERNATING_SPIN;
     let footprint = [
         Vec2::new(-0.88, -0.1),
         Vec2::new(0.88, -0.1),

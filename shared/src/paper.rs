@@ -54,6 +54,22 @@ fn robots() -> RobotsInput<'static> {
     }
 }
 
+/// Eight rotor points on the rectangle's rail (m), roughly balanced about a COM near
+/// (0.1, 0.0): the layout the mixer and cascade tests and benchmarks fly.
+pub const RECT_ROTORS: [Vec2; 8] = [
+    Vec2::new(-0.6, -0.22),
+    Vec2::new(0.1, -0.22),
+    Vec2::new(0.7, -0.22),
+    Vec2::new(1.0, 0.05),
+    Vec2::new(0.8, 0.22),
+    Vec2::new(0.3, 0.22),
+    Vec2::new(-0.4, 0.22),
+    Vec2::new(-1.0, 0.0),
+];
+
+/// Alternating spin signs of eight robots.
+pub const ALTERNATING_SPIN: [i8; 8] = [1, -1, 1, -1, 1, -1, 1, -1];
+
 /// `rect-sim1` as input.
 pub fn rect_sim1() -> ScenarioInput<'static> {
     ScenarioInput {

@@ -130,17 +130,8 @@ fn main() -> ! {
     }
 
     // One 400 Hz step with 8 rotors.
-    let points = [
-        Vec2::new(-0.6, -0.22),
-        Vec2::new(0.1, -0.22),
-        Vec2::new(0.7, -0.22),
-        Vec2::new(1.0, 0.05),
-        Vec2::new(0.8, 0.22),
-        Vec2::new(0.3, 0.22),
-        Vec2::new(-0.4, 0.22),
-        Vec2::new(-1.0, 0.0),
-    ];
-    let spin = [1, -1, 1, -1, 1, -1, 1, -1];
+    let points = shared::paper::RECT_ROTORS;
+    let spin = shared::paper::ALTERNATING_SPIN;
     let com = Vec2::new(0.12, 0.01);
     let footprint = &rect.payload.footprint;
     let model = VehicleModel::from_payload(footprint, com, 3.5, &points, 0.1, 14.2);

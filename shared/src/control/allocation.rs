@@ -309,18 +309,9 @@ mod tests {
 
     /// The paper's rectangle with 8 robots in a balanced formation about an offset COM.
     fn layout_points() -> [Vec2; 8] {
-        [
-            Vec2::new(-0.6, -0.22),
-            Vec2::new(0.1, -0.22),
-            Vec2::new(0.7, -0.22),
-            Vec2::new(1.0, 0.05),
-            Vec2::new(0.8, 0.22),
-            Vec2::new(0.3, 0.22),
-            Vec2::new(-0.4, 0.22),
-            Vec2::new(-1.0, 0.0),
-        ]
+        crate::paper::RECT_ROTORS
     }
-    const SPIN: [i8; 8] = [1, -1, 1, -1, 1, -1, 1, -1];
+    const SPIN: [i8; 8] = crate::paper::ALTERNATING_SPIN;
 
     fn mixer(kind: MixerKind, com: Vec2) -> Mixer {
         let points = layout_points();

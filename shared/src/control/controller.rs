@@ -234,17 +234,8 @@ mod tests {
     use crate::control::allocation::{Mixer, MixerKind, RotorLayout};
     use crate::geometry::Vec2;
 
-    const POINTS: [Vec2; 8] = [
-        Vec2::new(-0.6, -0.22),
-        Vec2::new(0.1, -0.22),
-        Vec2::new(0.7, -0.22),
-        Vec2::new(1.0, 0.05),
-        Vec2::new(0.8, 0.22),
-        Vec2::new(0.3, 0.22),
-        Vec2::new(-0.4, 0.22),
-        Vec2::new(-1.0, 0.0),
-    ];
-    const SPIN: [i8; 8] = [1, -1, 1, -1, 1, -1, 1, -1];
+    const POINTS: [Vec2; 8] = crate::paper::RECT_ROTORS;
+    const SPIN: [i8; 8] = crate::paper::ALTERNATING_SPIN;
 
     /// A rigid body with eight lagging rotors, perfect state feedback, 400 Hz control.
     struct Bench {
