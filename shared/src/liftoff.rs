@@ -81,7 +81,6 @@ pub struct LiftoffDetector {
     thrust: f32,
     timer: f32,
     reference_axis: Vec3,
-    samples: u32,
     state: LiftState,
     history: heapless::Deque<(f32, f32, Vec3), HISTORY>,
     clock: f32,
@@ -98,7 +97,6 @@ impl LiftoffDetector {
             thrust: start_thrust,
             timer: 0.0,
             reference_axis: Vec3::ZERO,
-            samples: 0,
             state: LiftState::Settling,
             history: heapless::Deque::new(),
             clock: 0.0,
@@ -162,7 +160,6 @@ impl LiftoffDetector {
         match self.state {
             LiftState::Settling => {
                 self.reference_axis += axis;
-                self.samples += 1;
                 self.timer += dt;
                 if self.timer >= self.config.settle_time {
                     self.reference_axis = self.reference_axis.normalized();

@@ -176,12 +176,6 @@ impl AttitudeEstimator {
     }
 }
 
-/// `angle` wrapped into `[-pi, pi)`.
-pub fn wrap_pi(angle: f32) -> f32 {
-    let tau = core::f32::consts::TAU;
-    angle - tau * math::floor((angle + core::f32::consts::PI) / tau)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -9,7 +9,6 @@
 //! the estimate invalid so the caller can hold or land.
 
 use crate::control::vector::Vec3;
-use crate::math;
 
 /// Ticks of history kept for late fixes (0.32 s at 400 Hz).
 pub const HISTORY: usize = 128;
@@ -133,11 +132,6 @@ impl PositionEstimator {
             valid,
         }
     }
-}
-
-/// Seconds between two microsecond stamps, as `f32`.
-pub fn seconds_between(earlier_us: u64, later_us: u64) -> f32 {
-    math::abs(later_us as f32 - earlier_us as f32) * 1e-6
 }
 
 #[cfg(test)]

@@ -143,7 +143,6 @@ pub struct Mission {
     estimate: Option<Estimate>,
     formation: Option<Positions>,
     flight: Option<Flight>,
-    now_us: u64,
     abort: Option<AbortReason>,
     /// Time since take-off began (runs across the flight's phases), s.
     flight_clock: f32,
@@ -179,7 +178,6 @@ impl Mission {
             estimate: None,
             formation: None,
             flight: None,
-            now_us: 0,
             abort: None,
             flight_clock: 0.0,
         })
@@ -245,7 +243,6 @@ impl Mission {
 
     /// One tick at `now_us` with an IMU sample; `dt` seconds since the previous tick.
     pub fn step(&mut self, imu: ImuReading, now_us: u64, dt: f32) -> MissionOutputs {
-        self.now_us = now_us;
         self.phase_time += dt;
         let a = self.attitude.update(imu.gyro, imu.accel, dt, now_us);
         self.position.predict(
@@ -260,7 +257,7 @@ impl Mission {
             Phase::PreflightChecks => self.checks(a.attitude),
             Phase::SelectingPair => Some(self.select_pair()),
             Phase::MovingRobots | Phase::Rearranging => self.move_robots(),
-            Phase::Lifting => self.lifting(a.attitude, &mut thrusts),
+            Phase::Lifting => self.lifting(a.attitude, dt, &mut thrusts),
             Phase::Relaxing => self.relaxing(),
             Phase::DecidingFormation => Some(self.decide_formation()),
             Phase::Arming => (self.phase_time >= self.config.arm_time)
@@ -354,12 +351,17 @@ impl Mission {
         }
     }
 
-    fn lifting(&mut self, attitude: Quat, thrusts: &mut [f32; MAX_ROBOTS]) -> Option<Transition> {
+    fn lifting(
+        &mut self,
+        attitude: Quat,
+        dt: f32,
+        thrusts: &mut [f32; MAX_ROBOTS],
+    ) -> Option<Transition> {
         let n = self.scenario.robots.count();
         let own = self.own_weight();
         thrusts[..n].iter_mut().for_each(|t| *t = own);
         let lift = self.lift.as_mut()?;
-        let state = lift.step(attitude, 1.0 / crate::timing::CONTROL_RATE_HZ as f32);
+        let state = lift.step(attitude, dt);
         for &i in &self.pair_robots {
             thrusts[i] = lift.pair_thrust();
         }
