@@ -24,6 +24,7 @@ fn run(scenario: &Scenario, map_error: f32, bias_term: bool) -> (MissionOutcome,
             },
             ..MissionConfig::default()
         },
+        mocap_lost_after_takeoff: None,
     };
     let mut reasons = Vec::new();
     let outcome = mission_run::run(scenario, &setup, &mut |_, tr| reasons.push(tr.reason))
@@ -128,6 +129,7 @@ fn refuses_to_take_off_without_thrust_margin_or_convergence() {
             max_hover_fraction: 0.3,
             ..MissionConfig::default()
         },
+        mocap_lost_after_takeoff: None,
     };
     let mut reasons = Vec::new();
     let outcome = mission_run::run(&s, &setup, &mut |_, tr| reasons.push(tr.reason)).expect("runs");
@@ -203,4 +205,37 @@ fn mission_json_has_the_spec_keys() {
             .all(|p| p["name"].is_string() && p["duration_s"].is_number())
     );
     assert_eq!(v["delivered"], true);
+}
+
+#[test]
+fn losing_motion_capture_in_flight_lands_in_place_instead_of_falling() {
+    let s = load("L-sim1");
+    let setup = MissionSetup {
+        seed: 1,
+        map_error: 1.0,
+        config: MissionConfig::default(),
+        // Take-off lasts ~3 s: lost during the transit, ~0.5 m above ground.
+        mocap_lost_after_takeoff: Some(6.0),
+    };
+    let mut reasons = Vec::new();
+    let outcome = mission_run::run(&s, &setup, &mut |_, tr| reasons.push(tr.reason)).expect("runs");
+    assert!(!outcome.dropped, "kept flying: {outcome:?}");
+    assert!(
+        outcome
+            .aborted
+            .as_deref()
+            .is_some_and(|a| a.contains("PositionLost")),
+        "{:?}",
+        outcome.aborted
+    );
+    assert!(!outcome.delivered, "an aborted flight is not a delivery");
+    assert!(
+        reasons.iter().any(|r| matches!(r, Reason::Landed)),
+        "landed and disarmed"
+    );
+    assert!(
+        outcome.phases.last().is_some_and(|(n, _)| n == "disarmed"),
+        "{:?}",
+        outcome.phases
+    );
 }

@@ -25,6 +25,8 @@ pub struct MissionSetup {
     pub map_error: f32,
     /// The mission's configuration.
     pub config: MissionConfig,
+    /// Failure injection: motion capture stops this long after take-off began, s.
+    pub mocap_lost_after_takeoff: Option<f32>,
 }
 
 /// What the mission did.
@@ -103,6 +105,7 @@ pub fn run(
         record(0.0, &tr, &mut phases);
     }
     let mut current = robots.initial.to_vec();
+    let mut mocap_lost_at = f32::INFINITY;
     let mut lifts = Vec::new();
     let mut group = 0usize;
     let mut dropped = false;
@@ -114,8 +117,11 @@ pub fn run(
         let now_us = plant.time_us();
         let truth_now = plant.state();
         let imu = sensors.imu(&truth_now, dt);
-        for fix in sensors.mocap(&truth_now, plant.time_us()) {
-            mission.motion_capture(fix.position, fix.attitude, fix.stamp_us);
+        let fixes = sensors.mocap(&truth_now, plant.time_us());
+        if t < mocap_lost_at {
+            for fix in fixes {
+                mission.motion_capture(fix.position, fix.attitude, fix.stamp_us);
+            }
         }
         let out = mission.step(
             ImuReading {
@@ -128,6 +134,9 @@ pub fn run(
         if let Some(tr) = out.transition {
             if matches!(tr.to, Phase::Flying(_)) {
                 plant.set_disturbance_peak(flight.disturbance_torque);
+            }
+            if let (Reason::Armed, Some(after)) = (tr.reason, setup.mocap_lost_after_takeoff) {
+                mocap_lost_at = t + after;
             }
             on_transition(t, &tr);
             record(t, &tr, &mut phases);
@@ -177,7 +186,10 @@ pub fn run(
     }
     let landing = Vec3::new(flight.target[0], flight.target[1], 0.0);
     let final_error = (plant.state().position - landing).norm();
-    let delivered = mission.phase() == Phase::Disarmed && !dropped && final_error < 0.25;
+    let delivered = mission.phase() == Phase::Disarmed
+        && mission.abort_reason().is_none()
+        && !dropped
+        && final_error < 0.25;
     Ok(MissionOutcome {
         estimate: mission.estimate().map(|e| e.theta),
         measurements: mission.measurements(),

@@ -44,6 +44,9 @@ pub struct MissionArgs {
     /// Use the scenario's noise_sigma (the paper's simulated noise) as the lifts' noise model.
     #[arg(long)]
     scenario_sigma: bool,
+    /// Failure injection: motion capture stops this many seconds after take-off.
+    #[arg(long, value_name = "S")]
+    mocap_lost_after: Option<f64>,
     /// Mixer for the flight.
     #[arg(long, value_enum, default_value = "equal-split")]
     mixer: MixerArg,
@@ -77,6 +80,7 @@ pub fn run(args: &MissionArgs) -> Result<()> {
         seed: args.seed,
         map_error: args.map_error as f32,
         config,
+        mocap_lost_after_takeoff: args.mocap_lost_after.map(|s| s as f32),
     };
     let json = args.json;
     if !json {

@@ -121,7 +121,14 @@ struct Flight {
     plan: FlightPlan,
     land: LandDetector,
     saturation: Saturation,
+    /// Height of the ground (NED z) the flight took off from.
+    ground_z: f32,
+    /// The position was lost: descending on velocity alone until this flight-clock time, s.
+    failsafe_until: Option<f32>,
 }
+
+/// Failsafe: time past the expected touchdown before the rotors stop, s.
+const FAILSAFE_MARGIN: f32 = 1.0;
 
 /// The mission.
 #[derive(Clone, Debug)]
@@ -470,6 +477,8 @@ impl Mission {
             plan: FlightPlan::new(start, flight.target, 0.0, self.config.plan),
             land: LandDetector::new(start.z),
             saturation: Saturation::default(),
+            ground_z: start.z,
+            failsafe_until: None,
         });
         self.enter(Phase::Arming, Reason::RobotsInPlace)
     }
@@ -485,18 +494,39 @@ impl Mission {
         };
         let estimate = self.position.state();
         self.flight_clock += dt;
+        let descent_speed = self.config.plan.descent_speed;
         let flight = self.flight.as_mut()?;
-        let (setpoint, plan_phase) = flight.plan.sample(self.flight_clock);
+        let (mut setpoint, plan_phase) = flight.plan.sample(self.flight_clock);
         let descending = matches!(plan_phase, FlightPhase::Land | FlightPhase::Done);
         let contact = flight
             .land
             .update(estimate.position, estimate.velocity, descending, dt);
-        if contact == Contact::Landed {
+        if contact == Contact::Landed && flight.failsafe_until.is_none() {
             return Some(self.enter(Phase::Disarmed, Reason::Landed));
         }
-        if !estimate.valid && contact == Contact::Airborne {
-            // Without position the only safe act left is to stop the mission on record.
-            return Some(self.abort(AbortReason::PositionLost));
+        if !estimate.valid && contact == Contact::Airborne && flight.failsafe_until.is_none() {
+            // Position lost in the air: never cut the rotors there. Descend on velocity alone
+            // (the IMU-propagated velocity drifts slowly) and stop the rotors once the descent
+            // from the last known height has reached the ground, before the IMU-only estimate
+            // has had time to wander.
+            let height = (flight.ground_z - estimate.position.z).max(0.0);
+            flight.failsafe_until =
+                Some(self.flight_clock + height / descent_speed.max(0.05) + FAILSAFE_MARGIN);
+            return Some(self.enter(
+                Phase::Flying(FlightPhase::Land),
+                Reason::Abort(AbortReason::PositionLost),
+            ));
+        }
+        if let Some(until) = flight.failsafe_until {
+            if self.flight_clock >= until {
+                return Some(self.enter(Phase::Disarmed, Reason::Landed));
+            }
+            setpoint = crate::control::trajectory::Setpoint {
+                position: estimate.position,
+                velocity: Vec3::new(0.0, 0.0, descent_speed),
+                acceleration: Vec3::ZERO,
+                yaw: setpoint.yaw,
+            };
         }
         let inputs = ControlInputs {
             setpoint,
@@ -510,6 +540,9 @@ impl Mission {
         flight.saturation = alloc.saturation;
         let n = self.scenario.robots.count();
         thrusts[..n].copy_from_slice(&alloc.thrusts[..n]);
+        if flight.failsafe_until.is_some() {
+            return None;
+        }
         (plan_phase != current).then(|| self.enter(Phase::Flying(plan_phase), Reason::PlanAdvanced))
     }
 }

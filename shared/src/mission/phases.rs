@@ -30,7 +30,8 @@ pub enum Phase {
     Flying(FlightPhase),
     /// Landed and disarmed: the mission is over.
     Disarmed,
-    /// Stopped for a reason; rotors off (or landing, if it happened in flight).
+    /// Stopped on the ground for a reason, rotors off. (In flight nothing stops the rotors: a
+    /// lost position switches the plan to a landing in place, recorded as an abort reason.)
     Aborted,
 }
 
@@ -78,7 +79,7 @@ pub enum AbortReason {
     NoBalancedFormation,
     /// The formation's rotors cannot control every axis.
     Uncontrollable,
-    /// The position estimate was lost in flight.
+    /// The position estimate was lost in flight (the mission lands in place, then disarms).
     PositionLost,
     /// The estimator rejected a reading or the set-up.
     EstimationFailed,
