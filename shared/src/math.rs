@@ -128,6 +128,16 @@ pub fn ln_normal_sf(a: f32) -> f32 {
     }
 }
 
+/// `ln(sum(exp(terms)))` without overflow or underflow (`-inf` for no terms, or all `-inf`).
+pub fn ln_sum_exp(terms: &[f32]) -> f32 {
+    let top = terms.iter().copied().fold(f32::NEG_INFINITY, max);
+    if !top.is_finite() {
+        return top;
+    }
+    let sum: f32 = terms.iter().map(|&t| exp(t - top)).sum();
+    top + ln(sum)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -9,10 +9,12 @@ use heapless::Vec;
 
 use crate::estimation::grid::{Grid, GridError, ThrustScaleAxis};
 use crate::estimation::groups::{group_count, lift_group};
+use crate::estimation::guard::GuardBand;
 use crate::estimation::information::{InformationScratch, mutual_information};
 use crate::estimation::likelihood::{LiftLikelihood, Measurement};
 use crate::estimation::posterior::{CellModel, Concentration, Posterior, concentration};
 use crate::geometry::{ConvexHull, Vec2};
+use crate::math;
 use crate::scenario::{MAX_CANDIDATES, MAX_GRID_POINTS, Scenario};
 use crate::statics::lift_fraction;
 
@@ -36,6 +38,10 @@ pub enum EstimationError {
     UnknownGroup(usize),
     /// A reading that is not a finite, non-negative thrust.
     BadReading,
+    /// The estimation has ended (outside the grid, or out of lifts): no more readings.
+    Finished,
+    /// The lift readings' standard deviation is not a positive number.
+    BadNoiseModel,
 }
 
 impl core::fmt::Display for EstimationError {
@@ -49,21 +55,83 @@ impl core::fmt::Display for EstimationError {
             ),
             Self::UnknownGroup(i) => write!(f, "lifting group {i} does not exist"),
             Self::BadReading => write!(f, "a lift reading must be a finite, non-negative thrust"),
+            Self::Finished => write!(f, "the estimation has ended; no more readings are taken"),
+            Self::BadNoiseModel => write!(
+                f,
+                "the lift readings' standard deviation must be a positive number of N"
+            ),
         }
     }
 }
 
 impl core::error::Error for EstimationError {}
 
+/// Why the estimator concluded that the payload lies outside its grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum OutsideGrid {
+    /// A reading that no grid point explains (see
+    /// [`crate::estimation::likelihood::UNEXPLAINED_SIGMAS`]); for a censored reading: every
+    /// grid point would have lifted, so the payload is heavier (or its COM further from the
+    /// group) than the grid allows.
+    Unexplained {
+        /// The lifting group.
+        group: usize,
+        /// Its reading.
+        reading: Measurement,
+    },
+    /// The readings put far more posterior mass on the layer one resolution beyond a face of
+    /// the grid than on the whole grid ([`BEYOND_EDGE_LN_RATIO`]; see
+    /// [`crate::estimation::guard`]).
+    BeyondEdge {
+        /// Axis (0: COM x, 1: COM y, 2: mass).
+        axis: usize,
+        /// True beyond the grid's maximum, false below its minimum.
+        above: bool,
+    },
+}
+
+impl core::fmt::Display for OutsideGrid {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        const AXES: [&str; 3] = ["COM x", "COM y", "mass"];
+        match *self {
+            Self::Unexplained {
+                group,
+                reading: Measurement::CouldNotLift,
+            } => write!(
+                f,
+                "pair {group} could not lift where every point of the grid would have: \
+                 the payload is heavier than the grid allows or its COM lies outside it"
+            ),
+            Self::Unexplained {
+                group,
+                reading: Measurement::Lifted { thrust },
+            } => write!(
+                f,
+                "pair {group} lifted at {thrust:.2} N, which no point of the grid explains"
+            ),
+            Self::BeyondEdge { axis, above } => write!(
+                f,
+                "the readings point {} the grid's {} on {}",
+                if above { "above" } else { "below" },
+                if above { "maximum" } else { "minimum" },
+                AXES.get(axis).copied().unwrap_or("an axis")
+            ),
+        }
+    }
+}
+
 /// Where the estimation stands.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Status {
     /// More lifts are needed.
     Measuring,
-    /// The posterior mass near the MAP passed the threshold.
+    /// The posterior mass near the MAP passed the threshold (after at least one lift that
+    /// lifted: censored readings alone bound the payload, they never locate it).
     Converged,
     /// `max_measurements` lifts were taken without converging.
     NotConverged,
+    /// The readings say the payload lies outside the grid: no estimate can be trusted.
+    OutsideGrid(OutsideGrid),
 }
 
 /// The chosen lifting group.
@@ -87,13 +155,27 @@ pub struct Estimate {
     /// Posterior mean of the thrust-scale factor (1 when the bias term is off).
     pub thrust_scale: f32,
     /// Mass the payload exceeds with at most 5 % posterior probability (upper edge of the cell
-    /// where the mass marginal's cumulative reaches 95 %), kg.
+    /// where the mass marginal's cumulative reaches 95 %, counting the layer just above the
+    /// grid's top mass), kg.
     pub mass_upper_95: f32,
     /// Lifts taken.
     pub measurements: u32,
     /// Where the estimation stands.
     pub status: Status,
 }
+
+/// `ln` of how much more posterior mass the layer just beyond a face of the grid must hold
+/// than the whole grid before the estimator decides the payload lies outside the grid: a
+/// hundred times. Over 600 simulated estimations of truths inside the paper's grids (noise
+/// 1 N) the ratio never passed 20 (`ln` 2.98); a payload too heavy to lift, or a reading no
+/// grid point explains, passes it at once.
+pub const BEYOND_EDGE_LN_RATIO: f32 = 4.6;
+
+/// `ln` of how much more posterior mass the layer just beyond the face the MAP sits on must
+/// hold than the whole grid for the posterior to count as piled up against that face (no
+/// convergence then): twenty times. Axes the lifts barely observe (the narrow plate's COM y)
+/// put a few times the grid's mass just beyond it by noise alone, with the truth inside.
+pub const PILED_UP_LN_RATIO: f32 = 3.0;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct GroupGeometry {
@@ -113,8 +195,14 @@ pub struct Estimator {
     threshold: f32,
     max_measurements: u32,
     posterior: Posterior,
+    guard: GuardBand,
     measurements: u32,
+    /// Readings that lifted (censored ones alone bound the payload, they never locate it).
+    lifted: u32,
+    outside: Option<OutsideGrid>,
     summary: Concentration,
+    /// The posterior is piled up against an edge of the grid (see [`Self::status`]).
+    piled_up: bool,
     mass_upper_95: f32,
     probabilities: Vec<f32, MAX_GRID_POINTS>,
     fractions: Vec<f32, MAX_GRID_POINTS>,
@@ -129,6 +217,7 @@ impl Estimator {
         let hull = scenario.payload.hull.clone();
         let posterior =
             Posterior::uniform_on_hull(&grid, &hull).ok_or(EstimationError::NoSupport)?;
+        let guard = GuardBand::new(&grid, &hull).map_err(EstimationError::Grid)?;
         let groups: Vec<GroupGeometry, MAX_CANDIDATES> = (0..group_count(scenario))
             .filter_map(|i| lift_group(scenario, i))
             .map(|g| GroupGeometry {
@@ -156,13 +245,17 @@ impl Estimator {
             threshold: scenario.estimation.threshold,
             max_measurements: scenario.estimation.max_measurements,
             posterior,
+            guard,
             measurements: 0,
+            lifted: 0,
+            outside: None,
             summary: Concentration {
                 map_indices: [0; 3],
                 map: [0.0; 3],
                 mass_near_map: 0.0,
                 local_mean: [0.0; 3],
             },
+            piled_up: false,
             mass_upper_95: 0.0,
             probabilities,
             fractions,
@@ -180,6 +273,17 @@ impl Estimator {
     /// The posterior.
     pub fn posterior(&self) -> &Posterior {
         &self.posterior
+    }
+
+    /// For each face of the grid (x below, x above, y below, y above, mass below, mass
+    /// above): `ln` of the posterior mass the readings put on the layer just beyond it,
+    /// relative to the whole grid's (see [`crate::estimation::guard`]).
+    pub fn beyond_grid(&self) -> [f32; 6] {
+        let ln_grid = self.posterior.ln_total();
+        let ns = self.grid.scale_len();
+        self.guard
+            .faces()
+            .map(|face| self.guard.ln_mass(&face, ns) - ln_grid)
     }
 
     /// Number of lifting groups (reachable or not).
@@ -239,7 +343,9 @@ impl Estimator {
             .ok_or(EstimationError::NoReachableGroup)
     }
 
-    /// Bayes update with the reading of group `group`; returns the new status.
+    /// Bayes update with the reading of group `group`; returns the new status. Once the
+    /// status is [`Status::OutsideGrid`], [`Status::NotConverged`] or [`Status::Converged`]
+    /// further readings are refused ([`EstimationError::Finished`]).
     pub fn update(
         &mut self,
         group: usize,
@@ -254,34 +360,72 @@ impl Estimator {
             .groups
             .get(group)
             .ok_or(EstimationError::UnknownGroup(group))?;
+        if matches!(self.status(), Status::OutsideGrid(_) | Status::NotConverged) {
+            return Err(EstimationError::Finished);
+        }
         let cell = CellModel {
             hull: &self.hull,
             centroid: g.centroid,
             size: g.size,
             robot_mass: self.robot_mass,
         };
-        self.posterior
+        let update = self
+            .posterior
             .update(&self.grid, &cell, &self.likelihood, measurement);
+        self.guard.update(
+            &self.grid,
+            &cell,
+            &self.likelihood,
+            measurement,
+            update.shift,
+        );
         self.measurements += 1;
+        if matches!(measurement, Measurement::Lifted { .. }) {
+            self.lifted += 1;
+        }
+        if !self.likelihood.explains(measurement, update.ln_best) {
+            self.outside = Some(OutsideGrid::Unexplained {
+                group,
+                reading: measurement,
+            });
+        }
         self.summarise();
         Ok(self.status())
     }
 
     fn summarise(&mut self) {
+        // The guard band against the grid: both unnormalised on the same scale.
+        let ln_ratios = self.beyond_grid();
         let marginal = &mut self.probabilities[..self.grid.theta_len()];
         self.posterior.theta_marginal(&self.grid, marginal);
         self.summary = concentration(&self.grid, marginal);
-        // The mass marginal's 95 % quantile (cell upper edge).
-        let [_, _, nm] = self.grid.shape();
+        let shape = self.grid.shape();
+        self.piled_up = false;
+        for (face, &ln_ratio) in self.guard.faces().iter().zip(&ln_ratios) {
+            let edge = if face.above { shape[face.axis] - 1 } else { 0 };
+            self.piled_up |=
+                ln_ratio > PILED_UP_LN_RATIO && self.summary.map_indices[face.axis] == edge;
+            if ln_ratio > BEYOND_EDGE_LN_RATIO && self.measurements > 0 && self.outside.is_none() {
+                self.outside = Some(OutsideGrid::BeyondEdge {
+                    axis: face.axis,
+                    above: face.above,
+                });
+            }
+        }
+        // The mass marginal's 95 % quantile (cell upper edge), the layer above the grid's top
+        // mass counted: a posterior piled up against the top does not hide a heavier payload.
+        let nm = shape[2];
+        let above = math::exp(math::min(ln_ratios[5], 30.0));
         let mut cumulative = 0.0;
-        let mut upper = self.grid.mass(nm - 1);
+        let mut upper = self.grid.mass(nm - 1) + self.grid.resolution()[2];
         for im in 0..nm {
             cumulative += marginal
                 .iter()
                 .enumerate()
                 .filter(|(t, _)| t % nm == im)
                 .map(|(_, p)| *p)
-                .sum::<f32>();
+                .sum::<f32>()
+                / (1.0 + above);
             if cumulative >= 0.95 {
                 upper = self.grid.mass(im);
                 break;
@@ -290,10 +434,15 @@ impl Estimator {
         self.mass_upper_95 = upper + 0.5 * self.grid.resolution()[2];
     }
 
-    /// Where the estimation stands: converged once the mass near the MAP exceeds the threshold,
-    /// not converged once `max_measurements` lifts were taken without it.
+    /// Where the estimation stands: outside the grid once the readings say so; converged once
+    /// the mass near the MAP exceeds the threshold, after at least one lift that lifted and
+    /// with the posterior not piled up against an edge of the grid
+    /// ([`PILED_UP_LN_RATIO`]); not converged once
+    /// `max_measurements` lifts were taken without it.
     pub fn status(&self) -> Status {
-        if self.measurements > 0 && self.summary.mass_near_map > self.threshold {
+        if let Some(why) = self.outside {
+            Status::OutsideGrid(why)
+        } else if self.lifted > 0 && !self.piled_up && self.summary.mass_near_map > self.threshold {
             Status::Converged
         } else if self.measurements >= self.max_measurements {
             Status::NotConverged
@@ -403,13 +552,156 @@ mod tests {
         let mut e = Estimator::new(&scenario, EstimatorOptions::default()).unwrap();
         for k in 0..1000 {
             // Deliberately inconsistent readings: the likelihood of every point keeps falling.
+            // (The estimator itself stops taking them once no point explains them; the
+            // posterior underneath must survive them all.)
             let thrust = if k % 2 == 0 { 2.0 } else { 13.0 };
-            e.update(k % 12, Measurement::Lifted { thrust }).unwrap();
+            let g = e.groups[k % 12];
+            let cell = CellModel {
+                hull: &e.hull,
+                centroid: g.centroid,
+                size: g.size,
+                robot_mass: e.robot_mass,
+            };
+            e.posterior.update(
+                &e.grid,
+                &cell,
+                &e.likelihood,
+                Measurement::Lifted { thrust },
+            );
         }
+        e.summarise();
         let ln = e.posterior().ln_values();
         assert!(ln.iter().all(|v| !v.is_nan()));
         assert!(ln.contains(&0.0), "renormalised to a max of 0");
         assert!(e.estimate().confidence.is_finite());
+    }
+
+    #[test]
+    fn a_reading_no_grid_point_explains_ends_the_estimation_outside_the_grid() {
+        let mut scenario = checked(rect_sim1());
+        scenario.estimation.noise_sigma = 0.2;
+        let mut e = Estimator::new(&scenario, EstimatorOptions::default()).unwrap();
+        // 14 N per robot on a long side: many sigma above what any payload of the grid (at
+        // most 4 kg) needs there (about 10 N at most).
+        let status = e.update(6, Measurement::Lifted { thrust: 14.0 }).unwrap();
+        assert!(
+            matches!(
+                status,
+                Status::OutsideGrid(OutsideGrid::Unexplained { group: 6, .. })
+            ),
+            "{status:?}"
+        );
+        assert_eq!(
+            e.update(4, Measurement::Lifted { thrust: 5.0 }),
+            Err(EstimationError::Finished),
+            "no more readings once outside"
+        );
+    }
+
+    #[test]
+    fn a_payload_too_heavy_for_the_grid_is_outside_not_converged() {
+        // rect-sim1's truth at 20 kg: beyond what the grid (2.5 to 4 kg) allows. Every lift the
+        // MI picks reads "could not lift" where every grid point would have lifted.
+        let mut scenario = checked(rect_sim1());
+        if let Some(t) = scenario.truth.as_mut() {
+            t.mass = 20.0;
+        }
+        // The mission's noise model (the lift detector's 0.5 N).
+        scenario.estimation.noise_sigma = 0.5;
+        let mut e = Estimator::new(&scenario, EstimatorOptions::default()).unwrap();
+        let mut status = Status::Measuring;
+        while status == Status::Measuring {
+            let g = e.select_group().unwrap().group;
+            let reading = true_reading(&scenario, g, 1.0);
+            assert_eq!(reading, Measurement::CouldNotLift);
+            status = e.update(g, reading).unwrap();
+        }
+        // Either no grid point explains a reading, or the layer beyond the grid's top mass
+        // holds far more than the whole grid: outside, either way, within a few lifts.
+        assert!(
+            matches!(
+                status,
+                Status::OutsideGrid(
+                    OutsideGrid::Unexplained { .. }
+                        | OutsideGrid::BeyondEdge {
+                            axis: 2,
+                            above: true
+                        }
+                )
+            ),
+            "{status:?} at 20 kg"
+        );
+        assert!(e.estimate().measurements <= 4, "{:?}", e.estimate());
+    }
+
+    #[test]
+    fn censored_readings_alone_never_converge() {
+        // A censored reading that the grid can explain (a heavy payload far from the pair)
+        // bounds the payload but never locates it: no convergence on it alone, however
+        // lenient the threshold.
+        let mut scenario = checked(rect_sim1());
+        scenario.estimation.threshold = 0.05;
+        let mut e = Estimator::new(&scenario, EstimatorOptions::default()).unwrap();
+        // Pair 4 (candidates 1.88, 2.22) at a short end: heavy payloads whose COM lies
+        // towards the other end cannot be tipped from there (up to 15 N on the grid).
+        let status = e.update(4, Measurement::CouldNotLift).unwrap();
+        assert_eq!(status, Status::Measuring, "{:?}", e.estimate());
+        assert!(e.estimate().confidence > 0.05, "{:?}", e.estimate());
+    }
+
+    #[test]
+    fn a_posterior_against_the_top_mass_bounds_the_mass_beyond_the_grid() {
+        // Truth 5 kg on a grid that ends at 4 kg: every pair lifts, and two lifts cannot tell
+        // a 5 kg payload from a 4 kg one with its COM elsewhere, so the estimate sits on the
+        // top edge. The 95 % mass bound (for the thrust-margin check) must then count the
+        // layer just above the grid instead of stopping at the grid's top cell.
+        let mut scenario = checked(rect_sim1());
+        if let Some(t) = scenario.truth.as_mut() {
+            t.mass = 5.0;
+            t.com = Vec2::new(0.1, 0.0);
+        }
+        let mut e = Estimator::new(&scenario, EstimatorOptions::default()).unwrap();
+        let mut status = Status::Measuring;
+        while status == Status::Measuring {
+            let g = e.select_group().unwrap().group;
+            status = e.update(g, true_reading(&scenario, g, 1.0)).unwrap();
+        }
+        let est = e.estimate();
+        let top = scenario.estimation.grid_max[2];
+        let res = scenario.estimation.resolution[2];
+        assert!(
+            est.mass_upper_95 > top + 0.5 * res + 1e-3,
+            "{est:?}: the bound stops at the grid's top cell"
+        );
+    }
+
+    #[test]
+    fn truths_on_the_grids_edge_still_converge() {
+        // The paper's grids with the truth on an edge cell: noiseless lifts converge inside.
+        for input in [rect_sim1(), l_sim1()] {
+            let base = checked(input);
+            let setup = base.estimation;
+            for theta in [
+                [setup.grid_max[0], 0.0, setup.grid_max[2]],
+                [
+                    setup.grid_min[0] + 0.3,
+                    setup.grid_min[1],
+                    setup.grid_min[2],
+                ],
+            ] {
+                let mut scenario = base.clone();
+                let com = Vec2::new(theta[0], theta[1]);
+                if !scenario.payload.hull.contains(com, 0.0) {
+                    continue;
+                }
+                scenario.truth = Some(crate::scenario::Truth {
+                    com,
+                    mass: theta[2],
+                });
+                let est = run_noiseless(&scenario, EstimatorOptions::default(), 1.0);
+                assert_eq!(est.status, Status::Converged, "{theta:?}: {est:?}");
+            }
+        }
     }
 
     #[test]

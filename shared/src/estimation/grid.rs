@@ -46,6 +46,12 @@ pub enum GridError {
         /// Points asked for.
         points: usize,
     },
+    /// The layers just beyond the grid's faces (see [`crate::estimation::guard`]) have more
+    /// points than [`crate::estimation::guard::MAX_GUARD_POINTS`].
+    TooManyGuardPoints {
+        /// Points they would have.
+        points: usize,
+    },
     /// The thrust-scale axis is malformed (non-positive values or step, max below min, or
     /// more than [`MAX_SCALE_POINTS`] values).
     BadScaleAxis,
@@ -57,6 +63,11 @@ impl core::fmt::Display for GridError {
             Self::TooManyPoints { points } => write!(
                 f,
                 "the grid has {points} points, at most {MAX_GRID_POINTS} supported"
+            ),
+            Self::TooManyGuardPoints { points } => write!(
+                f,
+                "the layers beyond the grid's faces have {points} points, at most {} supported: use fewer grid points",
+                crate::estimation::guard::MAX_GUARD_POINTS
             ),
             Self::BadScaleAxis => write!(
                 f,
@@ -147,6 +158,11 @@ impl Grid {
     pub fn com(&self, com_index: usize) -> Vec2 {
         let (ix, iy) = (com_index / self.shape[1], com_index % self.shape[1]);
         Vec2::new(self.setup.axis_value(0, ix), self.setup.axis_value(1, iy))
+    }
+
+    /// Value of point `index` along theta axis `axis` (0: COM x, 1: COM y, 2: mass).
+    pub fn axis_value(&self, axis: usize, index: usize) -> f32 {
+        self.setup.axis_value(axis, index)
     }
 
     /// Mass of mass index `im`, kg.

@@ -5,6 +5,11 @@
 
 use crate::math;
 
+/// A reading that every grid point misses by more than this many standard deviations (a
+/// lifted reading) or that every grid point would have avoided by as many (a censored one:
+/// every point would have lifted) is not explained by the grid: the truth lies outside it.
+pub const UNEXPLAINED_SIGMAS: f32 = 4.0;
+
 /// What one lift produced.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Measurement {
@@ -39,6 +44,16 @@ impl LiftLikelihood {
                 math::ln_normal_sf((self.max_thrust - predicted) / self.sigma)
             }
         }
+    }
+
+    /// Whether a point whose log-likelihood for `measurement` is `ln_best` (see
+    /// [`Self::ln_likelihood`]) explains it within [`UNEXPLAINED_SIGMAS`].
+    pub fn explains(&self, measurement: Measurement, ln_best: f32) -> bool {
+        let limit = match measurement {
+            Measurement::Lifted { .. } => -0.5 * UNEXPLAINED_SIGMAS * UNEXPLAINED_SIGMAS,
+            Measurement::CouldNotLift => math::ln_normal_sf(UNEXPLAINED_SIGMAS),
+        };
+        ln_best >= limit
     }
 
     /// Probability that a group whose true lift-off thrust is `predicted` cannot lift.

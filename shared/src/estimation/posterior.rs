@@ -22,14 +22,19 @@ pub fn predicted_reading(grid: &Grid, fraction: f32, im: usize, is: usize, robot
 /// Sub-point offsets within a cell, in resolutions.
 const SUB_OFFSETS: [f32; 3] = [-1.0 / 3.0, 0.0, 1.0 / 3.0];
 
-/// `ln(mean(exp(terms)))` without overflow or underflow.
+/// `ln(mean(exp(terms)))` without overflow or underflow (`terms` not empty).
 fn ln_mean_exp(terms: &[f32]) -> f32 {
-    let top = terms.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-    if !top.is_finite() {
-        return top;
-    }
-    let sum: f32 = terms.iter().map(|&t| math::exp(t - top)).sum();
-    top + math::ln(sum / terms.len() as f32)
+    math::ln_sum_exp(terms) - math::ln(terms.len() as f32)
+}
+
+/// What one update did to the posterior.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UpdateSummary {
+    /// The largest sub-point log-likelihood over the points with prior support: how well the
+    /// best-explaining point explains the reading (`-inf` when no point has support).
+    pub ln_best: f32,
+    /// What was subtracted from every log-value to bring the largest back to 0.
+    pub shift: f32,
 }
 
 /// The lifting group and robots a reading came from, as the cell likelihood needs them.
@@ -43,6 +48,63 @@ pub struct CellModel<'a> {
     pub size: usize,
     /// Mass of one robot, kg.
     pub robot_mass: f32,
+}
+
+/// A reading's log-likelihood over one cell: the cell average and the best single sub-point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellLikelihood {
+    /// `ln(mean(likelihood))` over the cell's sub-points.
+    pub ln_mean: f32,
+    /// The largest sub-point log-likelihood: how well the best point of the cell explains the
+    /// reading.
+    pub ln_best: f32,
+}
+
+impl CellModel<'_> {
+    /// Lift shares of the COM sub-points of the cell centred on `centre` (COM resolutions
+    /// `res_x`, `res_y`) that lie in the hull; empty when none does.
+    pub fn shares(&self, centre: Vec2, res_x: f32, res_y: f32) -> Vec<f32, 9> {
+        let mut shares = Vec::new();
+        for dx in SUB_OFFSETS {
+            for dy in SUB_OFFSETS {
+                let com = Vec2::new(centre.x + dx * res_x, centre.y + dy * res_y);
+                if let Some(f) = lift_fraction(self.hull, com, self.centroid, self.size) {
+                    // At most 9 sub-points.
+                    let _ = shares.push(f);
+                }
+            }
+        }
+        shares
+    }
+
+    /// The reading's log-likelihood over the cell of COM shares `shares`, mass `mass` (mass
+    /// resolution `res_mass`) and thrust scale `scale`; `None` when `shares` is empty.
+    pub fn likelihood(
+        &self,
+        shares: &[f32],
+        mass: f32,
+        res_mass: f32,
+        scale: f32,
+        likelihood: &LiftLikelihood,
+        measurement: Measurement,
+    ) -> Option<CellLikelihood> {
+        let mut terms: Vec<f32, 27> = Vec::new();
+        for &f in shares {
+            for dm in SUB_OFFSETS {
+                let predicted =
+                    scale * thrust_from_fraction(f, mass + dm * res_mass, self.robot_mass);
+                // At most 9 shares times 3 masses.
+                let _ = terms.push(likelihood.ln_likelihood(measurement, predicted));
+            }
+        }
+        if terms.is_empty() {
+            return None;
+        }
+        Some(CellLikelihood {
+            ln_mean: ln_mean_exp(&terms),
+            ln_best: terms.iter().copied().fold(f32::NEG_INFINITY, math::max),
+        })
+    }
 }
 
 /// Unnormalised log posterior on every grid point.
@@ -74,7 +136,7 @@ impl Posterior {
         &self.ln_p
     }
 
-    /// Bayes update with one reading of the group `cell.group`.
+    /// Bayes update with one reading of the group `cell`.
     ///
     /// Each grid point stands for its cell (`+-res/2` on every theta axis): its likelihood is
     /// the reading's likelihood averaged over the cell, by `3 x 3 x 3` sub-points at
@@ -88,10 +150,11 @@ impl Posterior {
         cell: &CellModel<'_>,
         likelihood: &LiftLikelihood,
         measurement: Measurement,
-    ) {
+    ) -> UpdateSummary {
         let (nm, ns) = (grid.shape()[2], grid.scale_len());
         let res = grid.resolution();
         let mut top = f32::NEG_INFINITY;
+        let mut best = f32::NEG_INFINITY;
         for c in 0..grid.com_len() {
             let block = c * nm * ns..(c + 1) * nm * ns;
             if self.ln_p[block.clone()]
@@ -100,46 +163,43 @@ impl Posterior {
             {
                 continue;
             }
-            // Shares of the COM sub-points that lie in the hull.
-            let centre = grid.com(c);
-            let mut shares: Vec<f32, 9> = Vec::new();
-            for dx in SUB_OFFSETS {
-                for dy in SUB_OFFSETS {
-                    let com = Vec2::new(centre.x + dx * res[0], centre.y + dy * res[1]);
-                    if let Some(f) = lift_fraction(cell.hull, com, cell.centroid, cell.size) {
-                        let _ = shares.push(f);
-                    }
-                }
-            }
-            if shares.is_empty() {
-                continue;
-            }
+            let shares = cell.shares(grid.com(c), res[0], res[1]);
             for im in 0..nm {
                 for is in 0..ns {
                     let i = (c * nm + im) * ns + is;
                     if self.ln_p[i] == f32::NEG_INFINITY {
                         continue;
                     }
-                    let scale = grid.scale(is);
-                    let mut terms: Vec<f32, 27> = Vec::new();
-                    for &f in &shares {
-                        for dm in SUB_OFFSETS {
-                            let mass = grid.mass(im) + dm * res[2];
-                            let predicted = scale * thrust_from_fraction(f, mass, cell.robot_mass);
-                            let _ = terms.push(likelihood.ln_likelihood(measurement, predicted));
-                        }
-                    }
-                    self.ln_p[i] += ln_mean_exp(&terms);
-                    top = top.max(self.ln_p[i]);
+                    let Some(l) = cell.likelihood(
+                        &shares,
+                        grid.mass(im),
+                        res[2],
+                        grid.scale(is),
+                        likelihood,
+                        measurement,
+                    ) else {
+                        continue;
+                    };
+                    self.ln_p[i] += l.ln_mean;
+                    top = math::max(top, self.ln_p[i]);
+                    best = math::max(best, l.ln_best);
                 }
             }
         }
-        if top.is_finite() {
-            self.ln_p
-                .iter_mut()
-                .filter(|v| v.is_finite())
-                .for_each(|v| *v -= top);
+        let shift = if top.is_finite() { top } else { 0.0 };
+        self.ln_p
+            .iter_mut()
+            .filter(|v| v.is_finite())
+            .for_each(|v| *v -= shift);
+        UpdateSummary {
+            ln_best: best,
+            shift,
         }
+    }
+
+    /// `ln` of the unnormalised posterior mass of the whole grid.
+    pub fn ln_total(&self) -> f32 {
+        math::ln_sum_exp(&self.ln_p)
     }
 
     /// Normalised probabilities of every grid point into `out` (length `grid.len()`).
