@@ -10,6 +10,7 @@ use std::path::Path;
 use host_sim::harness::{self, FlightOutcome, FlightSetup, FormationChoice};
 use host_sim::scenario_file;
 use shared::control::allocation::MixerKind;
+use shared::flight::FlightStop;
 
 fn fly(name: &str, formation: FormationChoice, mixer: MixerKind) -> FlightOutcome {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -103,6 +104,12 @@ fn even_rectangle_cannot_take_off_with_the_papers_mixer() {
             line(name, "even", &even)
         );
         assert!(!even.landed, "{name}: never flew, so never delivered");
+        // The flight stack recognises it: the take-off failed and the rotors stopped.
+        assert!(
+            matches!(even.stop, Some(FlightStop::TakeoffFailed { .. })),
+            "{name}: {:?}",
+            even.stop
+        );
     }
 }
 

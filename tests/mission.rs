@@ -11,7 +11,7 @@ use std::process::Command;
 use host_sim::mission_run::{self, MissionOutcome, MissionSetup};
 use host_sim::scenario_file;
 use shared::estimation::{EstimatorOptions, ThrustScaleAxis};
-use shared::mission::{MissionConfig, Reason};
+use shared::mission::{AbortReason, MissionConfig, Reason};
 use shared::scenario::Scenario;
 
 fn run(scenario: &Scenario, map_error: f32, bias_term: bool) -> (MissionOutcome, Vec<Reason>) {
@@ -24,7 +24,7 @@ fn run(scenario: &Scenario, map_error: f32, bias_term: bool) -> (MissionOutcome,
             },
             ..MissionConfig::default()
         },
-        mocap_lost_after_takeoff: None,
+        ..MissionSetup::default()
     };
     let mut reasons = Vec::new();
     let outcome = mission_run::run(scenario, &setup, &mut |_, tr| reasons.push(tr.reason))
@@ -129,17 +129,17 @@ fn refuses_to_take_off_without_thrust_margin_or_convergence() {
             max_hover_fraction: 0.3,
             ..MissionConfig::default()
         },
-        mocap_lost_after_takeoff: None,
+        ..MissionSetup::default()
     };
     let mut reasons = Vec::new();
     let outcome = mission_run::run(&s, &setup, &mut |_, tr| reasons.push(tr.reason)).expect("runs");
     assert!(!outcome.delivered);
     assert!(outcome.estimate.is_some(), "estimated first");
     assert!(
-        outcome
-            .aborted
-            .as_deref()
-            .is_some_and(|a| a.contains("ThrustMarginTooSmall")),
+        matches!(
+            outcome.aborted,
+            Some(AbortReason::ThrustMarginTooSmall { .. })
+        ),
         "{:?}",
         outcome.aborted
     );
@@ -158,11 +158,9 @@ fn refuses_to_take_off_without_thrust_margin_or_convergence() {
         .scenario;
     let (outcome, _) = run(&strict, 1.0, false);
     assert_eq!(outcome.measurements, 1);
-    assert!(
-        outcome
-            .aborted
-            .as_deref()
-            .is_some_and(|a| a.contains("EstimationNotConverged")),
+    assert_eq!(
+        outcome.aborted,
+        Some(AbortReason::EstimationNotConverged),
         "{:?}",
         outcome.aborted
     );
@@ -216,15 +214,14 @@ fn losing_motion_capture_in_flight_lands_in_place_instead_of_falling() {
         config: MissionConfig::default(),
         // Take-off lasts ~3 s: lost during the transit, ~0.5 m above ground.
         mocap_lost_after_takeoff: Some(6.0),
+        ..MissionSetup::default()
     };
     let mut reasons = Vec::new();
     let outcome = mission_run::run(&s, &setup, &mut |_, tr| reasons.push(tr.reason)).expect("runs");
     assert!(!outcome.dropped, "kept flying: {outcome:?}");
-    assert!(
-        outcome
-            .aborted
-            .as_deref()
-            .is_some_and(|a| a.contains("PositionLost")),
+    assert_eq!(
+        outcome.aborted,
+        Some(AbortReason::PositionLost),
         "{:?}",
         outcome.aborted
     );
@@ -238,4 +235,89 @@ fn losing_motion_capture_in_flight_lands_in_place_instead_of_falling() {
         "{:?}",
         outcome.phases
     );
+}
+
+/// A payload the robots cannot lift (the grid allows at most 4 kg; eight rotors make 113.6 N):
+/// the mission must stop on the ground with the reason, rotors off, never armed for flight.
+#[test]
+fn a_payload_beyond_the_grid_and_the_rotors_aborts_on_the_ground() {
+    let base = std::fs::read_to_string(scenario_path("rect-sim1")).expect("file");
+    for (label, text, map_error) in [
+        ("20 kg", base.replace("mass = 3.5", "mass = 20.0"), 1.0),
+        ("1e6 kg", base.replace("mass = 3.5", "mass = 1e6"), 1.0),
+        ("rotors making nothing", base.clone(), 1e30),
+    ] {
+        assert!(label == "rotors making nothing" || text != base, "{label}");
+        let s = scenario_file::parse(&text, Path::new("heavy.toml"))
+            .expect("valid")
+            .scenario;
+        let setup = MissionSetup {
+            map_error,
+            ..MissionSetup::default()
+        };
+        let mut reasons = Vec::new();
+        let outcome =
+            mission_run::run(&s, &setup, &mut |_, tr| reasons.push(tr.reason)).expect("runs");
+        eprintln!(
+            "{label}: aborted {:?}, lifts {:?}",
+            outcome.aborted, outcome.lifts
+        );
+        assert!(!outcome.delivered, "{label}");
+        assert!(!outcome.flew, "{label}: the payload never left the ground");
+        assert!(
+            !reasons.iter().any(|r| matches!(r, Reason::Armed)),
+            "{label}: never armed for flight"
+        );
+        assert!(
+            matches!(outcome.aborted, Some(AbortReason::PayloadOutsideGrid(_))),
+            "{label}: {:?}",
+            outcome.aborted
+        );
+        assert!(
+            outcome.final_thrusts.iter().all(|&t| t == 0.0),
+            "{label}: rotors off at the end: {:?}",
+            outcome.final_thrusts
+        );
+        assert!(
+            outcome.estimate.is_none(),
+            "{label}: no estimate is believed"
+        );
+        let text = outcome.aborted.map(|a| a.to_string()).unwrap_or_default();
+        assert!(
+            text.contains("outside the estimation grid"),
+            "{label}: {text}"
+        );
+    }
+}
+
+/// The rotors make far less thrust than commanded (a command-to-thrust map that over-reads
+/// 2.5 times): the payload cannot leave the ground, and the flight stack stops the rotors a
+/// few seconds into the take-off instead of walking the plan on the clock.
+#[test]
+fn a_take_off_that_does_not_leave_the_ground_stops_the_rotors() {
+    use host_sim::harness::{self, FlightSetup, FormationChoice};
+    use shared::control::allocation::MixerKind;
+    use shared::flight::FlightStop;
+    let s = load("rect-sim1");
+    let truth = s.truth.expect("truth");
+    let setup = FlightSetup {
+        formation: FormationChoice::Optimized,
+        mixer: MixerKind::EqualSplit,
+        believed_com: truth.com,
+        believed_mass: truth.mass,
+        seed: 3,
+        // The rotors make 1/2.5 of what is commanded: at most 45 N against 44 N of weight,
+        // held back further by the collective limit.
+        map_error: 2.5,
+    };
+    let out = harness::fly(&s, &setup).expect("flight runs");
+    assert!(
+        matches!(out.stop, Some(FlightStop::TakeoffFailed { .. })),
+        "{:?}",
+        out.stop
+    );
+    assert!(out.max_height_m < 0.05, "{}", out.max_height_m);
+    assert!(!out.dropped);
+    // Stopped within a few seconds of take-off thrust, not at the end of the plan.
+    assert!(out.simulated_s < 1.0 + 6.0, "{}", out.simulated_s);
 }

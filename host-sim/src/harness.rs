@@ -4,19 +4,16 @@
 //!
 //! The vehicle takes off from the ground, follows the reference trajectory to the target,
 //! hovers, lands and disarms. The controller believes the COM and mass it is given; the plant
-//! always has the truth. Nothing here decides anything: estimators, controller, mixer, plan and
-//! land detector are `shared`'s.
+//! always has the truth. Nothing here decides anything: the navigator and the flight stack
+//! (cascade, mixer, plan, take-off check, land detector, failsafes) are `shared`'s, the same
+//! the mission flies.
 
 use anyhow::{Result, anyhow, bail};
-use shared::control::allocation::{Mixer, MixerKind, RotorLayout, Saturation};
-use shared::control::attitude_estimator::{AttitudeEstimator, AttitudeEstimatorGains};
-use shared::control::controller::{ControlInputs, FlightController};
-use shared::control::land_detector::{Contact, LandDetector};
-use shared::control::params::ControlParams;
-use shared::control::position_estimator::{PositionEstimator, PositionEstimatorGains};
-use shared::control::trajectory::{FlightPhase, FlightPlan, PlanLimits, Setpoint};
+use shared::control::allocation::MixerKind;
+use shared::control::navigator::Navigator;
+use shared::control::trajectory::FlightPhase;
 use shared::control::vector::Vec3;
-use shared::control::vehicle::VehicleModel;
+use shared::flight::{FlightConfig, FlightModel, FlightStack, FlightStop};
 use shared::formation::{FormationProblem, solve};
 use shared::geometry::Vec2;
 use shared::scenario::{GRAVITY, Scenario};
@@ -30,8 +27,8 @@ pub const CONTROL_HZ: u32 = shared::timing::CONTROL_RATE_HZ;
 pub const ARM_DELAY: f32 = 1.0;
 /// Roll or pitch beyond this counts as dropped (the paper), degrees.
 pub const DROP_TILT_DEG: f32 = 45.0;
-/// Time allowed after the plan ends for the landing to be detected, s.
-const LANDING_GRACE: f32 = 3.0;
+/// Time allowed beyond the plan's nominal duration (waiting at segment ends, landing), s.
+const FLIGHT_GRACE: f32 = 30.0;
 
 /// Which formation the robots fly in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -97,6 +94,8 @@ pub struct FlightOutcome {
     pub positions: Vec<f32>,
     /// Whether the landing was detected and the rotors stopped.
     pub landed: bool,
+    /// Why the rotors stopped, if they did (the flight stack's reason).
+    pub stop: Option<FlightStop>,
     /// Simulated time, s.
     pub simulated_s: f32,
     /// The time series.
@@ -154,41 +153,32 @@ pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
     });
     let mut sensors = Sensors::new(setup.seed);
 
-    // The flight software, as the firmware builds it after the formation decision.
-    let model = VehicleModel::from_payload(
-        &scenario.payload.footprint,
+    // The flight software, as the mission builds it after the formation decision.
+    let model = FlightModel::build(
+        scenario,
+        &positions,
         setup.believed_com,
         setup.believed_mass,
-        &points,
-        robots.mass,
-        robots.max_thrust,
-    );
-    let layout = RotorLayout {
-        points: &points,
-        spin: &robots.spin,
-        com: setup.believed_com,
-        torque_per_thrust: robots.torque_per_thrust,
-        max_thrust: robots.max_thrust,
-    };
-    let mixer = Mixer::build(setup.mixer, &layout).map_err(|e| anyhow!("mixer: {e}"))?;
-    let mut controller = FlightController::new(ControlParams::default(), model);
-    let mut attitude = AttitudeEstimator::new(AttitudeEstimatorGains::default());
-    let mut position = PositionEstimator::new(PositionEstimatorGains::default());
+        setup.mixer,
+    )
+    .map_err(|e| anyhow!("mixer: {e}"))?;
+    let mut navigator = Navigator::new();
+    let mut flight_stack: Option<FlightStack> = None;
     let start = plant.state().position;
-    let plan = FlightPlan::new(start, flight.target, 0.0, PlanLimits::default());
-    let mut land = LandDetector::new(start.z);
     let landing_point = Vec3::new(flight.target[0], flight.target[1], start.z);
 
     let dt = 1.0 / CONTROL_HZ as f32;
     let physics_per_tick = (dt / PHYSICS_DT).round() as usize;
-    let end = ARM_DELAY + plan.duration() + LANDING_GRACE;
-    let n = points.len();
+    let nominal =
+        shared::control::trajectory::FlightPlan::new(start, flight.target, 0.0, Default::default());
+    let end = ARM_DELAY + nominal.duration() + FLIGHT_GRACE;
+    let n = positions.len();
     let mut commands = vec![0.0f32; n];
-    let mut saturation = Saturation::default();
     let (mut dropped, mut max_tilt, mut max_fraction) = (false, 0.0f32, 0.0f32);
     let mut max_height = 0.0f32;
     let (mut squared_error, mut error_samples) = (0.0f64, 0u64);
     let mut samples = Vec::new();
+    let mut stop = None;
     let mut tick: u64 = 0;
     loop {
         let t = plant.time();
@@ -198,48 +188,34 @@ pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
         let now_us = plant.time_us();
         let truth_now = plant.state();
         let imu = sensors.imu(&truth_now, dt);
-        for fix in sensors.mocap(&truth_now, plant.time_us()) {
-            attitude.set_reference(fix.attitude, fix.stamp_us);
-            position.correct(fix.position, fix.stamp_us);
+        if let Some(fix) = sensors.mocap(&truth_now, now_us) {
+            navigator.motion_capture(&fix);
         }
-        let a = attitude.update(imu.gyro, imu.accel, dt, plant.time_us());
-        position.predict(
-            a.attitude.rotate(imu.accel) + Vec3::DOWN * GRAVITY,
-            dt,
-            now_us,
-        );
-        let estimate = position.state();
-        let armed = t >= ARM_DELAY;
-        let (setpoint, phase) = if armed {
-            plan.sample(t - ARM_DELAY)
-        } else {
-            (
-                Setpoint {
-                    position: start,
-                    ..Setpoint::default()
-                },
-                FlightPhase::Takeoff,
-            )
+        let nav = navigator.update(&imu, dt, now_us);
+        if t >= ARM_DELAY && flight_stack.is_none() {
+            flight_stack = Some(FlightStack::new(
+                FlightConfig::default(),
+                model.clone(),
+                nav.position.position,
+                flight.target,
+            ));
+        }
+        let out = flight_stack.as_mut().map(|f| f.step(&nav, None, dt));
+        let (setpoint, phase, collective, saturated) = match &out {
+            Some(o) => {
+                commands.copy_from_slice(&o.thrusts[..n]);
+                if let Some(shared::flight::FlightEvent::Stopped(why)) = o.event {
+                    stop = Some(why);
+                }
+                (
+                    o.setpoint.position,
+                    o.phase,
+                    o.collective,
+                    o.saturation.any(),
+                )
+            }
+            None => (start, FlightPhase::Takeoff, 0.0, false),
         };
-        let descending = matches!(phase, FlightPhase::Land | FlightPhase::Done);
-        let contact = land.update(estimate.position, estimate.velocity, descending, dt);
-        let mut collective = 0.0;
-        if armed && contact != Contact::Landed {
-            let inputs = ControlInputs {
-                setpoint,
-                attitude: a,
-                position: estimate,
-                airborne: land.airborne(),
-                saturation,
-            };
-            let out = controller.step(&inputs, dt);
-            let alloc = mixer.allocate(&out.wrench);
-            saturation = alloc.saturation;
-            commands.copy_from_slice(&alloc.thrusts[..n]);
-            collective = out.wrench.thrust;
-        } else {
-            commands.iter_mut().for_each(|c| *c = 0.0);
-        }
 
         let tilt = truth_now
             .attitude
@@ -252,8 +228,8 @@ pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
         max_height = max_height.max(start.z - truth_now.position.z);
         let fraction = commands.iter().fold(0.0f32, |m, &c| m.max(c)) / robots.max_thrust;
         max_fraction = max_fraction.max(fraction);
-        if armed && phase != FlightPhase::Done {
-            let e = (truth_now.position - setpoint.position).norm();
+        if out.is_some() && phase != FlightPhase::Done && stop.is_none() {
+            let e = (truth_now.position - setpoint).norm();
             squared_error += f64::from(e * e);
             error_samples += 1;
         }
@@ -262,11 +238,11 @@ pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
             samples.push(Sample {
                 t,
                 position: truth_now.position,
-                reference: setpoint.position,
+                reference: setpoint,
                 attitude_deg: Vec3::new(e.x.to_degrees(), e.y.to_degrees(), e.z.to_degrees()),
                 max_thrust_fraction: fraction,
                 collective,
-                saturated: saturation.any(),
+                saturated,
             });
         }
         let euler = truth_now.attitude.to_euler();
@@ -275,7 +251,7 @@ pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
             dropped = true;
             break;
         }
-        if contact == Contact::Landed && phase == FlightPhase::Done {
+        if stop.is_some() {
             break;
         }
         for _ in 0..physics_per_tick {
@@ -296,7 +272,8 @@ pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
         max_thrust_fraction: max_fraction,
         max_height_m: max_height,
         positions,
-        landed: land.contact() == Contact::Landed,
+        landed: stop == Some(FlightStop::Landed),
+        stop,
         simulated_s: plant.time(),
         samples,
     })
@@ -372,7 +349,7 @@ pub fn lift_from(
         disturbance_phase: [0.0, 0.0],
     });
     let mut sensors = Sensors::new(seed);
-    let mut attitude = AttitudeEstimator::new(AttitudeEstimatorGains::default());
+    let mut navigator = Navigator::new();
     let own_weight = robots.mass * GRAVITY;
     let mut detector =
         LiftoffDetector::new(LiftoffConfig::default(), own_weight, robots.max_thrust);
@@ -389,12 +366,12 @@ pub fn lift_from(
         }
         let truth_now = plant.state();
         let imu = sensors.imu(&truth_now, dt);
-        for fix in sensors.mocap(&truth_now, plant.time_us()) {
-            attitude.set_reference(fix.attitude, fix.stamp_us);
+        if let Some(fix) = sensors.mocap(&truth_now, plant.time_us()) {
+            navigator.motion_capture(&fix);
         }
-        let a = attitude.update(imu.gyro, imu.accel, dt, plant.time_us());
+        let nav = navigator.update(&imu, dt, plant.time_us());
         if t >= started {
-            if let LiftState::Measured(m) = detector.step(a.attitude, dt) {
+            if let LiftState::Measured(m) = detector.step(nav.attitude.attitude, dt) {
                 return Ok(LiftOutcome {
                     measured: m,
                     model,

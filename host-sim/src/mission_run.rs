@@ -6,7 +6,10 @@ use anyhow::{Result, anyhow};
 use shared::control::vector::Vec3;
 use shared::estimation::Measurement;
 use shared::geometry::Vec2;
-use shared::mission::{ImuReading, Mission, MissionConfig, Phase, Reason, Transition};
+use shared::mission::{
+    AbortReason, Mission, MissionConfig, MissionPlanner, OperatorCommand, Phase, Reason, TickInput,
+    Transition,
+};
 use shared::scenario::Scenario;
 
 use crate::harness::{CONTROL_HZ, DROP_TILT_DEG};
@@ -17,7 +20,7 @@ use crate::plant::{PHYSICS_DT, Plant, PlantConfig};
 pub const MISSION_TIME_LIMIT: f32 = 900.0;
 
 /// One mission run's set-up.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct MissionSetup {
     /// Seed of sensor noise and disturbance.
     pub seed: u64,
@@ -27,6 +30,22 @@ pub struct MissionSetup {
     pub config: MissionConfig,
     /// Failure injection: motion capture stops this long after take-off began, s.
     pub mocap_lost_after_takeoff: Option<f32>,
+    /// Operator commands after the start: (seconds after take-off began, command).
+    pub commands: Vec<(f32, OperatorCommand)>,
+}
+
+impl Default for MissionSetup {
+    /// Seed 1, an exact command-to-thrust map, the default mission, no failure, no command
+    /// but the start.
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            map_error: 1.0,
+            config: MissionConfig::default(),
+            mocap_lost_after_takeoff: None,
+            commands: Vec::new(),
+        }
+    }
 }
 
 /// What the mission did.
@@ -49,8 +68,14 @@ pub struct MissionOutcome {
     /// Each lift: group, reading (N, or `None` when it could not lift), model lift-off thrust
     /// for the truth (N).
     pub lifts: Vec<(usize, Option<f32>, f32)>,
-    /// Why it stopped early, if it did.
-    pub aborted: Option<String>,
+    /// Why it stopped early (or landed in place), if it did.
+    pub aborted: Option<AbortReason>,
+    /// Whether the rotors were ever armed.
+    pub armed: bool,
+    /// Whether the payload left the ground.
+    pub flew: bool,
+    /// Thrust of every rotor at the end, N.
+    pub final_thrusts: Vec<f32>,
     /// Simulated time, s.
     pub simulated_s: f32,
 }
@@ -86,8 +111,9 @@ pub fn run(
         disturbance_phase: [0.4 + setup.seed as f32 % 3.0, 1.9],
     });
     let mut sensors = Sensors::new(setup.seed);
-    let mut mission =
-        Mission::new(scenario, setup.config).map_err(|e| anyhow!("mission cannot start: {e:?}"))?;
+    let mut planner = MissionPlanner::new(scenario, setup.config)
+        .map_err(|e| anyhow!("the mission cannot start: {e}"))?;
+    let mut mission = Mission::new(scenario, setup.config);
     let dt = 1.0 / CONTROL_HZ as f32;
     let physics_per_tick = (dt / PHYSICS_DT).round() as usize;
     let n = robots.count();
@@ -100,43 +126,53 @@ pub fn run(
         phases.push((tr.to.name().to_string(), 0.0));
         entered = t;
     };
-    if let Some(tr) = mission.start() {
-        on_transition(0.0, &tr);
-        record(0.0, &tr, &mut phases);
-    }
     let mut current = robots.initial.to_vec();
     let mut mocap_lost_at = f32::INFINITY;
+    let mut takeoff_at = f32::INFINITY;
+    let mut next_command = 0usize;
+    let mut command = Some(OperatorCommand::Start);
     let mut lifts = Vec::new();
     let mut group = 0usize;
-    let mut dropped = false;
+    let (mut dropped, mut armed, mut flew) = (false, false, false);
+    let mut thrusts = vec![0.0f32; n];
     loop {
         let t = plant.time();
         if t > MISSION_TIME_LIMIT {
             break;
         }
-        let now_us = plant.time_us();
         let truth_now = plant.state();
         let imu = sensors.imu(&truth_now, dt);
-        let fixes = sensors.mocap(&truth_now, plant.time_us());
-        if t < mocap_lost_at {
-            for fix in fixes {
-                mission.motion_capture(fix.position, fix.attitude, fix.stamp_us);
+        let mocap = sensors
+            .mocap(&truth_now, plant.time_us())
+            .filter(|_| t < mocap_lost_at);
+        if command.is_none() {
+            if let Some(&(after, c)) = setup.commands.get(next_command) {
+                if t >= takeoff_at + after {
+                    command = Some(c);
+                    next_command += 1;
+                }
             }
         }
-        let out = mission.step(
-            ImuReading {
-                gyro: imu.gyro,
-                accel: imu.accel,
-            },
-            now_us,
-            dt,
-        );
+        let out = mission.step(&TickInput {
+            time_us: plant.time_us(),
+            imu,
+            mocap,
+            command: command.take(),
+        });
+        if let Some(job) = &out.job {
+            // The firmware runs this off the tick; its result is taken at its deadline tick
+            // either way.
+            mission.deliver(planner.run(job));
+        }
+        armed |= out.armed;
+        flew |= mission.flight().is_some_and(|f| f.airborne());
         if let Some(tr) = out.transition {
-            if matches!(tr.to, Phase::Flying(_)) {
+            if matches!(tr.to, Phase::Flying(_)) && matches!(tr.reason, Reason::Armed) {
                 plant.set_disturbance_peak(flight.disturbance_torque);
-            }
-            if let (Reason::Armed, Some(after)) = (tr.reason, setup.mocap_lost_after_takeoff) {
-                mocap_lost_at = t + after;
+                takeoff_at = t;
+                if let Some(after) = setup.mocap_lost_after_takeoff {
+                    mocap_lost_at = t + after;
+                }
             }
             on_transition(t, &tr);
             record(t, &tr, &mut phases);
@@ -167,6 +203,7 @@ pub fn run(
             current = out.robots.to_vec();
             plant.set_rotor_points(&rotor_points(&current));
         }
+        thrusts.copy_from_slice(&out.thrusts[..n]);
         let euler = truth_now.attitude.to_euler();
         if euler.x.abs().to_degrees() > DROP_TILT_DEG || euler.y.abs().to_degrees() > DROP_TILT_DEG
         {
@@ -177,7 +214,7 @@ pub fn run(
             break;
         }
         for _ in 0..physics_per_tick {
-            plant.step(&out.thrusts[..n]);
+            plant.step(&thrusts);
         }
     }
     let end = plant.time();
@@ -199,7 +236,10 @@ pub fn run(
         final_position_error_m: final_error,
         phases,
         lifts,
-        aborted: mission.abort_reason().map(|r| format!("{r:?}")),
+        aborted: mission.abort_reason(),
+        armed,
+        flew,
+        final_thrusts: thrusts,
         simulated_s: end,
     })
 }

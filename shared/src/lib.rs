@@ -16,6 +16,7 @@ extern crate std;
 
 pub mod control;
 pub mod estimation;
+pub mod flight;
 pub mod formation;
 pub mod geometry;
 pub mod liftoff;

@@ -1,10 +1,16 @@
 //! The paper's simulation cases built in (SPEC.md section 4): `rect-sim1` and `L-sim1` as
 //! [`ScenarioInput`]s, the same values as the files in `tests/scenarios/` (a test checks they
-//! agree). For unit tests and for target-side benchmarks that cannot read files.
+//! agree). For unit tests and for target-side benchmarks that cannot read files, with a
+//! hovering flight of the rectangle for the 400 Hz benchmarks.
 
+use crate::control::allocation::{Mixer, MixerKind, RotorLayout};
+use crate::control::navigator::{ImuSample, MocapFix, Navigator};
+use crate::control::vector::{Quat, Vec3};
+use crate::control::vehicle::VehicleModel;
+use crate::flight::{FlightConfig, FlightModel, FlightStack};
 use crate::geometry::Vec2;
 use crate::scenario::{
-    EstimationSetup, FormationSetup, RobotsInput, Scenario, ScenarioInput, Truth,
+    EstimationSetup, FormationSetup, GRAVITY, RobotsInput, Scenario, ScenarioInput, Truth,
 };
 
 const RECT: [Vec2; 4] = [
@@ -116,6 +122,39 @@ pub fn l_sim1() -> ScenarioInput<'static> {
         }),
         flight: None,
     }
+}
+
+/// A flight of the rectangle (COM (0.12, 0.01), 3.5 kg) on [`RECT_ROTORS`] with `mixer`,
+/// its navigator primed by a motion-capture fix 0.5 m above the take-off point, so the flight
+/// stack is airborne from its first step: the state the 400 Hz benchmarks step from. `None`
+/// if the mixer cannot be built (never, for these rotors).
+pub fn hovering_flight(mixer: MixerKind) -> Option<(Navigator, FlightStack)> {
+    let com = Vec2::new(0.12, 0.01);
+    let layout = RotorLayout {
+        points: &RECT_ROTORS,
+        spin: &ALTERNATING_SPIN,
+        com,
+        torque_per_thrust: 0.016,
+        max_thrust: 14.2,
+    };
+    let model = FlightModel {
+        mixer: Mixer::build(mixer, &layout).ok()?,
+        vehicle: VehicleModel::from_payload(&RECT, com, 3.5, &RECT_ROTORS, 0.1, 14.2),
+    };
+    let above = Vec3::new(0.0, 0.0, -0.5);
+    let mut navigator = Navigator::new();
+    let level = ImuSample {
+        gyro: Vec3::ZERO,
+        accel: Vec3::new(0.0, 0.0, -GRAVITY),
+    };
+    navigator.motion_capture(&MocapFix {
+        position: above,
+        attitude: Quat::IDENTITY,
+        stamp_us: 0,
+    });
+    navigator.update(&level, 0.0025, 0);
+    let stack = FlightStack::new(FlightConfig::default(), model, Vec3::ZERO, [0.3, 1.98, 0.5]);
+    Some((navigator, stack))
 }
 
 /// A built-in case, checked (the built-in values are valid; a failure here is a bug in this

@@ -10,7 +10,7 @@ use anyhow::Result;
 use clap::Args;
 use serde_json::json;
 use shared::estimation::{EstimatorOptions, ThrustScaleAxis};
-use shared::mission::{MissionConfig, Reason};
+use shared::mission::MissionConfig;
 
 use crate::commands::fly::MixerArg;
 use crate::mission_run::{self, MissionSetup};
@@ -71,7 +71,7 @@ pub fn run(args: &MissionArgs) -> Result<()> {
         } else {
             Some(
                 args.lift_sigma
-                    .map_or(shared::mission::machine::DETECTOR_SIGMA, |s| s as f32),
+                    .map_or(shared::mission::DETECTOR_SIGMA, |s| s as f32),
             )
         },
         ..MissionConfig::default()
@@ -81,6 +81,7 @@ pub fn run(args: &MissionArgs) -> Result<()> {
         map_error: args.map_error as f32,
         config,
         mocap_lost_after_takeoff: args.mocap_lost_after.map(|s| s as f32),
+        ..MissionSetup::default()
     };
     let json = args.json;
     if !json {
@@ -89,7 +90,7 @@ pub fn run(args: &MissionArgs) -> Result<()> {
     let started = Instant::now();
     let outcome = mission_run::run(&loaded.scenario, &setup, &mut |t, tr| {
         if !json {
-            println!("  {t:7.2} s  {:<17} {}", tr.to.name(), describe(&tr.reason));
+            println!("  {t:7.2} s  {:<17} {}", tr.to.name(), tr.reason);
         }
     })?;
     let wall_s = started.elapsed().as_secs_f64();
@@ -104,7 +105,7 @@ pub fn run(args: &MissionArgs) -> Result<()> {
             "final_position_error_m": outcome.final_position_error_m,
             "phases": outcome.phases.iter().map(|(name, d)| json!({"name": name, "duration_s": d})).collect::<Vec<_>>(),
             "lifts": outcome.lifts.iter().map(|(g, r, m)| json!({"pair": g, "reading": r, "model": m})).collect::<Vec<_>>(),
-            "aborted": outcome.aborted,
+            "aborted": outcome.aborted.map(|r| r.to_string()),
             "simulated_s": outcome.simulated_s,
             "wall_s": wall_s,
         });
@@ -141,22 +142,4 @@ pub fn run(args: &MissionArgs) -> Result<()> {
         }
     }
     Ok(())
-}
-
-fn describe(reason: &Reason) -> String {
-    match reason {
-        Reason::PairChosen { group, information } => {
-            format!("pair {group} (information {information:.2} nats)")
-        }
-        Reason::LiftRead(m) => format!("reading {m:?}"),
-        Reason::Converged(t) => {
-            format!(
-                "estimate COM ({:.3}, {:.3}) m, mass {:.2} kg",
-                t[0], t[1], t[2]
-            )
-        }
-        Reason::FormationChosen(det) => format!("formation det(BB^T) {det:.3e}"),
-        Reason::Abort(why) => format!("ABORT: {why:?}"),
-        other => format!("{other:?}"),
-    }
 }

@@ -14,6 +14,7 @@ use std::collections::VecDeque;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
+use shared::control::navigator::{ImuSample, MocapFix};
 use shared::control::vector::{Quat, Vec3};
 use shared::scenario::GRAVITY;
 
@@ -35,26 +36,6 @@ pub const MOCAP_LATENCY: f32 = 0.01;
 pub const MOCAP_POSITION_NOISE: f32 = 0.001;
 /// Motion-capture attitude noise, rad per axis (1 sigma).
 pub const MOCAP_ATTITUDE_NOISE: f32 = 0.005;
-
-/// One IMU sample.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ImuSample {
-    /// Body rate with bias and noise, rad/s.
-    pub gyro: Vec3,
-    /// Specific force in the body frame with noise, m/s^2.
-    pub accel: Vec3,
-}
-
-/// One motion-capture fix.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MocapFix {
-    /// Position of the payload frame, NED, m.
-    pub position: Vec3,
-    /// Attitude of the payload frame.
-    pub attitude: Quat,
-    /// When it was taken, us.
-    pub stamp_us: u64,
-}
 
 /// The vehicle's sensors.
 pub struct Sensors {
@@ -109,9 +90,9 @@ impl Sensors {
         }
     }
 
-    /// Takes a fix when one is due at time `now_us` and returns the fixes whose latency has
-    /// passed.
-    pub fn mocap(&mut self, truth: &TrueState, now_us: u64) -> Vec<MocapFix> {
+    /// Takes a fix when one is due at time `now_us` and returns the oldest fix whose latency
+    /// has passed (one per call: at most one a control tick reaches the flight controller).
+    pub fn mocap(&mut self, truth: &TrueState, now_us: u64) -> Option<MocapFix> {
         let t = now_us as f32 * 1e-6;
         if t + 1e-6 >= self.next_fix {
             self.next_fix += 1.0 / MOCAP_HZ;
@@ -134,12 +115,10 @@ impl Sensors {
             };
             self.pending.push_back((t + MOCAP_LATENCY, fix));
         }
-        let mut ready = Vec::new();
-        while self.pending.front().is_some_and(|(at, _)| *at <= t + 1e-6) {
-            if let Some((_, fix)) = self.pending.pop_front() {
-                ready.push(fix);
-            }
+        if self.pending.front().is_some_and(|(at, _)| *at <= t + 1e-6) {
+            self.pending.pop_front().map(|(_, fix)| fix)
+        } else {
+            None
         }
-        ready
     }
 }

@@ -10,11 +10,13 @@
 //! - [`allocation`]: the two mixers, rebuilt from the formation, with desaturation.
 //! - [`trajectory`]: take-off, transit, hover, landing.
 //! - [`land_detector`]: on the ground, airborne, landed.
+//! - [`navigator`]: both estimators together, fed by the IMU and motion capture.
 
 pub mod allocation;
 pub mod attitude_estimator;
 pub mod controller;
 pub mod land_detector;
+pub mod navigator;
 pub mod params;
 pub mod pid;
 pub mod position_estimator;

@@ -72,36 +72,56 @@ const MIN_JERK_PEAK: f32 = 1.875;
 /// Shortest segment, s.
 const MIN_DURATION: f32 = 0.5;
 
+/// One minimum-jerk segment of a plan, from rest to rest.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Segment {
-    from: Vec3,
-    to: Vec3,
-    duration: f32,
+pub struct PlanSegment {
+    /// What the segment does.
+    pub phase: FlightPhase,
+    /// Start point, NED, m.
+    pub from: Vec3,
+    /// End point, NED, m.
+    pub to: Vec3,
+    /// Duration, s.
+    pub duration: f32,
+    /// Heading, rad.
+    pub yaw: f32,
 }
 
-impl Segment {
-    fn new(from: Vec3, to: Vec3, speed: f32) -> Self {
+impl PlanSegment {
+    fn new(phase: FlightPhase, from: Vec3, to: Vec3, speed: f32, yaw: f32) -> Self {
         let distance = (to - from).norm();
         let duration = (MIN_JERK_PEAK * distance / speed.max(1e-3)).max(MIN_DURATION);
-        Self { from, to, duration }
+        Self {
+            phase,
+            from,
+            to,
+            duration,
+            yaw,
+        }
     }
 
-    fn sample(&self, t: f32) -> (Vec3, Vec3, Vec3) {
+    /// The setpoint `t` seconds into the segment (held at its end after `duration`).
+    pub fn sample(&self, t: f32) -> Setpoint {
         let u = (t / self.duration).clamp(0.0, 1.0);
         let (u2, u3) = (u * u, u * u * u);
         let s = 10.0 * u3 - 15.0 * u3 * u + 6.0 * u3 * u2;
         let ds = (30.0 * u2 - 60.0 * u3 + 30.0 * u2 * u2) / self.duration;
         let dds = (60.0 * u - 180.0 * u2 + 120.0 * u3) / (self.duration * self.duration);
         let d = self.to - self.from;
-        (self.from + d * s, d * ds, d * dds)
+        Setpoint {
+            position: self.from + d * s,
+            velocity: d * ds,
+            acceleration: d * dds,
+            yaw: self.yaw,
+        }
     }
 }
 
-/// Take-off at the start, transit, hover and landing at the target.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The segments of a flight: take-off, transit, hover and landing at the target, or a landing
+/// where the vehicle is.
+#[derive(Clone, Debug, PartialEq)]
 pub struct FlightPlan {
-    segments: [Segment; 4],
-    yaw: f32,
+    segments: heapless::Vec<PlanSegment, 4>,
 }
 
 impl FlightPlan {
@@ -112,59 +132,72 @@ impl FlightPlan {
         let top = Vec3::new(start.x, start.y, start.z - height);
         let above = Vec3::new(target[0], target[1], start.z - height);
         let ground = Vec3::new(target[0], target[1], start.z);
+        let segments = [
+            PlanSegment::new(FlightPhase::Takeoff, start, top, limits.climb_speed, yaw),
+            PlanSegment::new(FlightPhase::Transit, top, above, limits.cruise_speed, yaw),
+            PlanSegment {
+                phase: FlightPhase::Hover,
+                from: above,
+                to: above,
+                duration: limits.hover_time.max(0.0),
+                yaw,
+            },
+            PlanSegment::new(FlightPhase::Land, above, ground, limits.descent_speed, yaw),
+        ];
         Self {
-            segments: [
-                Segment::new(start, top, limits.climb_speed),
-                Segment::new(top, above, limits.cruise_speed),
-                Segment {
-                    from: above,
-                    to: above,
-                    duration: limits.hover_time.max(0.0),
-                },
-                Segment::new(above, ground, limits.descent_speed),
-            ],
-            yaw,
+            segments: heapless::Vec::from_slice(&segments).unwrap_or_default(),
         }
     }
 
-    /// Total duration, s.
+    /// A landing straight down from `from` to the ground at height `ground_z` (NED z).
+    pub fn landing(from: Vec3, ground_z: f32, yaw: f32, limits: PlanLimits) -> Self {
+        let ground = Vec3::new(from.x, from.y, ground_z);
+        let land = PlanSegment::new(FlightPhase::Land, from, ground, limits.descent_speed, yaw);
+        Self {
+            segments: heapless::Vec::from_slice(&[land]).unwrap_or_default(),
+        }
+    }
+
+    /// Segment `index`, in order; `None` past the last.
+    pub fn segment(&self, index: usize) -> Option<&PlanSegment> {
+        self.segments.get(index)
+    }
+
+    /// Total duration when every segment ends on time, s.
     pub fn duration(&self) -> f32 {
         self.segments.iter().map(|s| s.duration).sum()
     }
 
-    /// Where the hover over the target happens (NED).
+    /// Where the hover over the target happens (NED); the last point for a landing.
     pub fn hover_point(&self) -> Vec3 {
-        self.segments[2].from
+        self.segments
+            .iter()
+            .find(|s| s.phase == FlightPhase::Hover)
+            .or(self.segments.last())
+            .map_or(Vec3::ZERO, |s| s.from)
     }
 
-    /// The setpoint and phase `t` seconds after take-off began.
+    /// The setpoint after the last segment: [`SETTLE_DEPTH`] below its end, at rest.
+    pub fn settled(&self) -> Setpoint {
+        let last = self.segments.last();
+        Setpoint {
+            position: last.map_or(Vec3::ZERO, |s| s.to) + Vec3::DOWN * SETTLE_DEPTH,
+            yaw: last.map_or(0.0, |s| s.yaw),
+            ..Setpoint::default()
+        }
+    }
+
+    /// The setpoint and phase `t` seconds after take-off began, when every segment ends on
+    /// time (the flight stack waits at a segment's end until the vehicle is there).
     pub fn sample(&self, t: f32) -> (Setpoint, FlightPhase) {
-        const PHASES: [FlightPhase; 4] = [
-            FlightPhase::Takeoff,
-            FlightPhase::Transit,
-            FlightPhase::Hover,
-            FlightPhase::Land,
-        ];
         let mut start = 0.0;
-        for (segment, phase) in self.segments.iter().zip(PHASES) {
+        for segment in &self.segments {
             if t < start + segment.duration {
-                let (position, velocity, acceleration) = segment.sample(t - start);
-                let setpoint = Setpoint {
-                    position,
-                    velocity,
-                    acceleration,
-                    yaw: self.yaw,
-                };
-                return (setpoint, phase);
+                return (segment.sample(t - start), segment.phase);
             }
             start += segment.duration;
         }
-        let end = Setpoint {
-            position: self.segments[3].to + Vec3::DOWN * SETTLE_DEPTH,
-            yaw: self.yaw,
-            ..Setpoint::default()
-        };
-        (end, FlightPhase::Done)
+        (self.settled(), FlightPhase::Done)
     }
 }
 

@@ -1,193 +1,163 @@
 //! The autonomous mission as the flight controller runs it at 400 Hz (SPEC.md section 2):
 //! pre-flight checks, the estimation loop (choose a pair, move the robots, ramp and read the
 //! lift-off, update, check convergence), the formation decision with a thrust-margin check,
-//! the rearrangement, arming, take-off, trajectory, hover, landing and disarm.
+//! the rearrangement, arming and the flight, with the operator's commands at any time.
 //!
-//! Each step takes the sensor readings and returns every rotor's thrust and every robot's rail
-//! setpoint (the stepper drivers follow them with [`crate::rail::stepper`] profiles). It calls
-//! the crate's estimators, estimation, formation, rail, lift-off and control pieces; nothing
-//! else decides.
+//! This is the tick side: each [`Mission::step`] takes the IMU sample, a motion-capture fix
+//! and an operator command if they came, and the time, and returns every rotor's thrust and
+//! every robot's rail setpoint (the stepper drivers follow them with
+//! [`crate::rail::stepper`] profiles). Nothing slow runs here: pair selection, the Bayes
+//! update, the formation decision and the mixer are [`JobRequest`]s that the caller runs on
+//! a [`crate::mission::MissionPlanner`] and hands back with [`Mission::deliver`]; the mission
+//! takes each result exactly [`JobRequest::deadline_ticks`] after asking, while the rotors
+//! hold what the phase needs (off on the ground).
 
-use heapless::Vec;
-
-use crate::control::allocation::{Mixer, MixerKind, RotorLayout, Saturation};
-use crate::control::attitude_estimator::{AttitudeEstimator, AttitudeEstimatorGains};
-use crate::control::controller::{ControlInputs, FlightController};
-use crate::control::land_detector::{Contact, LandDetector};
-use crate::control::params::ControlParams;
-use crate::control::position_estimator::{PositionEstimator, PositionEstimatorGains};
-use crate::control::trajectory::{FlightPhase, FlightPlan, PlanLimits};
-use crate::control::vector::{Quat, Vec3};
-use crate::control::vehicle::VehicleModel;
-use crate::estimation::groups::lift_group;
-use crate::estimation::{Estimate, Estimator, EstimatorOptions, Status};
-use crate::formation::{FormationProblem, solve};
-use crate::geometry::Vec2;
-use crate::liftoff::{LiftState, LiftoffConfig, LiftoffDetector};
+use crate::control::navigator::{ImuSample, MocapFix, NavState, Navigator};
+use crate::control::trajectory::FlightPhase;
+use crate::estimation::{Estimate, Status};
+use crate::flight::{FlightCommand, FlightEvent, FlightStack, FlightStop, LandingCause};
+use crate::liftoff::{LiftState, LiftoffDetector};
 use crate::math;
+use crate::mission::config::MissionConfig;
+use crate::mission::jobs::{JobRequest, JobResult, LiftPlan};
 use crate::mission::phases::{AbortReason, Phase, Reason, Transition};
-use crate::rail::moves::{Positions, RailMove, lift_targets};
-use crate::rail::stepper::MotionLimits;
+use crate::rail::moves::{Positions, RailMove};
 use crate::scenario::{GRAVITY, MAX_ROBOTS, Scenario};
+use crate::timing::{CONTROL_RATE_HZ, LoopMonitor, LoopStats};
 
-/// Default standard deviation of a lift reading, N (see [`MissionConfig::lift_noise_sigma`]).
-pub const DETECTOR_SIGMA: f32 = 0.5;
-
-/// Everything the mission may be tuned with beyond the scenario.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MissionConfig {
-    /// Estimator options (the thrust-scale bias term).
-    pub estimator: EstimatorOptions,
-    /// Standard deviation of a lift reading from this vehicle's detector, N: the estimator's
-    /// noise model for the lifts. `None` uses the scenario's `noise_sigma` (the paper's
-    /// simulated measurement noise). A real vehicle sets it from bench lifts of a known load.
-    /// The default, 0.5 N, bounds what the detector showed in the simulated vehicle: 63 lifts
-    /// over 18 missions read the model's lift-off with an RMS error of 0.14 N, worst 0.77 N.
-    pub lift_noise_sigma: Option<f32>,
-    /// Lift-off detection.
-    pub liftoff: LiftoffConfig,
-    /// Rail motion limits.
-    pub rail_limits: MotionLimits,
-    /// Flight control gains.
-    pub control: ControlParams,
-    /// Mixer for the flight.
-    pub mixer: MixerKind,
-    /// Reference trajectory limits.
-    pub plan: PlanLimits,
-    /// Largest share of the rotors' total thrust the heaviest plausible payload (the
-    /// posterior's 95 % upper bound on the mass) may need to hover; above it the mission
-    /// refuses to take off.
-    pub max_hover_fraction: f32,
-    /// Time on the ground, rotors off, before the estimation starts (the attitude estimator
-    /// learns the gyro bias meanwhile), s.
-    pub checks_time: f32,
-    /// Time with rotors off after each lift, s.
-    pub relax_time: f32,
-    /// Consecutive lifts after which the stopping rule must hold before the estimate is taken
-    /// (1: the paper's rule; 2: one confirmation lift after it first holds).
-    pub confirmations: u32,
-    /// Time armed on the ground before take-off, s.
-    pub arm_time: f32,
+/// A command from the operator (the ground station).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OperatorCommand {
+    /// Start the mission (from idle).
+    Start,
+    /// Stop it: on the ground the rotors stop; in flight the vehicle lands where it is.
+    Abort,
+    /// In flight: land where the vehicle is.
+    LandNow,
+    /// Stop the rotors now, wherever the vehicle is (flight termination).
+    Kill,
 }
 
-impl Default for MissionConfig {
-    fn default() -> Self {
-        Self {
-            estimator: EstimatorOptions::default(),
-            lift_noise_sigma: Some(DETECTOR_SIGMA),
-            liftoff: LiftoffConfig::default(),
-            rail_limits: MotionLimits::default(),
-            control: ControlParams::default(),
-            mixer: MixerKind::EqualSplit,
-            plan: PlanLimits::default(),
-            max_hover_fraction: 0.7,
-            checks_time: 5.0,
-            relax_time: 2.0,
-            confirmations: 1,
-            arm_time: 1.0,
+/// Why a command was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CommandRefusal {
+    /// The mission has already started.
+    AlreadyStarted,
+    /// The mission is over (landed or aborted).
+    Finished,
+    /// Landing asked for while not flying.
+    NotFlying,
+}
+
+impl core::fmt::Display for CommandRefusal {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::AlreadyStarted => write!(f, "the mission has already started"),
+            Self::Finished => write!(f, "the mission is over"),
+            Self::NotFlying => write!(f, "not flying"),
         }
     }
 }
 
-/// One IMU sample.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ImuReading {
-    /// Body rate, rad/s.
-    pub gyro: Vec3,
-    /// Specific force, body frame, m/s^2.
-    pub accel: Vec3,
+/// The answer to an operator command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CommandReply {
+    /// The command.
+    pub command: OperatorCommand,
+    /// Accepted, or why not.
+    pub outcome: Result<(), CommandRefusal>,
 }
 
-/// What the mission commands for one tick.
+/// What one tick takes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TickInput {
+    /// When the IMU sample was taken, us (the flight controller's clock; in lockstep
+    /// hardware-in-the-loop, the simulator's).
+    pub time_us: u64,
+    /// The IMU sample.
+    pub imu: ImuSample,
+    /// A motion-capture fix that arrived since the previous tick.
+    pub mocap: Option<MocapFix>,
+    /// An operator command that arrived since the previous tick.
+    pub command: Option<OperatorCommand>,
+}
+
+/// What one tick commands.
 #[derive(Clone, Debug, PartialEq)]
-pub struct MissionOutputs {
-    /// Thrust of each robot's rotor, N (commanded units).
+pub struct TickOutput {
+    /// Thrust of each robot's rotor, N (commanded units); zero unless `armed`.
     pub thrusts: [f32; MAX_ROBOTS],
     /// Where each robot should be on the rail now (arc lengths).
     pub robots: Positions,
+    /// Whether the rotors may spin.
+    pub armed: bool,
     /// The phase after this tick.
     pub phase: Phase,
     /// The transition this tick made, if any.
     pub transition: Option<Transition>,
-    /// The attitude estimate (for telemetry).
-    pub attitude: Quat,
+    /// A computation to run off the tick, if this tick asked for one.
+    pub job: Option<JobRequest>,
+    /// The answer to this tick's operator command, if one came.
+    pub reply: Option<CommandReply>,
+    /// The state estimate after this tick.
+    pub nav: NavState,
 }
 
-/// The flight part, built once the formation is known.
+/// A job asked for and not yet taken.
 #[derive(Clone, Debug)]
-struct Flight {
-    mixer: Mixer,
-    controller: FlightController,
-    plan: FlightPlan,
-    land: LandDetector,
-    saturation: Saturation,
-    /// Height of the ground (NED z) the flight took off from.
-    ground_z: f32,
-    /// The position was lost: descending on velocity alone until this flight-clock time, s.
-    failsafe_until: Option<f32>,
+struct PendingJob {
+    due: u64,
+    result: Option<JobResult>,
 }
 
-/// Failsafe: time past the expected touchdown before the rotors stop, s.
-const FAILSAFE_MARGIN: f32 = 1.0;
-
-/// The mission.
+/// The tick side of the mission.
 #[derive(Clone, Debug)]
 pub struct Mission {
     scenario: Scenario,
     config: MissionConfig,
-    estimator: Estimator,
-    attitude: AttitudeEstimator,
-    position: PositionEstimator,
+    navigator: Navigator,
+    clock: LoopMonitor,
+    tick: u64,
     phase: Phase,
     phase_time: f32,
     robots: Positions,
     rail_move: Option<(RailMove, Positions)>,
-    group: usize,
-    pair_robots: Vec<usize, MAX_ROBOTS>,
+    lift_plan: Option<LiftPlan>,
     lift: Option<LiftoffDetector>,
-    last_status: Status,
+    pending: Option<PendingJob>,
+    outgoing: Option<JobRequest>,
+    latest: Option<Estimate>,
     converged_in_a_row: u32,
     estimate: Option<Estimate>,
     formation: Option<Positions>,
-    flight: Option<Flight>,
+    flight: Option<FlightStack>,
     abort: Option<AbortReason>,
-    /// Time since take-off began (runs across the flight's phases), s.
-    flight_clock: f32,
 }
 
 impl Mission {
-    /// A mission for `scenario` with the robots at their initial positions.
-    pub fn new(scenario: &Scenario, config: MissionConfig) -> Result<Self, AbortReason> {
-        let mut measured = scenario.clone();
-        if let Some(sigma) = config.lift_noise_sigma {
-            if !(sigma.is_finite() && sigma > 0.0) {
-                return Err(AbortReason::EstimationFailed);
-            }
-            measured.estimation.noise_sigma = sigma;
-        }
-        let estimator = Estimator::new(&measured, config.estimator)
-            .map_err(|_| AbortReason::EstimationFailed)?;
-        Ok(Self {
+    /// A mission for `scenario` with the robots at their initial positions, idle.
+    pub fn new(scenario: &Scenario, config: MissionConfig) -> Self {
+        Self {
             scenario: scenario.clone(),
             config,
-            estimator,
-            attitude: AttitudeEstimator::new(AttitudeEstimatorGains::default()),
-            position: PositionEstimator::new(PositionEstimatorGains::default()),
+            navigator: Navigator::new(),
+            clock: LoopMonitor::at_rate(CONTROL_RATE_HZ),
+            tick: 0,
             phase: Phase::Idle,
             phase_time: 0.0,
             robots: scenario.robots.initial.clone(),
             rail_move: None,
-            group: 0,
-            pair_robots: Vec::new(),
+            lift_plan: None,
             lift: None,
-            last_status: Status::Measuring,
+            pending: None,
+            outgoing: None,
+            latest: None,
             converged_in_a_row: 0,
             estimate: None,
             formation: None,
             flight: None,
             abort: None,
-            flight_clock: 0.0,
-        })
+        }
     }
 
     /// The phase.
@@ -200,9 +170,9 @@ impl Mission {
         self.estimate
     }
 
-    /// Lifts taken so far.
+    /// Lifts taken so far (as far as the results have come back).
     pub fn measurements(&self) -> u32 {
-        self.estimator.estimate().measurements
+        self.latest.map_or(0, |e| e.measurements)
     }
 
     /// The flight formation once chosen.
@@ -210,20 +180,45 @@ impl Mission {
         self.formation.as_ref()
     }
 
-    /// Why the mission aborted, if it did.
+    /// The flight, once built.
+    pub fn flight(&self) -> Option<&FlightStack> {
+        self.flight.as_ref()
+    }
+
+    /// Why the mission aborted (or lands in place), if it did.
     pub fn abort_reason(&self) -> Option<AbortReason> {
         self.abort
     }
 
-    /// A motion-capture fix of the payload frame (NED position, attitude) taken at `stamp_us`.
-    pub fn motion_capture(&mut self, position: Vec3, attitude: Quat, stamp_us: u64) {
-        self.attitude.set_reference(attitude, stamp_us);
-        self.position.correct(position, stamp_us);
+    /// Ticks stepped so far.
+    pub fn ticks(&self) -> u64 {
+        self.tick
     }
 
-    /// Starts the mission (from idle).
-    pub fn start(&mut self) -> Option<Transition> {
-        (self.phase == Phase::Idle).then(|| self.enter(Phase::PreflightChecks, Reason::Started))
+    /// Whether the next [`Self::step`] needs the pending job's result: the caller must
+    /// [`Self::deliver`] it first (in lockstep it waits for it; in real time a missing result
+    /// aborts the mission as [`AbortReason::JobOverrun`]).
+    pub fn needs_result(&self) -> bool {
+        self.pending
+            .as_ref()
+            .is_some_and(|p| p.result.is_none() && self.tick + 1 >= p.due)
+    }
+
+    /// Hands back the result of the pending job; `false` (and dropped) when no job is pending
+    /// (for example after an abort).
+    pub fn deliver(&mut self, result: JobResult) -> bool {
+        match &mut self.pending {
+            Some(p) if p.result.is_none() => {
+                p.result = Some(result);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// The loop's timing since the last call (periods, overruns).
+    pub fn take_loop_stats(&mut self) -> LoopStats {
+        self.clock.take_stats()
     }
 
     fn enter(&mut self, to: Phase, reason: Reason) -> Transition {
@@ -241,54 +236,148 @@ impl Mission {
     }
 
     fn abort(&mut self, why: AbortReason) -> Transition {
+        self.pending = None;
+        self.outgoing = None;
+        self.lift = None;
+        self.rail_move = None;
         self.enter(Phase::Aborted, Reason::Abort(why))
+    }
+
+    fn request(&mut self, job: JobRequest) {
+        self.pending = Some(PendingJob {
+            due: self.tick + u64::from(job.deadline_ticks()),
+            result: None,
+        });
+        self.outgoing = Some(job);
+    }
+
+    /// The pending job's result once its tick has come: `Ok(None)` before, `Err` when it is
+    /// due and missing.
+    fn take_result(&mut self) -> Result<Option<JobResult>, AbortReason> {
+        let Some(p) = &mut self.pending else {
+            return Ok(None);
+        };
+        if self.tick < p.due {
+            return Ok(None);
+        }
+        let result = p.result.take().ok_or(AbortReason::JobOverrun)?;
+        self.pending = None;
+        Ok(Some(result))
     }
 
     fn own_weight(&self) -> f32 {
         self.scenario.robots.mass * GRAVITY
     }
 
-    /// One tick at `now_us` with an IMU sample; `dt` seconds since the previous tick.
-    pub fn step(&mut self, imu: ImuReading, now_us: u64, dt: f32) -> MissionOutputs {
+    /// One tick.
+    pub fn step(&mut self, input: &TickInput) -> TickOutput {
+        self.tick += 1;
+        let dt = self.clock.step(input.time_us);
         self.phase_time += dt;
-        let a = self.attitude.update(imu.gyro, imu.accel, dt, now_us);
-        self.position.predict(
-            a.attitude.rotate(imu.accel) + Vec3::DOWN * GRAVITY,
-            dt,
-            now_us,
-        );
-        let mut thrusts = [0.0f32; MAX_ROBOTS];
-        let n = self.scenario.robots.count();
-        let transition = match self.phase {
-            Phase::Idle | Phase::Disarmed | Phase::Aborted => None,
-            Phase::PreflightChecks => self.checks(a.attitude),
-            Phase::SelectingPair => Some(self.select_pair()),
-            Phase::MovingRobots | Phase::Rearranging => self.move_robots(),
-            Phase::Lifting => self.lifting(a.attitude, dt, &mut thrusts),
-            Phase::Relaxing => self.relaxing(),
-            Phase::DecidingFormation => Some(self.decide_formation()),
-            Phase::Arming => (self.phase_time >= self.config.arm_time)
-                .then(|| self.enter(Phase::Flying(FlightPhase::Takeoff), Reason::Armed)),
-            Phase::Flying(_) => self.fly(a, dt, &mut thrusts),
-        };
-        if !matches!(self.phase, Phase::Lifting | Phase::Flying(_)) {
-            thrusts[..n].iter_mut().for_each(|t| *t = 0.0);
+        self.navigator.update(&input.imu, dt, input.time_us);
+        // The fix after the sample: a fix is never newer than the tick it arrives in.
+        if let Some(fix) = &input.mocap {
+            self.navigator.motion_capture(fix);
         }
-        MissionOutputs {
+        let nav = self.navigator.state();
+        let mut thrusts = [0.0f32; MAX_ROBOTS];
+        let (reply, mut transition) = match input.command {
+            Some(c) => self.command(c),
+            None => (None, None),
+        };
+        if transition.is_none() {
+            let flight_command = match input.command {
+                Some(OperatorCommand::Kill) => Some(FlightCommand::Kill),
+                Some(OperatorCommand::LandNow | OperatorCommand::Abort) => {
+                    Some(FlightCommand::LandNow)
+                }
+                _ => None,
+            };
+            transition = self.advance(&nav, dt, flight_command, &mut thrusts);
+        }
+        let armed = matches!(
+            self.phase,
+            Phase::Lifting | Phase::Arming | Phase::Flying(_)
+        );
+        if !matches!(self.phase, Phase::Lifting | Phase::Flying(_)) {
+            thrusts = [0.0; MAX_ROBOTS];
+        }
+        TickOutput {
             thrusts,
             robots: self.robots.clone(),
+            armed,
             phase: self.phase,
             transition,
-            attitude: a.attitude,
+            job: self.outgoing.take(),
+            reply,
+            nav,
         }
     }
 
-    fn checks(&mut self, attitude: Quat) -> Option<Transition> {
+    /// The operator's command; the transition it makes on the ground, if any (in flight the
+    /// flight stack carries it out).
+    fn command(&mut self, command: OperatorCommand) -> (Option<CommandReply>, Option<Transition>) {
+        let finished = matches!(self.phase, Phase::Disarmed | Phase::Aborted);
+        let flying = matches!(self.phase, Phase::Flying(_));
+        let mut transition = None;
+        let outcome = match command {
+            OperatorCommand::Kill if finished => Ok(()),
+            _ if finished => Err(CommandRefusal::Finished),
+            OperatorCommand::Start if self.phase == Phase::Idle => {
+                transition = Some(self.enter(Phase::PreflightChecks, Reason::Started));
+                Ok(())
+            }
+            OperatorCommand::Start => Err(CommandRefusal::AlreadyStarted),
+            OperatorCommand::LandNow if !flying => Err(CommandRefusal::NotFlying),
+            OperatorCommand::Abort if flying => {
+                self.abort = Some(AbortReason::OperatorAbort);
+                Ok(())
+            }
+            OperatorCommand::Abort => {
+                transition = Some(self.abort(AbortReason::OperatorAbort));
+                Ok(())
+            }
+            OperatorCommand::Kill if !flying => {
+                transition = Some(self.abort(AbortReason::Killed));
+                Ok(())
+            }
+            OperatorCommand::Kill | OperatorCommand::LandNow => Ok(()),
+        };
+        (Some(CommandReply { command, outcome }), transition)
+    }
+
+    fn advance(
+        &mut self,
+        nav: &NavState,
+        dt: f32,
+        command: Option<FlightCommand>,
+        thrusts: &mut [f32; MAX_ROBOTS],
+    ) -> Option<Transition> {
+        let step = match self.phase {
+            Phase::Idle | Phase::Disarmed | Phase::Aborted => Ok(None),
+            Phase::PreflightChecks => Ok(self.checks(nav)),
+            Phase::SelectingPair => self.selecting_pair(),
+            Phase::MovingRobots => Ok(self.moving_to_lift()),
+            Phase::Lifting => Ok(self.lifting(nav, dt, thrusts)),
+            Phase::Relaxing => self.relaxing(),
+            Phase::DecidingFormation => self.deciding_formation(),
+            Phase::Rearranging => self.rearranging(nav),
+            Phase::Arming => Ok((self.phase_time >= self.config.arm_time)
+                .then(|| self.enter(Phase::Flying(FlightPhase::Takeoff), Reason::Armed))),
+            Phase::Flying(_) => Ok(self.fly(nav, dt, command, thrusts)),
+        };
+        step.unwrap_or_else(|why| Some(self.abort(why)))
+    }
+
+    fn checks(&mut self, nav: &NavState) -> Option<Transition> {
         if self.phase_time < self.config.checks_time {
             return None;
         }
-        let level = attitude.rotate(Vec3::DOWN).z > math::cos(0.17);
-        if self.position.state().valid && level {
+        let level = nav.level_cosine() > math::cos(0.17);
+        if nav.position.valid && level {
+            self.request(JobRequest::SelectPair {
+                robots: self.robots.clone(),
+            });
             Some(self.enter(Phase::SelectingPair, Reason::ChecksPassed))
         } else if self.phase_time > 5.0 * self.config.checks_time {
             Some(self.abort(AbortReason::SensorsNotReady))
@@ -297,70 +386,52 @@ impl Mission {
         }
     }
 
-    fn select_pair(&mut self) -> Transition {
-        let Ok(choice) = self.estimator.select_group() else {
-            return self.abort(AbortReason::NoReachablePair);
+    fn selecting_pair(&mut self) -> Result<Option<Transition>, AbortReason> {
+        let Some(result) = self.take_result()? else {
+            return Ok(None);
         };
-        let Some(group) = lift_group(&self.scenario, choice.group) else {
-            return self.abort(AbortReason::NoReachablePair);
+        let JobResult::Pair(plan) = result else {
+            return Err(AbortReason::JobOverrun);
         };
-        let candidates: Vec<f32, MAX_ROBOTS> = group
-            .candidates
-            .iter()
-            .map(|&c| self.scenario.payload.candidates[c])
-            .collect();
-        let rail = &self.scenario.payload.rail;
-        let spacing = self.scenario.robots.min_spacing;
-        let Some(targets) = lift_targets(rail, &self.robots, &candidates, spacing) else {
-            return self.abort(AbortReason::NoReachablePair);
+        let plan = plan?;
+        let reason = Reason::PairChosen {
+            group: plan.group,
+            information: plan.information,
         };
-        let Ok(mv) = RailMove::plan(
-            rail,
-            &self.robots,
-            &targets,
-            spacing,
-            self.config.rail_limits,
-        ) else {
-            return self.abort(AbortReason::NoReachablePair);
-        };
-        self.pair_robots = candidates
-            .iter()
-            .filter_map(|c| targets.iter().position(|t| math::abs(t - c) < 1e-5))
-            .collect();
-        self.group = choice.group;
-        self.rail_move = Some((mv, targets));
-        self.enter(
-            Phase::MovingRobots,
-            Reason::PairChosen {
-                group: choice.group,
-                information: choice.information,
-            },
-        )
+        self.rail_move = Some((plan.rail_move.clone(), plan.targets.clone()));
+        self.lift_plan = Some(plan);
+        Ok(Some(self.enter(Phase::MovingRobots, reason)))
     }
 
-    fn move_robots(&mut self) -> Option<Transition> {
-        let (mv, targets) = self.rail_move.as_ref()?;
+    /// Moves the robots along the planned move; true once they are there.
+    fn follow_rail_move(&mut self) -> bool {
+        let Some((mv, targets)) = self.rail_move.as_ref() else {
+            return true;
+        };
         if self.phase_time < mv.duration() {
             self.robots = mv.positions_at(&self.scenario.payload.rail, self.phase_time);
-            return None;
+            return false;
         }
         self.robots = targets.clone();
         self.rail_move = None;
-        if self.phase == Phase::MovingRobots {
-            self.lift = Some(LiftoffDetector::new(
-                self.config.liftoff,
-                self.own_weight(),
-                self.scenario.robots.max_thrust,
-            ));
-            Some(self.enter(Phase::Lifting, Reason::RobotsInPlace))
-        } else {
-            Some(self.build_flight())
+        true
+    }
+
+    fn moving_to_lift(&mut self) -> Option<Transition> {
+        if !self.follow_rail_move() {
+            return None;
         }
+        self.lift = Some(LiftoffDetector::new(
+            self.config.liftoff,
+            self.own_weight(),
+            self.scenario.robots.max_thrust,
+        ));
+        Some(self.enter(Phase::Lifting, Reason::RobotsInPlace))
     }
 
     fn lifting(
         &mut self,
-        attitude: Quat,
+        nav: &NavState,
         dt: f32,
         thrusts: &mut [f32; MAX_ROBOTS],
     ) -> Option<Transition> {
@@ -368,181 +439,145 @@ impl Mission {
         let own = self.own_weight();
         thrusts[..n].iter_mut().for_each(|t| *t = own);
         let lift = self.lift.as_mut()?;
-        let state = lift.step(attitude, dt);
-        for &i in &self.pair_robots {
+        let state = lift.step(nav.attitude.attitude, dt);
+        let plan = self.lift_plan.as_ref()?;
+        for &i in &plan.lifting {
             thrusts[i] = lift.pair_thrust();
         }
-        let LiftState::Measured(m) = state else {
+        let LiftState::Measured(reading) = state else {
             return None;
         };
+        let group = plan.group;
         self.lift = None;
-        match self.estimator.update(self.group, m) {
-            Ok(status) => {
-                self.last_status = status;
-                self.converged_in_a_row = if status == Status::Converged {
-                    self.converged_in_a_row + 1
-                } else {
-                    0
-                };
-                Some(self.enter(Phase::Relaxing, Reason::LiftRead(m)))
-            }
-            Err(_) => Some(self.abort(AbortReason::EstimationFailed)),
-        }
+        self.request(JobRequest::Update { group, reading });
+        Some(self.enter(Phase::Relaxing, Reason::LiftRead(reading)))
     }
 
-    fn relaxing(&mut self) -> Option<Transition> {
-        if self.phase_time < self.config.relax_time {
-            return None;
+    fn relaxing(&mut self) -> Result<Option<Transition>, AbortReason> {
+        if let Some(result) = self.take_result()? {
+            let JobResult::Updated(estimate) = result else {
+                return Err(AbortReason::JobOverrun);
+            };
+            let estimate = estimate?;
+            if let Status::OutsideGrid(why) = estimate.status {
+                return Err(AbortReason::PayloadOutsideGrid(why));
+            }
+            self.converged_in_a_row = if estimate.status == Status::Converged {
+                self.converged_in_a_row + 1
+            } else {
+                0
+            };
+            self.latest = Some(estimate);
         }
-        Some(match self.last_status {
-            Status::Measuring => self.enter(Phase::SelectingPair, Reason::NeedMoreLifts),
-            Status::Converged if self.converged_in_a_row < self.config.confirmations => {
+        if self.phase_time < self.config.relax_time || self.pending.is_some() {
+            return Ok(None);
+        }
+        let Some(estimate) = self.latest else {
+            return Ok(None);
+        };
+        let confirmed = self.converged_in_a_row >= self.config.confirmations;
+        let transition = match estimate.status {
+            Status::NotConverged => return Err(AbortReason::EstimationNotConverged),
+            Status::OutsideGrid(why) => return Err(AbortReason::PayloadOutsideGrid(why)),
+            Status::Converged if confirmed => {
+                self.estimate = Some(estimate);
+                self.request(JobRequest::DecideFormation {
+                    robots: self.robots.clone(),
+                });
+                self.enter(Phase::DecidingFormation, Reason::Converged(estimate.theta))
+            }
+            Status::Converged | Status::Measuring => {
+                self.request(JobRequest::SelectPair {
+                    robots: self.robots.clone(),
+                });
                 self.enter(Phase::SelectingPair, Reason::NeedMoreLifts)
             }
-            Status::Converged => {
-                let e = self.estimator.estimate();
-                self.estimate = Some(e);
-                self.enter(Phase::DecidingFormation, Reason::Converged(e.theta))
-            }
-            Status::NotConverged => self.abort(AbortReason::EstimationNotConverged),
-        })
+        };
+        Ok(Some(transition))
     }
 
-    fn decide_formation(&mut self) -> Transition {
-        let Some(e) = self.estimate else {
-            return self.abort(AbortReason::EstimationFailed);
+    fn deciding_formation(&mut self) -> Result<Option<Transition>, AbortReason> {
+        let Some(result) = self.take_result()? else {
+            return Ok(None);
         };
-        let robots = &self.scenario.robots;
-        let n = robots.count() as f32;
-        // The heaviest payload the posterior allows (95 % upper bound of the mass).
-        let heaviest = e.mass_upper_95.max(e.theta[2]);
-        let needed = (heaviest + n * robots.mass) * GRAVITY;
-        let allowed = self.config.max_hover_fraction * n * robots.max_thrust;
-        if needed > allowed {
-            return self.abort(AbortReason::ThrustMarginTooSmall { needed, allowed });
-        }
-        let rail = &self.scenario.payload.rail;
-        let com = Vec2::new(e.theta[0], e.theta[1]);
-        let problem = FormationProblem::for_scenario(&self.scenario, com, Some(&self.robots));
-        let Ok(formation) = solve(&problem) else {
-            return self.abort(AbortReason::NoBalancedFormation);
+        let JobResult::Formation(plan) = result else {
+            return Err(AbortReason::JobOverrun);
         };
-        let Ok(mv) = RailMove::plan(
-            rail,
-            &self.robots,
-            &formation.positions,
-            robots.min_spacing,
-            self.config.rail_limits,
-        ) else {
-            return self.abort(AbortReason::NoBalancedFormation);
-        };
-        self.formation = Some(formation.positions.clone());
-        self.rail_move = Some((mv, formation.positions));
-        self.enter(
+        let plan = plan?;
+        self.formation = Some(plan.positions.clone());
+        self.rail_move = Some((plan.rail_move, plan.positions));
+        Ok(Some(self.enter(
             Phase::Rearranging,
-            Reason::FormationChosen(formation.figures.det),
-        )
+            Reason::FormationChosen(plan.det),
+        )))
     }
 
-    fn build_flight(&mut self) -> Transition {
-        let (Some(e), Some(flight)) = (self.estimate, self.scenario.flight) else {
-            return self.abort(AbortReason::EstimationFailed);
+    fn rearranging(&mut self, nav: &NavState) -> Result<Option<Transition>, AbortReason> {
+        if self.rail_move.is_some() {
+            if self.follow_rail_move() {
+                self.request(JobRequest::BuildFlight {
+                    robots: self.robots.clone(),
+                });
+            }
+            return Ok(None);
+        }
+        let Some(result) = self.take_result()? else {
+            return Ok(None);
         };
-        let robots = &self.scenario.robots;
-        let rail = &self.scenario.payload.rail;
-        let points: Vec<Vec2, MAX_ROBOTS> = self.robots.iter().map(|&s| rail.point_at(s)).collect();
-        let com = Vec2::new(e.theta[0], e.theta[1]);
-        let model = VehicleModel::from_payload(
-            &self.scenario.payload.footprint,
-            com,
-            e.theta[2],
-            &points,
-            robots.mass,
-            robots.max_thrust,
-        );
-        let layout = RotorLayout {
-            points: &points,
-            spin: &robots.spin,
-            com,
-            torque_per_thrust: robots.torque_per_thrust,
-            max_thrust: robots.max_thrust,
+        let JobResult::Flight(model) = result else {
+            return Err(AbortReason::JobOverrun);
         };
-        let Ok(mixer) = Mixer::build(self.config.mixer, &layout) else {
-            return self.abort(AbortReason::Uncontrollable);
+        let model = model?;
+        let Some(target) = self.scenario.flight.map(|f| f.target) else {
+            return Err(AbortReason::NoFlightTarget);
         };
-        let start = self.position.state().position;
-        self.flight = Some(Flight {
-            mixer,
-            controller: FlightController::new(self.config.control, model),
-            plan: FlightPlan::new(start, flight.target, 0.0, self.config.plan),
-            land: LandDetector::new(start.z),
-            saturation: Saturation::default(),
-            ground_z: start.z,
-            failsafe_until: None,
-        });
-        self.enter(Phase::Arming, Reason::RobotsInPlace)
+        let start = nav.position.position;
+        self.flight = Some(FlightStack::new(self.config.flight, model, start, target));
+        Ok(Some(self.enter(Phase::Arming, Reason::FlightReady)))
     }
 
     fn fly(
         &mut self,
-        attitude: crate::control::attitude_estimator::AttitudeState,
+        nav: &NavState,
         dt: f32,
+        command: Option<FlightCommand>,
         thrusts: &mut [f32; MAX_ROBOTS],
     ) -> Option<Transition> {
-        let Phase::Flying(current) = self.phase else {
-            return None;
-        };
-        let estimate = self.position.state();
-        self.flight_clock += dt;
-        let descent_speed = self.config.plan.descent_speed;
         let flight = self.flight.as_mut()?;
-        let (mut setpoint, plan_phase) = flight.plan.sample(self.flight_clock);
-        let descending = matches!(plan_phase, FlightPhase::Land | FlightPhase::Done);
-        let contact = flight
-            .land
-            .update(estimate.position, estimate.velocity, descending, dt);
-        if contact == Contact::Landed && flight.failsafe_until.is_none() {
-            return Some(self.enter(Phase::Disarmed, Reason::Landed));
-        }
-        if !estimate.valid && contact == Contact::Airborne && flight.failsafe_until.is_none() {
-            // Position lost in the air: never cut the rotors there. Descend on velocity alone
-            // (the IMU-propagated velocity drifts slowly) and stop the rotors once the descent
-            // from the last known height has reached the ground, before the IMU-only estimate
-            // has had time to wander.
-            let height = (flight.ground_z - estimate.position.z).max(0.0);
-            flight.failsafe_until =
-                Some(self.flight_clock + height / descent_speed.max(0.05) + FAILSAFE_MARGIN);
-            return Some(self.enter(
-                Phase::Flying(FlightPhase::Land),
-                Reason::Abort(AbortReason::PositionLost),
-            ));
-        }
-        if let Some(until) = flight.failsafe_until {
-            if self.flight_clock >= until {
-                return Some(self.enter(Phase::Disarmed, Reason::Landed));
-            }
-            setpoint = crate::control::trajectory::Setpoint {
-                position: estimate.position,
-                velocity: Vec3::new(0.0, 0.0, descent_speed),
-                acceleration: Vec3::ZERO,
-                yaw: setpoint.yaw,
-            };
-        }
-        let inputs = ControlInputs {
-            setpoint,
-            attitude,
-            position: estimate,
-            airborne: flight.land.airborne(),
-            saturation: flight.saturation,
-        };
-        let out = flight.controller.step(&inputs, dt);
-        let alloc = flight.mixer.allocate(&out.wrench);
-        flight.saturation = alloc.saturation;
+        let out = flight.step(nav, command, dt);
         let n = self.scenario.robots.count();
-        thrusts[..n].copy_from_slice(&alloc.thrusts[..n]);
-        if flight.failsafe_until.is_some() {
-            return None;
-        }
-        (plan_phase != current).then(|| self.enter(Phase::Flying(plan_phase), Reason::PlanAdvanced))
+        thrusts[..n].copy_from_slice(&out.thrusts[..n]);
+        let event = out.event?;
+        let (to, reason) = match event {
+            FlightEvent::Advanced(phase) => (Phase::Flying(phase), Reason::PlanAdvanced),
+            FlightEvent::Landing(cause) => {
+                let reason = match cause {
+                    LandingCause::PositionLost => Reason::Abort(AbortReason::PositionLost),
+                    LandingCause::TrackingLost => Reason::Abort(AbortReason::TrackingLost),
+                    LandingCause::Operator => match self.abort {
+                        Some(AbortReason::OperatorAbort) => {
+                            Reason::Abort(AbortReason::OperatorAbort)
+                        }
+                        _ => Reason::LandNow,
+                    },
+                };
+                (Phase::Flying(FlightPhase::Land), reason)
+            }
+            FlightEvent::Stopped(FlightStop::Landed) => (Phase::Disarmed, Reason::Landed),
+            FlightEvent::Stopped(FlightStop::TakeoffFailed { height }) => (
+                Phase::Aborted,
+                Reason::Abort(AbortReason::TakeoffFailed { height }),
+            ),
+            FlightEvent::Stopped(FlightStop::NoPosition) => {
+                (Phase::Aborted, Reason::Abort(AbortReason::PositionLost))
+            }
+            FlightEvent::Stopped(FlightStop::OperatorGrounded) => {
+                (Phase::Aborted, Reason::Abort(AbortReason::OperatorAbort))
+            }
+            FlightEvent::Stopped(FlightStop::Killed) => {
+                (Phase::Aborted, Reason::Abort(AbortReason::Killed))
+            }
+        };
+        Some(self.enter(to, reason))
     }
 }

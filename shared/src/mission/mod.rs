@@ -2,10 +2,19 @@
 //! checks through estimation, formation decision and rearrangement to the flight and disarm.
 //!
 //! - [`phases`]: the phases and the reasons of each transition.
-//! - [`machine`]: the mission itself, stepped at 400 Hz.
+//! - [`config`]: the mission's tuning.
+//! - [`machine`]: the tick side, stepped at 400 Hz.
+//! - [`jobs`]: the long computations the tick side hands off, and the planner that runs them.
 
+pub mod config;
+pub mod jobs;
 pub mod machine;
 pub mod phases;
 
-pub use machine::{ImuReading, Mission, MissionConfig, MissionOutputs};
+pub use config::{DETECTOR_SIGMA, MissionConfig};
+pub use jobs::{FormationPlan, JobRequest, JobResult, LiftPlan, MissionPlanner};
+pub use machine::{CommandRefusal, CommandReply, Mission, OperatorCommand, TickInput, TickOutput};
 pub use phases::{AbortReason, Phase, Reason, Transition};
+
+#[cfg(test)]
+mod tests;

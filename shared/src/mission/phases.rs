@@ -2,8 +2,12 @@
 //! pipeline; the paper built it as a Stateflow chart). Every transition carries its reason so
 //! the caller can log it.
 
+use crate::control::allocation::AllocationError;
 use crate::control::trajectory::FlightPhase;
-use crate::estimation::Measurement;
+use crate::estimation::estimator::OutsideGrid;
+use crate::estimation::{EstimationError, Measurement};
+use crate::formation::FormationError;
+use crate::rail::moves::MoveError;
 
 /// Where the mission is.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -30,8 +34,9 @@ pub enum Phase {
     Flying(FlightPhase),
     /// Landed and disarmed: the mission is over.
     Disarmed,
-    /// Stopped on the ground for a reason, rotors off. (In flight nothing stops the rotors: a
-    /// lost position switches the plan to a landing in place, recorded as an abort reason.)
+    /// Stopped for a reason, rotors off: on the ground, or by the operator's kill. (In flight
+    /// nothing else stops the rotors: a lost position or an operator's abort switches the plan
+    /// to a landing in place, recorded as an abort reason.)
     Aborted,
 }
 
@@ -59,15 +64,20 @@ impl Phase {
     }
 }
 
-/// Why the mission stopped.
+/// Why the mission stopped, or (in flight) why it lands where it is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AbortReason {
     /// No valid position or attitude in time, or the payload not resting level.
     SensorsNotReady,
     /// No lifting pair can be reached by the robots.
     NoReachablePair,
+    /// The robots cannot be moved to the positions a lift or the formation needs.
+    RailMove(MoveError),
     /// `max_measurements` lifts without converging.
     EstimationNotConverged,
+    /// The readings say the payload lies outside the estimation grid (heavier, or its COM
+    /// elsewhere, than the grid allows).
+    PayloadOutsideGrid(OutsideGrid),
     /// The heaviest payload the estimate allows needs more than the allowed share of thrust.
     ThrustMarginTooSmall {
         /// Hover thrust of the heaviest payload the posterior allows (95 % bound), N.
@@ -76,13 +86,66 @@ pub enum AbortReason {
         allowed: f32,
     },
     /// No balanced formation exists for the estimated COM.
-    NoBalancedFormation,
+    NoBalancedFormation(FormationError),
     /// The formation's rotors cannot control every axis.
-    Uncontrollable,
-    /// The position estimate was lost in flight (the mission lands in place, then disarms).
-    PositionLost,
+    Uncontrollable(AllocationError),
     /// The estimator rejected a reading or the set-up.
-    EstimationFailed,
+    EstimationFailed(EstimationError),
+    /// The payload did not leave the ground under take-off thrust: the rotors stopped.
+    TakeoffFailed {
+        /// Greatest height reached, m.
+        height: f32,
+    },
+    /// The position estimate was lost (in flight: the mission lands in place, then disarms).
+    PositionLost,
+    /// The vehicle did not reach its plan's next point in time: it lands where it is.
+    TrackingLost,
+    /// The operator aborted (on the ground: rotors off; in flight: landing where it is).
+    OperatorAbort,
+    /// The operator stopped the rotors.
+    Killed,
+    /// A computation handed off the control tick did not finish by its deadline.
+    JobOverrun,
+    /// The payload description has no flight target.
+    NoFlightTarget,
+}
+
+impl core::fmt::Display for AbortReason {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Self::SensorsNotReady => write!(
+                f,
+                "sensors not ready: no valid position, or the payload is not resting level"
+            ),
+            Self::NoReachablePair => write!(f, "no lifting pair can be reached by the robots"),
+            Self::RailMove(e) => write!(f, "the robots cannot move there: {e}"),
+            Self::EstimationNotConverged => {
+                write!(f, "the estimate did not converge within the allowed lifts")
+            }
+            Self::PayloadOutsideGrid(why) => {
+                write!(f, "payload outside the estimation grid: {why}")
+            }
+            Self::ThrustMarginTooSmall { needed, allowed } => write!(
+                f,
+                "not enough thrust margin: the heaviest payload the estimate allows needs {needed:.1} N to hover, {allowed:.1} N allowed"
+            ),
+            Self::NoBalancedFormation(e) => write!(f, "no balanced formation: {e}"),
+            Self::Uncontrollable(e) => write!(f, "the formation cannot be flown: {e}"),
+            Self::EstimationFailed(e) => write!(f, "estimation failed: {e}"),
+            Self::TakeoffFailed { height } => write!(
+                f,
+                "take-off failed: the payload did not leave the ground (greatest height {height:.3} m); rotors stopped"
+            ),
+            Self::PositionLost => write!(f, "position lost"),
+            Self::TrackingLost => {
+                write!(f, "the vehicle did not reach its plan's next point in time")
+            }
+            Self::OperatorAbort => write!(f, "aborted by the operator"),
+            Self::Killed => write!(f, "rotors stopped by the operator"),
+            Self::JobOverrun => write!(f, "a computation did not finish by its deadline"),
+            Self::NoFlightTarget => write!(f, "the payload description has no flight target"),
+        }
+    }
 }
 
 /// Why a transition happened.
@@ -109,14 +172,50 @@ pub enum Reason {
     Converged([f32; 3]),
     /// The flight formation was chosen; its `det(B B^T)`.
     FormationChosen(f32),
+    /// The flight's model and mixer are built.
+    FlightReady,
     /// The arming delay passed.
     Armed,
     /// The plan moved on.
     PlanAdvanced,
+    /// The operator asked to land where the vehicle is.
+    LandNow,
     /// Touchdown detected and rotors stopped.
     Landed,
-    /// Stopped.
+    /// Stopped, or landing in place.
     Abort(AbortReason),
+}
+
+impl core::fmt::Display for Reason {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Self::Started => write!(f, "started"),
+            Self::ChecksPassed => write!(f, "sensors valid, payload level"),
+            Self::PairChosen { group, information } => {
+                write!(f, "pair {group} (information {information:.2} nats)")
+            }
+            Self::RobotsInPlace => write!(f, "robots in place"),
+            Self::LiftRead(Measurement::Lifted { thrust }) => {
+                write!(f, "lifted at {thrust:.2} N per robot")
+            }
+            Self::LiftRead(Measurement::CouldNotLift) => {
+                write!(f, "could not lift at full thrust")
+            }
+            Self::NeedMoreLifts => write!(f, "more lifts needed"),
+            Self::Converged(t) => write!(
+                f,
+                "estimate COM ({:.3}, {:.3}) m, mass {:.2} kg",
+                t[0], t[1], t[2]
+            ),
+            Self::FormationChosen(det) => write!(f, "formation det(BB^T) {det:.3e}"),
+            Self::FlightReady => write!(f, "mixer built"),
+            Self::Armed => write!(f, "armed"),
+            Self::PlanAdvanced => write!(f, "plan advanced"),
+            Self::LandNow => write!(f, "landing now, as commanded"),
+            Self::Landed => write!(f, "landed, rotors stopped"),
+            Self::Abort(why) => write!(f, "ABORT: {why}"),
+        }
+    }
 }
 
 /// One change of phase.

@@ -1,0 +1,102 @@
+//! The vehicle's state estimate as every phase uses it (SPEC.md section 2: the lift-off
+//! detector reads the attitude on the ground, the cascade reads attitude, position and
+//! velocity in flight): the attitude filter and the position observer fed by the IMU every
+//! tick and by motion-capture fixes when they come.
+
+use crate::control::attitude_estimator::{
+    AttitudeEstimator, AttitudeEstimatorGains, AttitudeState,
+};
+use crate::control::position_estimator::{
+    PositionEstimator, PositionEstimatorGains, PositionState,
+};
+use crate::control::vector::{Quat, Vec3};
+use crate::scenario::GRAVITY;
+
+/// One IMU sample in the body frame (FRD).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuSample {
+    /// Body rate, rad/s.
+    pub gyro: Vec3,
+    /// Specific force, m/s^2 (`z = -9.81` at rest, level).
+    pub accel: Vec3,
+}
+
+/// One motion-capture fix of the payload frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MocapFix {
+    /// Position, world NED from the take-off point, m.
+    pub position: Vec3,
+    /// Attitude, body to world.
+    pub attitude: Quat,
+    /// When the fix was taken, on the flight controller's clock, us.
+    pub stamp_us: u64,
+}
+
+/// What the vehicle believes about itself.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NavState {
+    /// Attitude and body rate.
+    pub attitude: AttitudeState,
+    /// Position and velocity.
+    pub position: PositionState,
+}
+
+impl NavState {
+    /// Height above a ground at NED z `ground_z`, m.
+    pub fn height_above(&self, ground_z: f32) -> f32 {
+        ground_z - self.position.position.z
+    }
+
+    /// Cosine of the tilt from level (1 when level).
+    pub fn level_cosine(&self) -> f32 {
+        self.attitude.attitude.rotate(Vec3::DOWN).z
+    }
+}
+
+/// The attitude filter and the position observer together.
+#[derive(Clone, Debug)]
+pub struct Navigator {
+    attitude: AttitudeEstimator,
+    position: PositionEstimator,
+}
+
+impl Default for Navigator {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Navigator {
+    /// Both estimators with their default gains, before any sample.
+    pub fn new() -> Self {
+        Self {
+            attitude: AttitudeEstimator::new(AttitudeEstimatorGains::default()),
+            position: PositionEstimator::new(PositionEstimatorGains::default()),
+        }
+    }
+
+    /// Takes a motion-capture fix (it may arrive late: each estimator meets it at its stamp).
+    pub fn motion_capture(&mut self, fix: &MocapFix) {
+        self.attitude.set_reference(fix.attitude, fix.stamp_us);
+        self.position.correct(fix.position, fix.stamp_us);
+    }
+
+    /// One IMU sample at `now_us`, `dt` seconds after the previous one.
+    pub fn update(&mut self, imu: &ImuSample, dt: f32, now_us: u64) -> NavState {
+        let attitude = self.attitude.update(imu.gyro, imu.accel, dt, now_us);
+        let world = attitude.attitude.rotate(imu.accel) + Vec3::DOWN * GRAVITY;
+        self.position.predict(world, dt, now_us);
+        NavState {
+            attitude,
+            position: self.position.state(),
+        }
+    }
+
+    /// The estimate after the last update.
+    pub fn state(&self) -> NavState {
+        NavState {
+            attitude: self.attitude.state(),
+            position: self.position.state(),
+        }
+    }
+}

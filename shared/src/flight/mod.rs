@@ -1,0 +1,16 @@
+//! The flight stack (SPEC.md section 2, step 4): everything between a chosen formation and
+//! the rotors, as one component that the mission, the simulator's `fly`, the benchmarks and
+//! the firmware all step the same way.
+//!
+//! - [`model`]: the vehicle model and the mixer built from a formation and an estimate (a
+//!   matrix inverse: built once, off the control tick).
+//! - [`stack`]: the 400 Hz flight: cascade, mixer, plan walked on the vehicle's state,
+//!   take-off check, land detector, failsafes and the operator's land and kill commands.
+
+pub mod model;
+pub mod stack;
+
+pub use model::FlightModel;
+pub use stack::{
+    FlightCommand, FlightConfig, FlightEvent, FlightOutput, FlightStack, FlightStop, LandingCause,
+};

@@ -1,0 +1,55 @@
+//! The flight's model of the vehicle and its mixer, built from the robots' positions and the
+//! estimate (SPEC.md section 3, "Controllability and the mixer": the mixing matrix is rebuilt
+//! from the new positions; section 2, step 4: gravity compensation from the estimated mass).
+
+use heapless::Vec;
+
+use crate::control::allocation::{AllocationError, Mixer, MixerKind, RotorLayout};
+use crate::control::vehicle::VehicleModel;
+use crate::geometry::Vec2;
+use crate::scenario::{MAX_ROBOTS, Scenario};
+
+/// What the flight stack flies with.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlightModel {
+    /// The mixer of the formation about the estimated COM.
+    pub mixer: Mixer,
+    /// Mass, inertia and thrust as the controller believes them.
+    pub vehicle: VehicleModel,
+}
+
+impl FlightModel {
+    /// The model of `scenario`'s payload with the robots at arc lengths `positions`, the
+    /// payload believed to have its COM at `com` and mass `mass`; the mixer of `kind`.
+    pub fn build(
+        scenario: &Scenario,
+        positions: &[f32],
+        com: Vec2,
+        mass: f32,
+        kind: MixerKind,
+    ) -> Result<Self, AllocationError> {
+        let robots = &scenario.robots;
+        let rail = &scenario.payload.rail;
+        if positions.len() != robots.count() {
+            return Err(AllocationError::BadLayout);
+        }
+        let points: Vec<Vec2, MAX_ROBOTS> = positions.iter().map(|&s| rail.point_at(s)).collect();
+        let layout = RotorLayout {
+            points: &points,
+            spin: &robots.spin,
+            com,
+            torque_per_thrust: robots.torque_per_thrust,
+            max_thrust: robots.max_thrust,
+        };
+        let mixer = Mixer::build(kind, &layout)?;
+        let vehicle = VehicleModel::from_payload(
+            &scenario.payload.footprint,
+            com,
+            mass,
+            &points,
+            robots.mass,
+            robots.max_thrust,
+        );
+        Ok(Self { mixer, vehicle })
+    }
+}

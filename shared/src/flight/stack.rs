@@ -1,0 +1,406 @@
+//! One flight at 400 Hz (SPEC.md section 2, step 4): take-off, transit, hover and landing
+//! with the cascade and the formation's mixer, from the moment the rotors may spin until they
+//! stop again.
+//!
+//! The plan's segments advance on the vehicle's state, not on the clock alone: a segment ends
+//! when its time is up *and* the vehicle is within [`FlightConfig::arrival_tolerance`] of its
+//! end point (a landing segment ends on time; the land detector then decides). Nets, each an
+//! event with its reason:
+//! - take-off: if the payload has not left the ground after
+//!   [`FlightConfig::takeoff_timeout`] seconds of a collective at or above the believed
+//!   weight, the rotors stop ([`FlightStop::TakeoffFailed`]): a payload heavier than believed,
+//!   or a formation that pivots it on an edge, never flies on the clock alone;
+//! - a segment not reached [`FlightConfig::arrival_timeout`] seconds after its end: land where
+//!   the vehicle is ([`LandingCause::TrackingLost`]);
+//! - position lost in the air: never cut the rotors there; descend on velocity alone and stop
+//!   the rotors once the descent from the last known height has reached the ground
+//!   ([`LandingCause::PositionLost`]); lost on the ground: the rotors stop;
+//! - touchdown: the land detector stops the rotors ([`FlightStop::Landed`]); a plan over for
+//!   [`FlightConfig::touchdown_timeout`] near the ground stops them too.
+//!
+//! Operator commands: [`FlightCommand::LandNow`] lands where the vehicle is (or stops the
+//! rotors if it never left the ground); [`FlightCommand::Kill`] stops the rotors at once.
+
+use crate::control::allocation::{Mixer, Saturation};
+use crate::control::controller::{ControlInputs, FlightController};
+use crate::control::land_detector::{Contact, LandDetector};
+use crate::control::navigator::NavState;
+use crate::control::params::ControlParams;
+use crate::control::trajectory::{FlightPhase, FlightPlan, PlanLimits, Setpoint};
+use crate::control::vector::Vec3;
+use crate::flight::model::FlightModel;
+use crate::math;
+use crate::scenario::MAX_ROBOTS;
+
+/// Tuning of a flight beyond the cascade's gains.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlightConfig {
+    /// The cascade's gains and limits.
+    pub control: ControlParams,
+    /// Speeds and hover time of the plan.
+    pub plan: PlanLimits,
+    /// Time on the ground with the collective at or above the believed weight after which the
+    /// take-off counts as failed and the rotors stop, s.
+    pub takeoff_timeout: f32,
+    /// Distance from a segment's end point within which the vehicle has arrived, m.
+    pub arrival_tolerance: f32,
+    /// Time past a segment's planned end without arriving before the vehicle lands where it
+    /// is, s.
+    pub arrival_timeout: f32,
+    /// Time after the plan's end, near the ground, after which the rotors stop even if the
+    /// land detector has not seen the touchdown, s.
+    pub touchdown_timeout: f32,
+    /// Time past the expected touchdown of a descent without position before the rotors stop,
+    /// s.
+    pub failsafe_margin: f32,
+}
+
+impl Default for FlightConfig {
+    fn default() -> Self {
+        Self {
+            control: ControlParams::default(),
+            plan: PlanLimits::default(),
+            takeoff_timeout: 3.0,
+            arrival_tolerance: 0.15,
+            arrival_timeout: 10.0,
+            touchdown_timeout: 5.0,
+            failsafe_margin: 1.0,
+        }
+    }
+}
+
+/// An operator's command to a flight.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FlightCommand {
+    /// Land where the vehicle is now.
+    LandNow,
+    /// Stop the rotors now, wherever the vehicle is (flight termination).
+    Kill,
+}
+
+/// Why the flight switched to a landing where the vehicle is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LandingCause {
+    /// The position estimate was lost in the air: descending on velocity alone.
+    PositionLost,
+    /// A segment's end was not reached in time.
+    TrackingLost,
+    /// The operator asked for it.
+    Operator,
+}
+
+/// Why the rotors stopped: the flight is over.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FlightStop {
+    /// Touchdown detected (or, descending without position, the descent's time is up).
+    Landed,
+    /// The payload did not leave the ground under take-off thrust.
+    TakeoffFailed {
+        /// Greatest height above the take-off point seen, m.
+        height: f32,
+    },
+    /// No position estimate before the payload left the ground.
+    NoPosition,
+    /// The operator asked to land before the payload left the ground.
+    OperatorGrounded,
+    /// The operator stopped the rotors.
+    Killed,
+}
+
+/// Something the flight did this tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FlightEvent {
+    /// The plan moved on to this phase.
+    Advanced(FlightPhase),
+    /// The flight now lands where the vehicle is.
+    Landing(LandingCause),
+    /// The rotors stopped.
+    Stopped(FlightStop),
+}
+
+/// What one tick of the flight commands.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlightOutput {
+    /// Thrust of each rotor, N (zero once stopped).
+    pub thrusts: [f32; MAX_ROBOTS],
+    /// Collective thrust commanded, N.
+    pub collective: f32,
+    /// What the allocation cut.
+    pub saturation: Saturation,
+    /// The setpoint followed.
+    pub setpoint: Setpoint,
+    /// The plan's phase after this tick.
+    pub phase: FlightPhase,
+    /// What happened this tick, if anything.
+    pub event: Option<FlightEvent>,
+}
+
+/// The flight.
+#[derive(Clone, Debug)]
+pub struct FlightStack {
+    config: FlightConfig,
+    mixer: Mixer,
+    controller: FlightController,
+    /// Collective that holds the believed weight, N.
+    weight: f32,
+    plan: FlightPlan,
+    segment: usize,
+    segment_time: f32,
+    phase: FlightPhase,
+    land: LandDetector,
+    saturation: Saturation,
+    collective: f32,
+    ground_z: f32,
+    max_height: f32,
+    clock: f32,
+    thrust_on_ground: f32,
+    after_plan: f32,
+    failsafe_until: Option<f32>,
+    landing: Option<LandingCause>,
+    stopped: Option<FlightStop>,
+}
+
+impl FlightStack {
+    /// A flight of `model` from `start` (on the ground, NED) to `target` = [x, y, height
+    /// above ground].
+    pub fn new(config: FlightConfig, model: FlightModel, start: Vec3, target: [f32; 3]) -> Self {
+        Self {
+            config,
+            weight: model.vehicle.hover_thrust(),
+            controller: FlightController::new(config.control, model.vehicle),
+            mixer: model.mixer,
+            plan: FlightPlan::new(start, target, 0.0, config.plan),
+            segment: 0,
+            segment_time: 0.0,
+            phase: FlightPhase::Takeoff,
+            land: LandDetector::new(start.z),
+            saturation: Saturation::default(),
+            collective: 0.0,
+            ground_z: start.z,
+            max_height: 0.0,
+            clock: 0.0,
+            thrust_on_ground: 0.0,
+            after_plan: 0.0,
+            failsafe_until: None,
+            landing: None,
+            stopped: None,
+        }
+    }
+
+    /// The plan's phase.
+    pub fn phase(&self) -> FlightPhase {
+        self.phase
+    }
+
+    /// Why the rotors stopped, once they have.
+    pub fn stopped(&self) -> Option<FlightStop> {
+        self.stopped
+    }
+
+    /// Why the flight lands where it is, if it does.
+    pub fn landing_cause(&self) -> Option<LandingCause> {
+        self.landing
+    }
+
+    /// Whether the payload is flying (left the ground, not landed).
+    pub fn airborne(&self) -> bool {
+        self.land.airborne()
+    }
+
+    /// Greatest height above the take-off point so far, m.
+    pub fn max_height(&self) -> f32 {
+        self.max_height
+    }
+
+    /// Time since the flight began, s.
+    pub fn clock(&self) -> f32 {
+        self.clock
+    }
+
+    /// The plan being followed.
+    pub fn plan(&self) -> &FlightPlan {
+        &self.plan
+    }
+
+    fn stop(&mut self, why: FlightStop) -> Option<FlightEvent> {
+        self.stopped = Some(why);
+        Some(FlightEvent::Stopped(why))
+    }
+
+    fn begin_landing(&mut self, cause: LandingCause, nav: &NavState) -> Option<FlightEvent> {
+        if self.landing.is_some() {
+            return None;
+        }
+        self.landing = Some(cause);
+        self.plan = FlightPlan::landing(
+            nav.position.position,
+            self.ground_z,
+            self.plan.settled().yaw,
+            self.config.plan,
+        );
+        self.segment = 0;
+        self.segment_time = 0.0;
+        self.phase = FlightPhase::Land;
+        Some(FlightEvent::Landing(cause))
+    }
+
+    /// One tick with the state estimate `nav`, an operator command if one came, `dt` seconds
+    /// after the previous tick.
+    pub fn step(
+        &mut self,
+        nav: &NavState,
+        command: Option<FlightCommand>,
+        dt: f32,
+    ) -> FlightOutput {
+        let event = if self.stopped.is_some() {
+            None
+        } else {
+            self.clock += dt;
+            self.advance(nav, command, dt)
+        };
+        let setpoint = self.setpoint(nav);
+        let mut out = FlightOutput {
+            thrusts: [0.0; MAX_ROBOTS],
+            collective: 0.0,
+            saturation: Saturation::default(),
+            setpoint,
+            phase: self.phase,
+            event,
+        };
+        if self.stopped.is_some() {
+            self.collective = 0.0;
+            return out;
+        }
+        let inputs = ControlInputs {
+            setpoint,
+            attitude: nav.attitude,
+            position: nav.position,
+            airborne: self.land.airborne(),
+            saturation: self.saturation,
+        };
+        let command = self.controller.step(&inputs, dt);
+        let allocation = self.mixer.allocate(&command.wrench);
+        self.saturation = allocation.saturation;
+        self.collective = command.wrench.thrust;
+        let n = self.mixer.count();
+        out.thrusts[..n].copy_from_slice(&allocation.thrusts[..n]);
+        out.collective = self.collective;
+        out.saturation = allocation.saturation;
+        out
+    }
+
+    /// The nets, the plan's progress and the commands; the event of this tick.
+    fn advance(
+        &mut self,
+        nav: &NavState,
+        command: Option<FlightCommand>,
+        dt: f32,
+    ) -> Option<FlightEvent> {
+        let height = nav.height_above(self.ground_z);
+        self.max_height = math::max(self.max_height, height);
+        match command {
+            Some(FlightCommand::Kill) => return self.stop(FlightStop::Killed),
+            Some(FlightCommand::LandNow) if !self.land.airborne() => {
+                return self.stop(FlightStop::OperatorGrounded);
+            }
+            Some(FlightCommand::LandNow) => {
+                if let Some(event) = self.begin_landing(LandingCause::Operator, nav) {
+                    return Some(event);
+                }
+            }
+            None => {}
+        }
+        let position = nav.position;
+        let descending =
+            matches!(self.phase, FlightPhase::Land | FlightPhase::Done) || self.landing.is_some();
+        let contact = self
+            .land
+            .update(position.position, position.velocity, descending, dt);
+        if let Some(until) = self.failsafe_until {
+            if self.clock >= until {
+                return self.stop(FlightStop::Landed);
+            }
+            return None;
+        }
+        if contact == Contact::Landed {
+            return self.stop(FlightStop::Landed);
+        }
+        if !position.valid {
+            if contact == Contact::OnGround {
+                return self.stop(FlightStop::NoPosition);
+            }
+            let descent = math::max(self.config.plan.descent_speed, 0.05);
+            self.failsafe_until =
+                Some(self.clock + math::max(height, 0.0) / descent + self.config.failsafe_margin);
+            self.landing = None;
+            return self.begin_landing(LandingCause::PositionLost, nav);
+        }
+        if contact == Contact::OnGround && self.phase == FlightPhase::Takeoff {
+            if self.collective >= 0.95 * self.weight {
+                self.thrust_on_ground += dt;
+            }
+            if self.thrust_on_ground >= self.config.takeoff_timeout {
+                return self.stop(FlightStop::TakeoffFailed {
+                    height: self.max_height,
+                });
+            }
+        }
+        self.walk_plan(nav, dt)
+    }
+
+    /// Moves along the plan: a segment ends when its time is up and the vehicle is there.
+    fn walk_plan(&mut self, nav: &NavState, dt: f32) -> Option<FlightEvent> {
+        let Some(segment) = self.plan.segment(self.segment).copied() else {
+            self.after_plan += dt;
+            if self.after_plan < self.config.touchdown_timeout {
+                return None;
+            }
+            let near_ground = nav.height_above(self.ground_z) < 3.0 * LandDetector::LAND_HEIGHT;
+            return if near_ground {
+                self.stop(FlightStop::Landed)
+            } else {
+                self.after_plan = 0.0;
+                self.landing = None;
+                self.begin_landing(LandingCause::TrackingLost, nav)
+            };
+        };
+        self.segment_time += dt;
+        if self.segment_time < segment.duration {
+            return None;
+        }
+        let arrived = segment.phase == FlightPhase::Land
+            || (nav.position.position - segment.to).norm() <= self.config.arrival_tolerance;
+        if arrived {
+            self.segment += 1;
+            self.segment_time = 0.0;
+            self.phase = self
+                .plan
+                .segment(self.segment)
+                .map_or(FlightPhase::Done, |s| s.phase);
+            return Some(FlightEvent::Advanced(self.phase));
+        }
+        let late = self.segment_time > segment.duration + self.config.arrival_timeout;
+        if late && self.land.airborne() {
+            return self.begin_landing(LandingCause::TrackingLost, nav);
+        }
+        None
+    }
+
+    /// What the cascade follows now.
+    fn setpoint(&self, nav: &NavState) -> Setpoint {
+        let planned = match self.plan.segment(self.segment) {
+            Some(segment) => segment.sample(self.segment_time),
+            None => self.plan.settled(),
+        };
+        if self.failsafe_until.is_some() {
+            // Without position, hold a descent rate; the position loop's error stays zero.
+            return Setpoint {
+                position: nav.position.position,
+                velocity: Vec3::new(0.0, 0.0, self.config.plan.descent_speed),
+                acceleration: Vec3::ZERO,
+                yaw: planned.yaw,
+            };
+        }
+        planned
+    }
+}

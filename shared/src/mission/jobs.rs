@@ -1,0 +1,244 @@
+//! The mission's long computations, handed off the 400 Hz tick (SPEC.md section 2: pair
+//! selection by mutual information, the Bayes update, the formation decision, the mixer).
+//!
+//! The tick side ([`crate::mission::Mission`]) issues a [`JobRequest`]; the job side
+//! ([`MissionPlanner`], which owns the estimator and its buffers) runs it and returns a
+//! [`JobResult`]. On the flight controller the job side runs in thread mode while the control
+//! loop keeps its period; the simulator runs the same jobs in line. Either way the tick side
+//! takes the result at a fixed tick after the request, [`JobRequest::deadline_ticks`] later,
+//! so a run does not depend on how fast the jobs happened to finish. Each deadline is the
+//! job's worst case on the Cortex-M7 at 480 MHz (`.ci/target-bench`) with room for the
+//! control loop's share of the processor.
+
+use heapless::Vec;
+
+use crate::estimation::groups::lift_group;
+use crate::estimation::{Estimate, Estimator, Measurement};
+use crate::flight::FlightModel;
+use crate::formation::{FormationProblem, solve};
+use crate::geometry::Vec2;
+use crate::math;
+use crate::mission::config::MissionConfig;
+use crate::mission::phases::AbortReason;
+use crate::rail::moves::{Positions, RailMove, lift_targets};
+use crate::scenario::{GRAVITY, MAX_ROBOTS, Scenario};
+
+/// A computation the tick side wants.
+#[derive(Clone, Debug, PartialEq)]
+pub enum JobRequest {
+    /// Choose the next lift by mutual information and plan the robots' move to it.
+    SelectPair {
+        /// Where the robots are.
+        robots: Positions,
+    },
+    /// Bayes update with a lift's reading.
+    Update {
+        /// The lifting group.
+        group: usize,
+        /// Its reading.
+        reading: Measurement,
+    },
+    /// Check the thrust margin, solve the formation for the estimate, plan the move there.
+    DecideFormation {
+        /// Where the robots are.
+        robots: Positions,
+    },
+    /// Build the flight's vehicle model and mixer for the robots where they are.
+    BuildFlight {
+        /// Where the robots are.
+        robots: Positions,
+    },
+}
+
+/// Ticks at 400 Hz.
+const fn ticks_of_ms(ms: u32) -> u32 {
+    (ms * crate::timing::CONTROL_RATE_HZ).div_ceil(1000)
+}
+
+impl JobRequest {
+    /// Ticks after the request at which the tick side takes the result. Worst cases on the
+    /// Cortex-M7 (`.ci/target-bench`, instructions at 480 MHz): pair selection 1.5 M (~3 ms),
+    /// update 1.1 M (~2 ms, plus the grid-edge check), formation 53 M (~110 ms), mixer a few
+    /// thousand; each deadline leaves at least twice that.
+    pub fn deadline_ticks(&self) -> u32 {
+        match self {
+            Self::SelectPair { .. } | Self::Update { .. } => ticks_of_ms(20),
+            Self::DecideFormation { .. } => ticks_of_ms(300),
+            Self::BuildFlight { .. } => ticks_of_ms(5),
+        }
+    }
+
+    /// A short name for logs.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::SelectPair { .. } => "select-pair",
+            Self::Update { .. } => "update",
+            Self::DecideFormation { .. } => "decide-formation",
+            Self::BuildFlight { .. } => "build-flight",
+        }
+    }
+}
+
+/// The next lift: the group, its robots and the move that brings them there.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LiftPlan {
+    /// Group index.
+    pub group: usize,
+    /// Its mutual information, nats.
+    pub information: f32,
+    /// Robots (indices in rail order) that lift.
+    pub lifting: Vec<usize, MAX_ROBOTS>,
+    /// Where every robot goes.
+    pub targets: Positions,
+    /// How they get there.
+    pub rail_move: RailMove,
+}
+
+/// The flight formation and the move that brings the robots there.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FormationPlan {
+    /// Arc length of each robot.
+    pub positions: Positions,
+    /// Its `det(B B^T)`.
+    pub det: f32,
+    /// How the robots get there.
+    pub rail_move: RailMove,
+}
+
+/// What a job produced.
+#[derive(Clone, Debug, PartialEq)]
+pub enum JobResult {
+    /// Answer to [`JobRequest::SelectPair`].
+    Pair(Result<LiftPlan, AbortReason>),
+    /// Answer to [`JobRequest::Update`]: the estimate after it (with its status).
+    Updated(Result<Estimate, AbortReason>),
+    /// Answer to [`JobRequest::DecideFormation`].
+    Formation(Result<FormationPlan, AbortReason>),
+    /// Answer to [`JobRequest::BuildFlight`].
+    Flight(Result<FlightModel, AbortReason>),
+}
+
+/// The job side: the estimator (with its grid-sized buffers) and the decisions made on it.
+#[derive(Clone, Debug)]
+pub struct MissionPlanner {
+    scenario: Scenario,
+    config: MissionConfig,
+    estimator: Estimator,
+}
+
+impl MissionPlanner {
+    /// A planner for `scenario`, the estimator on a uniform prior.
+    pub fn new(scenario: &Scenario, config: MissionConfig) -> Result<Self, AbortReason> {
+        let measured = measured_scenario(scenario, &config)?;
+        let estimator =
+            Estimator::new(&measured, config.estimator).map_err(AbortReason::EstimationFailed)?;
+        Ok(Self {
+            scenario: scenario.clone(),
+            config,
+            estimator,
+        })
+    }
+
+    /// The estimator (its posterior, for reports).
+    pub fn estimator(&self) -> &Estimator {
+        &self.estimator
+    }
+
+    /// Runs one job.
+    pub fn run(&mut self, request: &JobRequest) -> JobResult {
+        match request {
+            JobRequest::SelectPair { robots } => JobResult::Pair(self.select_pair(robots)),
+            JobRequest::Update { group, reading } => JobResult::Updated(
+                self.estimator
+                    .update(*group, *reading)
+                    .map(|_| self.estimator.estimate())
+                    .map_err(AbortReason::EstimationFailed),
+            ),
+            JobRequest::DecideFormation { robots } => {
+                JobResult::Formation(self.decide_formation(robots))
+            }
+            JobRequest::BuildFlight { robots } => JobResult::Flight(self.build_flight(robots)),
+        }
+    }
+
+    fn select_pair(&mut self, robots: &[f32]) -> Result<LiftPlan, AbortReason> {
+        let choice = self
+            .estimator
+            .select_group()
+            .map_err(|_| AbortReason::NoReachablePair)?;
+        let group = lift_group(&self.scenario, choice.group).ok_or(AbortReason::NoReachablePair)?;
+        let candidates: Vec<f32, MAX_ROBOTS> = group
+            .candidates
+            .iter()
+            .map(|&c| self.scenario.payload.candidates[c])
+            .collect();
+        let rail = &self.scenario.payload.rail;
+        let spacing = self.scenario.robots.min_spacing;
+        let targets =
+            lift_targets(rail, robots, &candidates, spacing).ok_or(AbortReason::NoReachablePair)?;
+        let rail_move = RailMove::plan(rail, robots, &targets, spacing, self.config.rail_limits)
+            .map_err(AbortReason::RailMove)?;
+        let lifting = candidates
+            .iter()
+            .filter_map(|c| targets.iter().position(|t| math::abs(t - c) < 1e-5))
+            .collect();
+        Ok(LiftPlan {
+            group: choice.group,
+            information: choice.information,
+            lifting,
+            targets,
+            rail_move,
+        })
+    }
+
+    fn decide_formation(&mut self, robots: &[f32]) -> Result<FormationPlan, AbortReason> {
+        let e = self.estimator.estimate();
+        let r = &self.scenario.robots;
+        let n = r.count() as f32;
+        // The heaviest payload the posterior allows (95 % upper bound of the mass).
+        let heaviest = math::max(e.mass_upper_95, e.theta[2]);
+        let needed = (heaviest + n * r.mass) * GRAVITY;
+        let allowed = self.config.max_hover_fraction * n * r.max_thrust;
+        if needed > allowed {
+            return Err(AbortReason::ThrustMarginTooSmall { needed, allowed });
+        }
+        let com = Vec2::new(e.theta[0], e.theta[1]);
+        let problem = FormationProblem::for_scenario(&self.scenario, com, Some(robots));
+        let formation = solve(&problem).map_err(AbortReason::NoBalancedFormation)?;
+        let rail_move = RailMove::plan(
+            &self.scenario.payload.rail,
+            robots,
+            &formation.positions,
+            r.min_spacing,
+            self.config.rail_limits,
+        )
+        .map_err(AbortReason::RailMove)?;
+        Ok(FormationPlan {
+            positions: formation.positions.iter().copied().collect(),
+            det: formation.figures.det,
+            rail_move,
+        })
+    }
+
+    fn build_flight(&self, robots: &[f32]) -> Result<FlightModel, AbortReason> {
+        let e = self.estimator.estimate();
+        let com = Vec2::new(e.theta[0], e.theta[1]);
+        FlightModel::build(&self.scenario, robots, com, e.theta[2], self.config.mixer)
+            .map_err(AbortReason::Uncontrollable)
+    }
+}
+
+/// The scenario with the estimator's noise model for the lifts (see
+/// [`MissionConfig::lift_noise_sigma`]).
+fn measured_scenario(scenario: &Scenario, config: &MissionConfig) -> Result<Scenario, AbortReason> {
+    let mut measured = scenario.clone();
+    if let Some(sigma) = config.lift_noise_sigma {
+        if !(sigma.is_finite() && sigma > 0.0) {
+            return Err(AbortReason::EstimationFailed(
+                crate::estimation::EstimationError::BadNoiseModel,
+            ));
+        }
+        measured.estimation.noise_sigma = sigma;
+    }
+    Ok(measured)
+}

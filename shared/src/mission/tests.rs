@@ -1,0 +1,636 @@
+//! Sans-IO tests of the mission machine: a scripted miniature world (a payload that tilts
+//! when a lift passes its true lift-off thrust and rises when the rotors carry its weight)
+//! feeds IMU samples and motion-capture fixes; the jobs run on the planner at their deadline,
+//! late, or never; the operator's commands come at chosen instants.
+
+use std::vec::Vec;
+
+use crate::control::navigator::{ImuSample, MocapFix};
+use crate::control::trajectory::FlightPhase;
+use crate::control::vector::{Quat, Vec3};
+use crate::estimation::Measurement;
+use crate::geometry::Vec2;
+use crate::mission::{
+    AbortReason, CommandRefusal, JobRequest, Mission, MissionConfig, MissionPlanner,
+    OperatorCommand, Phase, Reason, TickInput, TickOutput,
+};
+use crate::paper::{checked, rect_sim1};
+use crate::scenario::{FlightSetup, GRAVITY, Scenario, Truth};
+use crate::statics::lift_off_thrust;
+
+const DT_US: u64 = 2500;
+
+/// rect-sim1 with a flight straight up to 0.5 m and back (the world has no horizontal motion).
+fn scenario(mass: f32) -> Scenario {
+    let mut s = checked(rect_sim1());
+    s.truth = Some(Truth {
+        com: Vec2::new(0.33, 0.01),
+        mass,
+    });
+    s.flight = Some(FlightSetup {
+        target: [0.0, 0.0, 0.5],
+        disturbance_torque: 0.0,
+    });
+    s
+}
+
+/// The miniature world: height, vertical speed, and a roll tilt for the lifts.
+struct World {
+    scenario: Scenario,
+    height: f32,
+    speed: f32,
+    /// Upward acceleration of the last tick, m/s^2 (the accelerometer reads it).
+    climb: f32,
+    tilt: f32,
+    tilt_rate: f32,
+    /// The rotors make `1 / map_error` of what is commanded.
+    map_error: f32,
+    mocap: bool,
+    /// Highest the payload can get (an obstacle above), m.
+    ceiling: f32,
+}
+
+impl World {
+    fn new(scenario: &Scenario) -> Self {
+        Self {
+            scenario: scenario.clone(),
+            height: 0.0,
+            speed: 0.0,
+            climb: 0.0,
+            tilt: 0.0,
+            tilt_rate: 0.0,
+            map_error: 1.0,
+            mocap: true,
+            ceiling: f32::INFINITY,
+        }
+    }
+
+    fn input(&self, tick: u64, command: Option<OperatorCommand>) -> TickInput {
+        let time_us = tick * DT_US;
+        let attitude = Quat::from_euler(self.tilt, 0.0, 0.0);
+        let accel = attitude.inverse_rotate(Vec3::new(0.0, 0.0, -GRAVITY - self.climb));
+        TickInput {
+            time_us,
+            imu: ImuSample {
+                gyro: Vec3::new(self.tilt_rate, 0.0, 0.0),
+                accel,
+            },
+            mocap: (self.mocap && tick % 4 == 0).then_some(MocapFix {
+                position: Vec3::new(0.0, 0.0, -self.height),
+                attitude,
+                stamp_us: time_us,
+            }),
+            command,
+        }
+    }
+
+    /// Advances the world by one tick under the mission's outputs.
+    fn advance(&mut self, out: &TickOutput) {
+        let dt = DT_US as f32 * 1e-6;
+        let s = &self.scenario;
+        let truth = s.truth.unwrap_or(Truth {
+            com: Vec2::default(),
+            mass: 1.0,
+        });
+        let own = s.robots.mass * GRAVITY;
+        let n = s.robots.count();
+        let made: Vec<f32> = out.thrusts[..n]
+            .iter()
+            .map(|t| t / self.map_error)
+            .collect();
+        // A lift: the robots above their own weight tip the payload past their lift-off.
+        let lifting: Vec<usize> = (0..n).filter(|&i| made[i] > own + 0.05).collect();
+        let total: f32 = made.iter().sum();
+        let weight = (truth.mass + n as f32 * s.robots.mass) * GRAVITY;
+        if self.height <= 0.0 && !lifting.is_empty() && total < 0.9 * weight {
+            let points: Vec<Vec2> = lifting
+                .iter()
+                .map(|&i| s.payload.rail.point_at(out.robots[i]))
+                .collect();
+            let lambda = lift_off_thrust(&s.payload.hull, truth.com, truth.mass, &points, 0.1)
+                .unwrap_or(f32::INFINITY);
+            let excess = made[lifting[0]] - lambda;
+            self.tilt_rate = if excess > 0.0 { 0.02 * excess } else { 0.0 };
+        } else {
+            self.tilt_rate = -self.tilt / 0.2;
+        }
+        self.tilt += self.tilt_rate * dt;
+        // Vertical flight: a point mass on the ground.
+        let before = self.speed;
+        let acceleration = (total - weight) / (weight / GRAVITY);
+        self.speed += acceleration * dt;
+        self.height += self.speed * dt;
+        if self.height <= 0.0 {
+            self.height = 0.0;
+            self.speed = self.speed.max(0.0);
+        }
+        if self.height >= self.ceiling {
+            self.height = self.ceiling;
+            self.speed = self.speed.min(0.0);
+        }
+        self.climb = (self.speed - before) / dt;
+    }
+}
+
+/// How the jobs come back.
+#[derive(Clone, Copy, PartialEq)]
+enum Jobs {
+    /// Run at once, taken at the deadline.
+    OnTime,
+    /// Never delivered.
+    Never,
+}
+
+/// A run: the transitions with their tick, the outputs of the last tick.
+struct Run {
+    transitions: Vec<(u64, Reason, Phase)>,
+    last: TickOutput,
+    mission: Mission,
+    job_ticks: Vec<(u64, u64, &'static str)>,
+    replies: Vec<(u64, crate::mission::CommandReply)>,
+}
+
+fn run_with(
+    scenario: &Scenario,
+    config: MissionConfig,
+    world: &mut World,
+    jobs: Jobs,
+    commands: &[(u64, OperatorCommand)],
+    mut each: impl FnMut(u64, &TickOutput, &mut World),
+    max_ticks: u64,
+) -> Run {
+    let mut mission = Mission::new(scenario, config);
+    let mut planner = MissionPlanner::new(scenario, config).expect("planner");
+    let mut transitions = Vec::new();
+    let mut job_ticks = Vec::new();
+    let mut replies = Vec::new();
+    let mut asked: Option<(u64, &'static str)> = None;
+    let mut last = None;
+    for tick in 1..=max_ticks {
+        let command = commands.iter().find(|(t, _)| *t == tick).map(|(_, c)| *c);
+        let out = mission.step(&world.input(tick, command));
+        if let Some(t) = out.transition {
+            transitions.push((tick, t.reason, t.to));
+            if let Some((at, name)) = asked.take() {
+                job_ticks.push((at, tick, name));
+            }
+        }
+        if let Some(job) = &out.job {
+            asked = Some((tick, job.name()));
+            if jobs == Jobs::OnTime {
+                assert!(mission.deliver(planner.run(job)));
+            }
+        }
+        if let Some(reply) = out.reply {
+            replies.push((tick, reply));
+        }
+        each(tick, &out, world);
+        world.advance(&out);
+        let done = matches!(out.phase, Phase::Disarmed | Phase::Aborted)
+            && commands.iter().all(|(t, _)| *t <= tick);
+        last = Some(out);
+        if done {
+            break;
+        }
+    }
+    Run {
+        transitions,
+        last: last.expect("at least one tick"),
+        mission,
+        job_ticks,
+        replies,
+    }
+}
+
+fn run(scenario: &Scenario, world: &mut World, commands: &[(u64, OperatorCommand)]) -> Run {
+    let start = [(1, OperatorCommand::Start)];
+    let all: Vec<(u64, OperatorCommand)> = start.iter().chain(commands).copied().collect();
+    run_with(
+        scenario,
+        MissionConfig::default(),
+        world,
+        Jobs::OnTime,
+        &all,
+        |_, _, _| {},
+        200_000,
+    )
+}
+
+fn phases(run: &Run) -> Vec<Phase> {
+    run.transitions.iter().map(|(_, _, p)| *p).collect()
+}
+
+fn tick_of(run: &Run, phase: Phase) -> u64 {
+    run.transitions
+        .iter()
+        .find(|(_, _, p)| *p == phase)
+        .map(|(t, _, _)| *t)
+        .unwrap_or_else(|| panic!("{phase:?} never entered: {:?}", phases(run)))
+}
+
+#[test]
+fn the_whole_mission_runs_and_every_job_is_taken_at_its_deadline() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    let r = run(&s, &mut world, &[]);
+    let seen = phases(&r);
+    for want in [
+        Phase::PreflightChecks,
+        Phase::SelectingPair,
+        Phase::Lifting,
+        Phase::Relaxing,
+        Phase::DecidingFormation,
+        Phase::Rearranging,
+        Phase::Arming,
+        Phase::Flying(FlightPhase::Takeoff),
+        Phase::Flying(FlightPhase::Hover),
+        Phase::Disarmed,
+    ] {
+        assert!(seen.contains(&want), "{want:?} missing from {seen:?}");
+    }
+    assert_eq!(r.mission.abort_reason(), None);
+    assert!(r.last.thrusts.iter().all(|&t| t == 0.0), "rotors off");
+    assert!(!r.last.armed);
+    let e = r.mission.estimate().expect("converged");
+    assert!((e.theta[0] - 0.33).abs() < 0.2, "{e:?}");
+    // Select-pair, decide-formation and build-flight results end their phase on the very
+    // tick they are due (the update's waits for the relax time).
+    for (asked, taken, name) in &r.job_ticks {
+        let deadline = match *name {
+            "select-pair" | "update" => 8,
+            "decide-formation" => 120,
+            "build-flight" => 2,
+            other => panic!("unknown job {other}"),
+        };
+        if *name != "update" {
+            assert_eq!(taken - asked, deadline, "{name} asked at {asked}");
+        } else {
+            assert!(taken - asked >= deadline, "{name} asked at {asked}");
+        }
+    }
+}
+
+#[test]
+fn a_job_that_does_not_come_back_by_its_deadline_aborts_on_the_ground() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    let r = run_with(
+        &s,
+        MissionConfig::default(),
+        &mut world,
+        Jobs::Never,
+        &[(1, OperatorCommand::Start)],
+        |_, _, _| {},
+        10_000,
+    );
+    assert_eq!(r.mission.abort_reason(), Some(AbortReason::JobOverrun));
+    let selecting = tick_of(&r, Phase::SelectingPair);
+    let aborted = tick_of(&r, Phase::Aborted);
+    assert_eq!(
+        aborted - selecting,
+        8,
+        "aborted on the tick the result was due"
+    );
+    assert!(r.last.thrusts.iter().all(|&t| t == 0.0));
+}
+
+#[test]
+fn the_caller_is_told_when_the_next_tick_needs_a_result() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    let mut planner = MissionPlanner::new(&s, MissionConfig::default()).unwrap();
+    let mut mission = Mission::new(&s, MissionConfig::default());
+    let mut pending: Option<JobRequest> = None;
+    let mut waited = 0;
+    for tick in 1..20_000 {
+        let command = (tick == 1).then_some(OperatorCommand::Start);
+        // A lockstep caller: deliver only when the mission says the next tick needs it.
+        if mission.needs_result() {
+            let job = pending.take().expect("a job is pending");
+            assert!(mission.deliver(planner.run(&job)));
+            waited += 1;
+        }
+        let out = mission.step(&world.input(tick, command));
+        if let Some(job) = &out.job {
+            pending = Some(job.clone());
+        }
+        world.advance(&out);
+        if mission.phase() == Phase::Arming {
+            break;
+        }
+    }
+    assert_eq!(mission.abort_reason(), None);
+    assert_eq!(mission.phase(), Phase::Arming);
+    assert!(
+        waited >= 4,
+        "pair, update, formation and flight jobs: {waited}"
+    );
+    assert!(!mission.deliver(crate::mission::JobResult::Updated(Err(
+        AbortReason::JobOverrun
+    ))));
+}
+
+#[test]
+fn a_payload_too_heavy_for_the_grid_aborts_before_arming() {
+    let s = scenario(20.0);
+    let mut world = World::new(&s);
+    let r = run(&s, &mut world, &[]);
+    assert!(
+        matches!(
+            r.mission.abort_reason(),
+            Some(AbortReason::PayloadOutsideGrid(_))
+        ),
+        "{:?}",
+        r.mission.abort_reason()
+    );
+    assert!(
+        r.transitions
+            .iter()
+            .all(|(_, reason, _)| !matches!(reason, Reason::Armed)),
+        "never armed"
+    );
+    assert!(
+        r.transitions
+            .iter()
+            .any(|(_, reason, _)| matches!(reason, Reason::LiftRead(Measurement::CouldNotLift))),
+        "it tried to lift"
+    );
+    assert!(r.last.thrusts.iter().all(|&t| t == 0.0));
+}
+
+#[test]
+fn without_motion_capture_the_checks_fail() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    world.mocap = false;
+    let r = run(&s, &mut world, &[]);
+    assert_eq!(r.mission.abort_reason(), Some(AbortReason::SensorsNotReady));
+    let at = tick_of(&r, Phase::Aborted);
+    // 5 x checks_time (5 s) at 400 Hz.
+    assert!((10_000..10_010).contains(&at), "{at}");
+}
+
+#[test]
+fn estimation_that_does_not_converge_never_flies() {
+    let mut s = scenario(3.5);
+    s.estimation.max_measurements = 1;
+    s.estimation.threshold = 0.999;
+    let mut world = World::new(&s);
+    let r = run(&s, &mut world, &[]);
+    assert_eq!(
+        r.mission.abort_reason(),
+        Some(AbortReason::EstimationNotConverged)
+    );
+    assert_eq!(r.mission.measurements(), 1);
+}
+
+#[test]
+fn a_thin_thrust_margin_never_flies() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    let config = MissionConfig {
+        max_hover_fraction: 0.3,
+        ..MissionConfig::default()
+    };
+    let r = run_with(
+        &s,
+        config,
+        &mut world,
+        Jobs::OnTime,
+        &[(1, OperatorCommand::Start)],
+        |_, _, _| {},
+        200_000,
+    );
+    assert!(
+        matches!(
+            r.mission.abort_reason(),
+            Some(AbortReason::ThrustMarginTooSmall { .. })
+        ),
+        "{:?}",
+        r.mission.abort_reason()
+    );
+    assert!(r.mission.estimate().is_some(), "estimated first");
+}
+
+#[test]
+fn the_operator_aborts_on_the_ground_in_any_phase() {
+    let s = scenario(3.5);
+    // Ticks that fall in checks, a lift, and the rearrangement's formation decision.
+    let probe = run(&s, &mut World::new(&s), &[]);
+    let in_lift = tick_of(&probe, Phase::Lifting) + 100;
+    let deciding = tick_of(&probe, Phase::DecidingFormation) + 1;
+    for at in [100, in_lift, deciding] {
+        let mut world = World::new(&s);
+        let r = run(&s, &mut world, &[(at, OperatorCommand::Abort)]);
+        assert_eq!(r.mission.abort_reason(), Some(AbortReason::OperatorAbort));
+        assert_eq!(
+            tick_of(&r, Phase::Aborted),
+            at,
+            "aborted on the command's tick"
+        );
+        assert!(r.last.thrusts.iter().all(|&t| t == 0.0));
+        assert!(!r.last.armed);
+        assert!(
+            r.replies
+                .iter()
+                .any(|(t, reply)| *t == at && reply.outcome.is_ok())
+        );
+    }
+}
+
+#[test]
+fn commands_out_of_place_are_refused_with_a_reason() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    let r = run(
+        &s,
+        &mut world,
+        &[
+            (10, OperatorCommand::Start),
+            (20, OperatorCommand::LandNow),
+            (30, OperatorCommand::Abort),
+            (40, OperatorCommand::Start),
+            (41, OperatorCommand::Kill),
+        ],
+    );
+    let outcome = |t: u64| {
+        r.replies
+            .iter()
+            .find(|(at, _)| *at == t)
+            .map(|(_, reply)| reply.outcome)
+    };
+    assert_eq!(outcome(10), Some(Err(CommandRefusal::AlreadyStarted)));
+    assert_eq!(outcome(20), Some(Err(CommandRefusal::NotFlying)));
+    assert_eq!(outcome(30), Some(Ok(())));
+    assert_eq!(outcome(40), Some(Err(CommandRefusal::Finished)));
+    assert_eq!(outcome(41), Some(Ok(())), "kill is always taken");
+}
+
+/// The tick the flight's take-off starts, from a probe run.
+fn takeoff_tick(s: &Scenario) -> u64 {
+    tick_of(
+        &run(s, &mut World::new(s), &[]),
+        Phase::Flying(FlightPhase::Takeoff),
+    )
+}
+
+#[test]
+fn kill_in_flight_stops_the_rotors_on_the_same_tick() {
+    let s = scenario(3.5);
+    let at = takeoff_tick(&s) + 1200; // 3 s into the flight
+    let mut world = World::new(&s);
+    let mut height_at_kill = 0.0;
+    let r = run_with(
+        &s,
+        MissionConfig::default(),
+        &mut world,
+        Jobs::OnTime,
+        &[(1, OperatorCommand::Start), (at, OperatorCommand::Kill)],
+        |tick, _, w| {
+            if tick == at {
+                height_at_kill = w.height;
+            }
+        },
+        200_000,
+    );
+    assert!(height_at_kill > 0.2, "flying when killed: {height_at_kill}");
+    assert_eq!(r.mission.abort_reason(), Some(AbortReason::Killed));
+    assert_eq!(tick_of(&r, Phase::Aborted), at);
+    assert!(r.last.thrusts.iter().all(|&t| t == 0.0));
+}
+
+#[test]
+fn land_now_lands_where_the_vehicle_is() {
+    let s = scenario(3.5);
+    let at = takeoff_tick(&s) + 1200;
+    let mut world = World::new(&s);
+    let r = run(&s, &mut world, &[(at, OperatorCommand::LandNow)]);
+    let landing = r
+        .transitions
+        .iter()
+        .find(|(_, reason, _)| *reason == Reason::LandNow)
+        .expect("landing now");
+    assert_eq!(landing.0, at);
+    assert_eq!(landing.2, Phase::Flying(FlightPhase::Land));
+    assert_eq!(r.mission.phase(), Phase::Disarmed);
+    assert_eq!(r.mission.abort_reason(), None);
+    assert!(
+        !phases(&r).contains(&Phase::Flying(FlightPhase::Hover)),
+        "never reached the hover"
+    );
+}
+
+#[test]
+fn an_abort_in_flight_lands_instead_of_dropping() {
+    let s = scenario(3.5);
+    let at = takeoff_tick(&s) + 1200;
+    let mut world = World::new(&s);
+    let r = run(&s, &mut world, &[(at, OperatorCommand::Abort)]);
+    assert_eq!(r.mission.abort_reason(), Some(AbortReason::OperatorAbort));
+    assert_eq!(r.mission.phase(), Phase::Disarmed, "landed, then disarmed");
+    assert!(world.height < 0.05);
+}
+
+#[test]
+fn a_payload_that_does_not_leave_the_ground_stops_the_rotors() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    let takeoff = takeoff_tick(&s);
+    let r = run_with(
+        &s,
+        MissionConfig::default(),
+        &mut world,
+        Jobs::OnTime,
+        &[(1, OperatorCommand::Start)],
+        |tick, _, w| {
+            // The rotors lose most of their thrust once the flight starts.
+            if tick == takeoff {
+                w.map_error = 3.0;
+            }
+        },
+        200_000,
+    );
+    assert!(
+        matches!(
+            r.mission.abort_reason(),
+            Some(AbortReason::TakeoffFailed { .. })
+        ),
+        "{:?}",
+        r.mission.abort_reason()
+    );
+    let stopped = tick_of(&r, Phase::Aborted);
+    let seconds = (stopped - takeoff) as f32 / 400.0;
+    assert!(
+        (3.0..4.5).contains(&seconds),
+        "stopped {seconds} s into take-off"
+    );
+    assert!(r.last.thrusts.iter().all(|&t| t == 0.0));
+}
+
+#[test]
+fn losing_position_in_flight_descends_and_stops_after_the_expected_touchdown() {
+    let s = scenario(3.5);
+    let at = takeoff_tick(&s) + 2000; // 5 s into the flight: at 0.5 m
+    let mut world = World::new(&s);
+    let mut height_at_detection = 0.0;
+    let r = run_with(
+        &s,
+        MissionConfig::default(),
+        &mut world,
+        Jobs::OnTime,
+        &[(1, OperatorCommand::Start)],
+        |tick, out, w| {
+            if tick == at {
+                w.mocap = false;
+            }
+            if out
+                .transition
+                .is_some_and(|t| t.reason == Reason::Abort(AbortReason::PositionLost))
+            {
+                height_at_detection = w.height;
+            }
+        },
+        200_000,
+    );
+    assert_eq!(r.mission.abort_reason(), Some(AbortReason::PositionLost));
+    let lost = r
+        .transitions
+        .iter()
+        .find(|(_, reason, _)| *reason == Reason::Abort(AbortReason::PositionLost))
+        .expect("position lost")
+        .0;
+    let stop = tick_of(&r, Phase::Disarmed);
+    // Detected within the observer's timeout (0.25 s) of the last fix; rotors stop after the
+    // descent from there at 0.25 m/s plus one second.
+    assert!(
+        lost - at <= 110,
+        "detected {} ticks after the loss",
+        lost - at
+    );
+    assert!(
+        height_at_detection > 0.2,
+        "in the air: {height_at_detection}"
+    );
+    let descent = (stop - lost) as f32 / 400.0;
+    let expected = height_at_detection / 0.25 + 1.0;
+    assert!(
+        (descent - expected).abs() < 0.2,
+        "rotors stopped {descent} s after the loss, expected {expected}"
+    );
+}
+
+#[test]
+fn a_plan_point_out_of_reach_lands_where_the_vehicle_is() {
+    // An obstacle at 0.3 m: the take-off's end (0.5 m) is never reached.
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    world.ceiling = 0.3;
+    let r = run(&s, &mut world, &[]);
+    assert_eq!(r.mission.abort_reason(), Some(AbortReason::TrackingLost));
+    assert!(
+        !phases(&r).contains(&Phase::Flying(FlightPhase::Transit)),
+        "the plan did not move on by the clock"
+    );
+    assert_eq!(r.mission.phase(), Phase::Disarmed);
+    assert!(world.height < 0.05);
+}
