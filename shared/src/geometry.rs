@@ -269,6 +269,11 @@ pub struct ConvexHull {
 }
 
 impl ConvexHull {
+    /// No hull: what an unloaded payload description holds until it is given one.
+    pub const EMPTY: Self = Self {
+        vertices: Vec::new(),
+    };
+
     /// Hull of `points` (Andrew's monotone chain). `None` for fewer than three points, more
     /// than [`MAX_VERTICES`], or when all points are collinear.
     pub fn of(points: &[Vec2]) -> Option<Self> {
@@ -358,6 +363,12 @@ pub struct Rail {
 }
 
 impl Rail {
+    /// No rail: what an unloaded payload description holds until it is given one.
+    pub const EMPTY: Self = Self {
+        vertices: Vec::new(),
+        cumulative: Vec::new(),
+    };
+
     /// A rail through `vertices` in order, closed back to the first. The path must be a simple
     /// polygon.
     pub fn new(vertices: &[Vec2]) -> Result<Self, PolygonError> {

@@ -37,15 +37,20 @@ pub struct LiftoffConfig {
     pub settle_time: f32,
 }
 
+impl LiftoffConfig {
+    /// The defaults (the simulated vehicle's characterised detector).
+    pub const DEFAULT: Self = Self {
+        ramp_rate: 1.0,
+        tilt_threshold: 0.01,
+        detection_delay: 0.005,
+        onset_fraction: 0.3,
+        settle_time: 0.5,
+    };
+}
+
 impl Default for LiftoffConfig {
     fn default() -> Self {
-        Self {
-            ramp_rate: 1.0,
-            tilt_threshold: 0.01,
-            detection_delay: 0.005,
-            onset_fraction: 0.3,
-            settle_time: 0.5,
-        }
+        Self::DEFAULT
     }
 }
 

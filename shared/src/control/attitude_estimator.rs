@@ -31,16 +31,21 @@ pub struct AttitudeEstimatorGains {
     pub accel_trust_band: f32,
 }
 
+impl AttitudeEstimatorGains {
+    /// The defaults.
+    pub const DEFAULT: Self = Self {
+        accel_p: 1.0,
+        reference_p: 2.0,
+        reference_timeout: 0.1,
+        bias_i: 1.0,
+        bias_limit: 0.1,
+        accel_trust_band: 0.15,
+    };
+}
+
 impl Default for AttitudeEstimatorGains {
     fn default() -> Self {
-        Self {
-            accel_p: 1.0,
-            reference_p: 2.0,
-            reference_timeout: 0.1,
-            bias_i: 1.0,
-            bias_limit: 0.1,
-            accel_trust_band: 0.15,
-        }
+        Self::DEFAULT
     }
 }
 
@@ -73,7 +78,7 @@ pub const ATTITUDE_HISTORY: usize = 64;
 
 impl AttitudeEstimator {
     /// A filter that initialises its tilt from the first accelerometer sample.
-    pub fn new(gains: AttitudeEstimatorGains) -> Self {
+    pub const fn new(gains: AttitudeEstimatorGains) -> Self {
         Self {
             gains,
             state: AttitudeState {

@@ -68,10 +68,10 @@ impl Default for Navigator {
 
 impl Navigator {
     /// Both estimators with their default gains, before any sample.
-    pub fn new() -> Self {
+    pub const fn new() -> Self {
         Self {
-            attitude: AttitudeEstimator::new(AttitudeEstimatorGains::default()),
-            position: PositionEstimator::new(PositionEstimatorGains::default()),
+            attitude: AttitudeEstimator::new(AttitudeEstimatorGains::DEFAULT),
+            position: PositionEstimator::new(PositionEstimatorGains::DEFAULT),
         }
     }
 

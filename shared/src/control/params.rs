@@ -54,27 +54,32 @@ pub struct ControlParams {
     pub max_collective_fraction: f32,
 }
 
+impl ControlParams {
+    /// The defaults, tuned in the physics plant for the paper's payloads.
+    pub const DEFAULT: Self = Self {
+        position_p: Vec3::new(1.0, 1.0, 1.2),
+        max_speed_xy: 1.0,
+        max_speed_z: 0.6,
+        velocity_p: Vec3::new(2.0, 2.0, 3.0),
+        velocity_i: Vec3::new(0.5, 0.5, 1.0),
+        velocity_d: Vec3::new(0.0, 0.0, 0.0),
+        velocity_integral_limit: Vec3::new(1.5, 1.5, 3.0),
+        velocity_d_cutoff_hz: 5.0,
+        max_tilt: 0.35,
+        attitude_p: Vec3::new(10.0, 10.0, 2.5),
+        max_rate: Vec3::new(2.5, 2.5, 1.0),
+        rate_p: Vec3::new(30.0, 30.0, 6.0),
+        rate_i: Vec3::new(40.0, 40.0, 3.0),
+        rate_d: Vec3::new(0.25, 0.25, 0.0),
+        rate_integral_limit: Vec3::new(8.0, 8.0, 3.0),
+        max_angular_acceleration: Vec3::new(40.0, 40.0, 10.0),
+        rate_d_cutoff_hz: 30.0,
+        max_collective_fraction: 0.85,
+    };
+}
+
 impl Default for ControlParams {
     fn default() -> Self {
-        Self {
-            position_p: Vec3::new(1.0, 1.0, 1.2),
-            max_speed_xy: 1.0,
-            max_speed_z: 0.6,
-            velocity_p: Vec3::new(2.0, 2.0, 3.0),
-            velocity_i: Vec3::new(0.5, 0.5, 1.0),
-            velocity_d: Vec3::new(0.0, 0.0, 0.0),
-            velocity_integral_limit: Vec3::new(1.5, 1.5, 3.0),
-            velocity_d_cutoff_hz: 5.0,
-            max_tilt: 0.35,
-            attitude_p: Vec3::new(10.0, 10.0, 2.5),
-            max_rate: Vec3::new(2.5, 2.5, 1.0),
-            rate_p: Vec3::new(30.0, 30.0, 6.0),
-            rate_i: Vec3::new(40.0, 40.0, 3.0),
-            rate_d: Vec3::new(0.25, 0.25, 0.0),
-            rate_integral_limit: Vec3::new(8.0, 8.0, 3.0),
-            max_angular_acceleration: Vec3::new(40.0, 40.0, 10.0),
-            rate_d_cutoff_hz: 30.0,
-            max_collective_fraction: 0.85,
-        }
+        Self::DEFAULT
     }
 }

@@ -24,13 +24,18 @@ pub struct PositionEstimatorGains {
     pub fix_timeout: f32,
 }
 
+impl PositionEstimatorGains {
+    /// The defaults.
+    pub const DEFAULT: Self = Self {
+        bandwidth: 4.0,
+        damping: 0.9,
+        fix_timeout: 0.25,
+    };
+}
+
 impl Default for PositionEstimatorGains {
     fn default() -> Self {
-        Self {
-            bandwidth: 4.0,
-            damping: 0.9,
-            fix_timeout: 0.25,
-        }
+        Self::DEFAULT
     }
 }
 
@@ -60,7 +65,7 @@ pub struct PositionEstimator {
 
 impl PositionEstimator {
     /// An observer with no fix yet.
-    pub fn new(gains: PositionEstimatorGains) -> Self {
+    pub const fn new(gains: PositionEstimatorGains) -> Self {
         Self {
             gains,
             position: Vec3::ZERO,

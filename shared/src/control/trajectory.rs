@@ -38,14 +38,19 @@ pub struct PlanLimits {
     pub hover_time: f32,
 }
 
+impl PlanLimits {
+    /// The defaults.
+    pub const DEFAULT: Self = Self {
+        climb_speed: 0.3,
+        cruise_speed: 0.5,
+        descent_speed: 0.25,
+        hover_time: 3.0,
+    };
+}
+
 impl Default for PlanLimits {
     fn default() -> Self {
-        Self {
-            climb_speed: 0.3,
-            cruise_speed: 0.5,
-            descent_speed: 0.25,
-            hover_time: 3.0,
-        }
+        Self::DEFAULT
     }
 }
 

@@ -212,57 +212,101 @@ pub struct Estimator {
 impl Estimator {
     /// An estimator with a uniform prior for `scenario`.
     pub fn new(scenario: &Scenario, options: EstimatorOptions) -> Result<Self, EstimationError> {
-        let grid =
+        let mut estimator = Self::UNLOADED;
+        estimator.load(scenario, options)?;
+        Ok(estimator)
+    }
+
+    /// An estimator with no scenario: every buffer empty, nothing to estimate until
+    /// [`Self::load`]. A constant, so the flight controller can place the estimator (with its
+    /// grid-sized buffers) in a static instead of building it on a stack.
+    pub const UNLOADED: Self = Self {
+        grid: Grid::EMPTY,
+        hull: ConvexHull::EMPTY,
+        groups: Vec::new(),
+        likelihood: LiftLikelihood {
+            sigma: 0.0,
+            max_thrust: 0.0,
+        },
+        robot_mass: 0.0,
+        threshold: 0.0,
+        max_measurements: 0,
+        posterior: Posterior::EMPTY,
+        guard: GuardBand::EMPTY,
+        measurements: 0,
+        lifted: 0,
+        outside: None,
+        summary: Concentration {
+            map_indices: [0; 3],
+            map: [0.0; 3],
+            mass_near_map: 0.0,
+            local_mean: [0.0; 3],
+        },
+        piled_up: false,
+        mass_upper_95: 0.0,
+        probabilities: Vec::new(),
+        fractions: Vec::new(),
+        scratch: InformationScratch::EMPTY,
+    };
+
+    /// In place: the estimator of `scenario` with a uniform prior, as [`Self::new`] builds
+    /// it, without a second copy of the buffers. On an error the estimator is left unloaded.
+    pub fn load(
+        &mut self,
+        scenario: &Scenario,
+        options: EstimatorOptions,
+    ) -> Result<(), EstimationError> {
+        let loaded = self.fill(scenario, options);
+        if loaded.is_err() {
+            self.grid = Grid::EMPTY;
+            self.posterior.reset_on_hull(&Grid::EMPTY, &self.hull);
+            self.groups.clear();
+        }
+        loaded
+    }
+
+    fn fill(
+        &mut self,
+        scenario: &Scenario,
+        options: EstimatorOptions,
+    ) -> Result<(), EstimationError> {
+        self.grid =
             Grid::new(&scenario.estimation, options.thrust_scale).map_err(EstimationError::Grid)?;
-        let hull = scenario.payload.hull.clone();
-        let posterior =
-            Posterior::uniform_on_hull(&grid, &hull).ok_or(EstimationError::NoSupport)?;
-        let guard = GuardBand::new(&grid, &hull).map_err(EstimationError::Grid)?;
-        let groups: Vec<GroupGeometry, MAX_CANDIDATES> = (0..group_count(scenario))
-            .filter_map(|i| lift_group(scenario, i))
-            .map(|g| GroupGeometry {
+        self.hull.clone_from(&scenario.payload.hull);
+        if !self.posterior.reset_on_hull(&self.grid, &self.hull) {
+            return Err(EstimationError::NoSupport);
+        }
+        self.guard
+            .reset(&self.grid, &self.hull)
+            .map_err(EstimationError::Grid)?;
+        self.groups.clear();
+        for g in (0..group_count(scenario)).filter_map(|i| lift_group(scenario, i)) {
+            // group_count <= MAX_CANDIDATES.
+            let _ = self.groups.push(GroupGeometry {
                 centroid: g.centroid,
                 size: g.rotor_points.len(),
                 reachable: g.reachable,
-            })
-            .collect();
-        if !groups.iter().any(|g| g.reachable) {
+            });
+        }
+        if !self.groups.iter().any(|g| g.reachable) {
             return Err(EstimationError::NoReachableGroup);
         }
-        let mut probabilities = Vec::new();
-        let _ = probabilities.resize(grid.len(), 0.0);
-        let mut fractions = Vec::new();
-        let _ = fractions.resize(grid.com_len(), 0.0);
-        let mut estimator = Self {
-            grid,
-            hull,
-            groups,
-            likelihood: LiftLikelihood {
-                sigma: scenario.estimation.noise_sigma,
-                max_thrust: scenario.robots.max_thrust,
-            },
-            robot_mass: scenario.robots.mass,
-            threshold: scenario.estimation.threshold,
-            max_measurements: scenario.estimation.max_measurements,
-            posterior,
-            guard,
-            measurements: 0,
-            lifted: 0,
-            outside: None,
-            summary: Concentration {
-                map_indices: [0; 3],
-                map: [0.0; 3],
-                mass_near_map: 0.0,
-                local_mean: [0.0; 3],
-            },
-            piled_up: false,
-            mass_upper_95: 0.0,
-            probabilities,
-            fractions,
-            scratch: InformationScratch::default(),
+        self.probabilities.clear();
+        let _ = self.probabilities.resize(self.grid.len(), 0.0);
+        self.fractions.clear();
+        let _ = self.fractions.resize(self.grid.com_len(), 0.0);
+        self.likelihood = LiftLikelihood {
+            sigma: scenario.estimation.noise_sigma,
+            max_thrust: scenario.robots.max_thrust,
         };
-        estimator.summarise();
-        Ok(estimator)
+        self.robot_mass = scenario.robots.mass;
+        self.threshold = scenario.estimation.threshold;
+        self.max_measurements = scenario.estimation.max_measurements;
+        self.measurements = 0;
+        self.lifted = 0;
+        self.outside = None;
+        self.summarise();
+        Ok(())
     }
 
     /// The grid.

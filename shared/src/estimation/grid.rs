@@ -89,6 +89,21 @@ pub struct Grid {
 }
 
 impl Grid {
+    /// No grid: an unloaded estimator's.
+    pub(crate) const EMPTY: Self = Self {
+        setup: EstimationSetup {
+            grid_min: [0.0; 3],
+            grid_max: [0.0; 3],
+            resolution: [0.0; 3],
+            threshold: 0.0,
+            noise_sigma: 0.0,
+            max_measurements: 0,
+        },
+        shape: [0; 3],
+        scale: None,
+        scale_len: 0,
+    };
+
     /// The grid of a checked estimation set-up, with the thrust-scale axis when given.
     pub fn new(setup: &EstimationSetup, scale: Option<ThrustScaleAxis>) -> Result<Self, GridError> {
         let shape = [0, 1, 2].map(|a| setup.axis_len(a));

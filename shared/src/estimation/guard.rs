@@ -54,9 +54,27 @@ fn other_axes(axis: usize) -> [usize; 2] {
 }
 
 impl GuardBand {
+    /// No guard points: an unloaded estimator's.
+    pub const EMPTY: Self = Self {
+        faces: [Face {
+            axis: 0,
+            above: false,
+            start: 0,
+            len: 0,
+        }; 6],
+        ln_p: Vec::new(),
+    };
+
     /// The guard band of `grid` on a payload with footprint hull `hull`, with a uniform prior
     /// where a payload could be.
     pub fn new(grid: &Grid, hull: &ConvexHull) -> Result<Self, GridError> {
+        let mut band = Self::EMPTY;
+        band.reset(grid, hull)?;
+        Ok(band)
+    }
+
+    /// In place: the guard band of `grid`, as [`Self::new`] makes it.
+    pub fn reset(&mut self, grid: &Grid, hull: &ConvexHull) -> Result<(), GridError> {
         let shape = grid.shape();
         let ns = grid.scale_len();
         let mut faces = [Face {
@@ -81,24 +99,22 @@ impl GuardBand {
         if start > MAX_GUARD_POINTS {
             return Err(GridError::TooManyGuardPoints { points: start });
         }
-        let mut band = Self {
-            faces,
-            ln_p: Vec::new(),
-        };
+        self.faces = faces;
+        self.ln_p.clear();
         let res = grid.resolution();
         for face in faces {
             for k in 0..face.len {
-                let theta = band.theta(grid, &face, k);
+                let theta = self.theta(grid, &face, k);
                 let possible =
                     theta[2] > res[2] / 3.0 && hull.contains(Vec2::new(theta[0], theta[1]), 1e-6);
                 let prior = if possible { 0.0 } else { f32::NEG_INFINITY };
                 for _ in 0..ns {
                     // Counted above: fits in MAX_GUARD_POINTS.
-                    let _ = band.ln_p.push(prior);
+                    let _ = self.ln_p.push(prior);
                 }
             }
         }
-        Ok(band)
+        Ok(())
     }
 
     /// The faces.

@@ -39,12 +39,17 @@ pub struct InformationScratch {
     kernel: [f32; MAX_KERNEL_HALF + 1],
 }
 
+impl InformationScratch {
+    /// Zeroed working memory.
+    pub const EMPTY: Self = Self {
+        mixture: [0.0; MAX_BINS],
+        kernel: [0.0; MAX_KERNEL_HALF + 1],
+    };
+}
+
 impl Default for InformationScratch {
     fn default() -> Self {
-        Self {
-            mixture: [0.0; MAX_BINS],
-            kernel: [0.0; MAX_KERNEL_HALF + 1],
-        }
+        Self::EMPTY
     }
 }
 

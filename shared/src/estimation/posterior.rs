@@ -114,10 +114,20 @@ pub struct Posterior {
 }
 
 impl Posterior {
+    /// No values: an unloaded estimator's.
+    pub const EMPTY: Self = Self { ln_p: Vec::new() };
+
     /// Uniform prior on the points whose COM lies in `hull`; `None` when no grid COM does.
     pub fn uniform_on_hull(grid: &Grid, hull: &ConvexHull) -> Option<Self> {
-        let block = grid.len() / grid.com_len();
-        let mut ln_p = Vec::new();
+        let mut posterior = Self::EMPTY;
+        posterior.reset_on_hull(grid, hull).then_some(posterior)
+    }
+
+    /// In place: the uniform prior on the points whose COM lies in `hull`; false (and no
+    /// support at all) when no grid COM does.
+    pub fn reset_on_hull(&mut self, grid: &Grid, hull: &ConvexHull) -> bool {
+        let block = grid.len() / grid.com_len().max(1);
+        self.ln_p.clear();
         let mut any = false;
         for c in 0..grid.com_len() {
             let inside = hull.contains(grid.com(c), 1e-6);
@@ -125,10 +135,10 @@ impl Posterior {
             let v = if inside { 0.0 } else { f32::NEG_INFINITY };
             for _ in 0..block {
                 // grid.len() <= MAX_GRID_POINTS by Grid::new.
-                let _ = ln_p.push(v);
+                let _ = self.ln_p.push(v);
             }
         }
-        any.then_some(Self { ln_p })
+        any
     }
 
     /// The log-values, flat in the grid's layout.

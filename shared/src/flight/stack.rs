@@ -55,17 +55,22 @@ pub struct FlightConfig {
     pub failsafe_margin: f32,
 }
 
+impl FlightConfig {
+    /// The defaults.
+    pub const DEFAULT: Self = Self {
+        control: ControlParams::DEFAULT,
+        plan: PlanLimits::DEFAULT,
+        takeoff_timeout: 3.0,
+        arrival_tolerance: 0.15,
+        arrival_timeout: 10.0,
+        touchdown_timeout: 5.0,
+        failsafe_margin: 1.0,
+    };
+}
+
 impl Default for FlightConfig {
     fn default() -> Self {
-        Self {
-            control: ControlParams::default(),
-            plan: PlanLimits::default(),
-            takeoff_timeout: 3.0,
-            arrival_tolerance: 0.15,
-            arrival_timeout: 10.0,
-            touchdown_timeout: 5.0,
-            failsafe_margin: 1.0,
-        }
+        Self::DEFAULT
     }
 }
 

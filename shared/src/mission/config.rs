@@ -45,20 +45,25 @@ pub struct MissionConfig {
     pub arm_time: f32,
 }
 
+impl MissionConfig {
+    /// The defaults the simulated vehicle was characterised with.
+    pub const DEFAULT: Self = Self {
+        estimator: EstimatorOptions { thrust_scale: None },
+        lift_noise_sigma: Some(DETECTOR_SIGMA),
+        liftoff: LiftoffConfig::DEFAULT,
+        rail_limits: MotionLimits::DEFAULT,
+        flight: FlightConfig::DEFAULT,
+        mixer: MixerKind::EqualSplit,
+        max_hover_fraction: 0.7,
+        checks_time: 5.0,
+        relax_time: 2.0,
+        confirmations: 1,
+        arm_time: 1.0,
+    };
+}
+
 impl Default for MissionConfig {
     fn default() -> Self {
-        Self {
-            estimator: EstimatorOptions::default(),
-            lift_noise_sigma: Some(DETECTOR_SIGMA),
-            liftoff: LiftoffConfig::default(),
-            rail_limits: MotionLimits::default(),
-            flight: FlightConfig::default(),
-            mixer: MixerKind::EqualSplit,
-            max_hover_fraction: 0.7,
-            checks_time: 5.0,
-            relax_time: 2.0,
-            confirmations: 1,
-            arm_time: 1.0,
-        }
+        Self::DEFAULT
     }
 }

@@ -16,12 +16,14 @@ use crate::estimation::groups::lift_group;
 use crate::estimation::{Estimate, Estimator, Measurement};
 use crate::flight::FlightModel;
 use crate::formation::{FormationProblem, solve};
-use crate::geometry::Vec2;
+use crate::geometry::{ConvexHull, Rail, Vec2};
 use crate::math;
 use crate::mission::config::MissionConfig;
 use crate::mission::phases::AbortReason;
 use crate::rail::moves::{Positions, RailMove, lift_targets};
-use crate::scenario::{GRAVITY, MAX_ROBOTS, Scenario};
+use crate::scenario::{
+    EstimationSetup, FormationSetup, GRAVITY, MAX_ROBOTS, Payload, Robots, Scenario,
+};
 
 /// A computation the tick side wants.
 #[derive(Clone, Debug, PartialEq)]
@@ -126,17 +128,68 @@ pub struct MissionPlanner {
     estimator: Estimator,
 }
 
+/// The payload description of an unloaded mission: nothing at all.
+pub(crate) const NO_SCENARIO: Scenario = Scenario {
+    payload: Payload {
+        footprint: Vec::new(),
+        hull: ConvexHull::EMPTY,
+        rail: Rail::EMPTY,
+        candidates: Vec::new(),
+    },
+    robots: Robots {
+        mass: 0.0,
+        max_thrust: 0.0,
+        torque_per_thrust: 0.0,
+        spin: Vec::new(),
+        min_spacing: 0.0,
+        pair_size: 0,
+        initial: Vec::new(),
+    },
+    estimation: EstimationSetup {
+        grid_min: [0.0; 3],
+        grid_max: [0.0; 3],
+        resolution: [0.0; 3],
+        threshold: 0.0,
+        noise_sigma: 0.0,
+        max_measurements: 0,
+    },
+    formation: FormationSetup { balance_eps: 0.0 },
+    truth: None,
+    flight: None,
+};
+
 impl MissionPlanner {
     /// A planner for `scenario`, the estimator on a uniform prior.
     pub fn new(scenario: &Scenario, config: MissionConfig) -> Result<Self, AbortReason> {
-        let measured = measured_scenario(scenario, &config)?;
-        let estimator =
-            Estimator::new(&measured, config.estimator).map_err(AbortReason::EstimationFailed)?;
-        Ok(Self {
-            scenario: scenario.clone(),
-            config,
-            estimator,
-        })
+        let mut planner = Self::UNLOADED;
+        planner.load(scenario, config)?;
+        Ok(planner)
+    }
+
+    /// A planner with no payload description: a constant, so the flight controller can place
+    /// it (with the estimator's grid-sized buffers) in a static; [`Self::load`] fills it.
+    pub const UNLOADED: Self = Self {
+        scenario: NO_SCENARIO,
+        config: MissionConfig::DEFAULT,
+        estimator: Estimator::UNLOADED,
+    };
+
+    /// In place: the planner of `scenario`, as [`Self::new`] builds it.
+    pub fn load(&mut self, scenario: &Scenario, config: MissionConfig) -> Result<(), AbortReason> {
+        self.scenario.clone_from(scenario);
+        self.config = config;
+        if let Some(sigma) = config.lift_noise_sigma {
+            if !(sigma.is_finite() && sigma > 0.0) {
+                return Err(AbortReason::EstimationFailed(
+                    crate::estimation::EstimationError::BadNoiseModel,
+                ));
+            }
+            // The estimator's noise model for the lifts (see MissionConfig::lift_noise_sigma).
+            self.scenario.estimation.noise_sigma = sigma;
+        }
+        let loaded = self.estimator.load(&self.scenario, config.estimator);
+        self.scenario.estimation.noise_sigma = scenario.estimation.noise_sigma;
+        loaded.map_err(AbortReason::EstimationFailed)
     }
 
     /// The estimator (its posterior, for reports).
@@ -226,19 +279,4 @@ impl MissionPlanner {
         FlightModel::build(&self.scenario, robots, com, e.theta[2], self.config.mixer)
             .map_err(AbortReason::Uncontrollable)
     }
-}
-
-/// The scenario with the estimator's noise model for the lifts (see
-/// [`MissionConfig::lift_noise_sigma`]).
-fn measured_scenario(scenario: &Scenario, config: &MissionConfig) -> Result<Scenario, AbortReason> {
-    let mut measured = scenario.clone();
-    if let Some(sigma) = config.lift_noise_sigma {
-        if !(sigma.is_finite() && sigma > 0.0) {
-            return Err(AbortReason::EstimationFailed(
-                crate::estimation::EstimationError::BadNoiseModel,
-            ));
-        }
-        measured.estimation.noise_sigma = sigma;
-    }
-    Ok(measured)
 }

@@ -19,7 +19,7 @@ use crate::flight::{FlightCommand, FlightEvent, FlightStack, FlightStop, Landing
 use crate::liftoff::{LiftState, LiftoffDetector};
 use crate::math;
 use crate::mission::config::MissionConfig;
-use crate::mission::jobs::{JobRequest, JobResult, LiftPlan};
+use crate::mission::jobs::{JobRequest, JobResult, LiftPlan, NO_SCENARIO};
 use crate::mission::phases::{AbortReason, Phase, Reason, Transition};
 use crate::rail::moves::{Positions, RailMove};
 use crate::scenario::{GRAVITY, MAX_ROBOTS, Scenario};
@@ -47,6 +47,8 @@ pub enum CommandRefusal {
     Finished,
     /// Landing asked for while not flying.
     NotFlying,
+    /// No payload description has been loaded.
+    NoPayload,
 }
 
 impl core::fmt::Display for CommandRefusal {
@@ -55,6 +57,7 @@ impl core::fmt::Display for CommandRefusal {
             Self::AlreadyStarted => write!(f, "the mission has already started"),
             Self::Finished => write!(f, "the mission is over"),
             Self::NotFlying => write!(f, "not flying"),
+            Self::NoPayload => write!(f, "no payload description is loaded"),
         }
     }
 }
@@ -137,27 +140,54 @@ pub struct Mission {
 impl Mission {
     /// A mission for `scenario` with the robots at their initial positions, idle.
     pub fn new(scenario: &Scenario, config: MissionConfig) -> Self {
-        Self {
-            scenario: scenario.clone(),
-            config,
-            navigator: Navigator::new(),
-            clock: LoopMonitor::at_rate(CONTROL_RATE_HZ),
-            tick: 0,
-            phase: Phase::Idle,
-            phase_time: 0.0,
-            robots: scenario.robots.initial.clone(),
-            rail_move: None,
-            lift_plan: None,
-            lift: None,
-            pending: None,
-            outgoing: None,
-            latest: None,
-            converged_in_a_row: 0,
-            estimate: None,
-            formation: None,
-            flight: None,
-            abort: None,
-        }
+        let mut mission = Self::UNLOADED;
+        mission.load(scenario, config);
+        mission
+    }
+
+    /// A mission with no payload description, idle: a constant, so the flight controller can
+    /// place it in a static; [`Self::load`] gives it its payload.
+    pub const UNLOADED: Self = Self {
+        scenario: NO_SCENARIO,
+        config: MissionConfig::DEFAULT,
+        navigator: Navigator::new(),
+        clock: LoopMonitor::at_rate(CONTROL_RATE_HZ),
+        tick: 0,
+        phase: Phase::Idle,
+        phase_time: 0.0,
+        robots: Positions::new(),
+        rail_move: None,
+        lift_plan: None,
+        lift: None,
+        pending: None,
+        outgoing: None,
+        latest: None,
+        converged_in_a_row: 0,
+        estimate: None,
+        formation: None,
+        flight: None,
+        abort: None,
+    };
+
+    /// In place: a fresh, idle mission for `scenario`, as [`Self::new`] builds it (the state
+    /// estimate and the loop clock carry on).
+    pub fn load(&mut self, scenario: &Scenario, config: MissionConfig) {
+        self.scenario.clone_from(scenario);
+        self.config = config;
+        self.phase = Phase::Idle;
+        self.phase_time = 0.0;
+        self.robots.clone_from(&scenario.robots.initial);
+        self.rail_move = None;
+        self.lift_plan = None;
+        self.lift = None;
+        self.pending = None;
+        self.outgoing = None;
+        self.latest = None;
+        self.converged_in_a_row = 0;
+        self.estimate = None;
+        self.formation = None;
+        self.flight = None;
+        self.abort = None;
     }
 
     /// The phase.
@@ -323,6 +353,9 @@ impl Mission {
         let outcome = match command {
             OperatorCommand::Kill if finished => Ok(()),
             _ if finished => Err(CommandRefusal::Finished),
+            OperatorCommand::Start if self.scenario.robots.count() == 0 => {
+                Err(CommandRefusal::NoPayload)
+            }
             OperatorCommand::Start if self.phase == Phase::Idle => {
                 transition = Some(self.enter(Phase::PreflightChecks, Reason::Started));
                 Ok(())

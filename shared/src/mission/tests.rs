@@ -634,3 +634,37 @@ fn a_plan_point_out_of_reach_lands_where_the_vehicle_is() {
     assert_eq!(r.mission.phase(), Phase::Disarmed);
     assert!(world.height < 0.05);
 }
+
+#[test]
+fn an_unloaded_mission_refuses_to_start_and_a_loaded_one_flies() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    let mut mission = Mission::UNLOADED;
+    let out = mission.step(&world.input(1, Some(OperatorCommand::Start)));
+    assert_eq!(
+        out.reply.map(|r| r.outcome),
+        Some(Err(CommandRefusal::NoPayload))
+    );
+    assert_eq!(out.phase, Phase::Idle);
+    // Loaded in place, the planner too: the same mission as one built by value.
+    let mut planner = MissionPlanner::UNLOADED;
+    planner.load(&s, MissionConfig::default()).expect("loads");
+    mission.load(&s, MissionConfig::default());
+    let mut phase = Phase::Idle;
+    for tick in 2..200_000 {
+        let command = (tick == 2).then_some(OperatorCommand::Start);
+        let out = mission.step(&world.input(tick, command));
+        if let Some(job) = &out.job {
+            assert!(mission.deliver(planner.run(job)));
+        }
+        world.advance(&out);
+        phase = out.phase;
+        if matches!(phase, Phase::Disarmed | Phase::Aborted) {
+            break;
+        }
+    }
+    assert_eq!(phase, Phase::Disarmed, "{:?}", mission.abort_reason());
+    let by_value = run(&s, &mut World::new(&s), &[]);
+    assert_eq!(mission.estimate(), by_value.mission.estimate());
+    assert_eq!(mission.formation(), by_value.mission.formation());
+}

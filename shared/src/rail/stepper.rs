@@ -16,13 +16,18 @@ pub struct DriveConfig {
     pub pinion_pitch_diameter: f32,
 }
 
+impl DriveConfig {
+    /// The defaults (200-step motors, 16 microsteps, 20 mm pinion).
+    pub const DEFAULT: Self = Self {
+        steps_per_rev: 200,
+        microsteps: 16,
+        pinion_pitch_diameter: 0.02,
+    };
+}
+
 impl Default for DriveConfig {
     fn default() -> Self {
-        Self {
-            steps_per_rev: 200,
-            microsteps: 16,
-            pinion_pitch_diameter: 0.02,
-        }
+        Self::DEFAULT
     }
 }
 
@@ -53,12 +58,17 @@ pub struct MotionLimits {
     pub max_acceleration: f32,
 }
 
+impl MotionLimits {
+    /// The defaults.
+    pub const DEFAULT: Self = Self {
+        max_speed: 0.2,
+        max_acceleration: 0.5,
+    };
+}
+
 impl Default for MotionLimits {
     fn default() -> Self {
-        Self {
-            max_speed: 0.2,
-            max_acceleration: 0.5,
-        }
+        Self::DEFAULT
     }
 }
 
