@@ -6,9 +6,11 @@
 //!   matrix inverse: built once, off the control tick).
 //! - [`stack`]: the 400 Hz flight: cascade, mixer, plan walked on the vehicle's state,
 //!   take-off check, land detector, failsafes and the operator's land and kill commands.
+//! - [`trim`]: the payload's COM and mass from the wrench that holds it in a hover.
 
 pub mod model;
 pub mod stack;
+pub mod trim;
 
 pub use model::FlightModel;
 pub use stack::{
