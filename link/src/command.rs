@@ -75,20 +75,10 @@ pub fn classify(command: &COMMAND_LONG_DATA) -> Request {
     }
 }
 
-/// The acknowledgement of `command` with `result`, addressed to its sender.
-pub fn ack(
-    command: MavCmd,
-    result: MavResult,
-    to_system: u8,
-    to_component: u8,
-) -> COMMAND_ACK_DATA {
-    COMMAND_ACK_DATA {
-        command,
-        result,
-        target_system: to_system,
-        target_component: to_component,
-        ..Default::default()
-    }
+/// The acknowledgement of `command` with `result` (its extension fields, progress and
+/// target, are left out: a ground station matches acknowledgements by command).
+pub fn ack(command: MavCmd, result: MavResult) -> COMMAND_ACK_DATA {
+    COMMAND_ACK_DATA { command, result }
 }
 
 /// A `COMMAND_LONG` of `command` to the vehicle with `param1` and `param2` (the ground side).

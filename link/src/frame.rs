@@ -271,11 +271,32 @@ impl Encoder {
 
     /// Encodes `message` into `out` (unsigned MAVLink 2, trailing zeros of the payload cut).
     pub fn encode<M: MessageData>(&mut self, message: &M, out: &mut Frame) {
+        self.encode_extended(message, &[], out);
+    }
+
+    /// Encodes `message` followed by the raw bytes of its MAVLink 2 extension fields
+    /// (`extensions`, in the message definition's order), as the spec lays them out after the
+    /// base fields.
+    pub fn encode_extended<M: MessageData>(
+        &mut self,
+        message: &M,
+        extensions: &[u8],
+        out: &mut Frame,
+    ) {
         let header = 1 + V2_HEADER;
         // A payload is at most 255 bytes and the frame buffer holds 255 after the header.
-        let len = message
-            .ser(MavlinkVersion::V2, &mut out.bytes[header..header + 255])
-            .min(255);
+        let payload = &mut out.bytes[header..header + 255];
+        let mut len = message.ser(MavlinkVersion::V2, payload).min(255);
+        if !extensions.is_empty() {
+            let base = M::ENCODED_LEN.min(255);
+            payload[len..base].fill(0);
+            let end = (base + extensions.len()).min(255);
+            payload[base..end].copy_from_slice(&extensions[..end - base]);
+            len = end;
+            while len > 1 && payload[len - 1] == 0 {
+                len -= 1;
+            }
+        }
         let id = M::ID.to_le_bytes();
         out.bytes[..header].copy_from_slice(&[
             STX_V2,

@@ -122,15 +122,15 @@ impl ImuSample {
             ygyro: self.gyro[1],
             zgyro: self.gyro[2],
             fields_updated: accel_gyro_bits(),
-            id: 0,
+            // The extension field `id` (IMU 0) is zero, which MAVLink 2 leaves out anyway.
             ..Default::default()
         }
     }
 
-    /// From `HIL_SENSOR`, checked.
-    pub fn from_message(m: &HIL_SENSOR_DATA) -> Result<Self, HilError> {
-        if m.id != 0 {
-            return Err(HilError::OtherSensor { id: m.id });
+    /// From `HIL_SENSOR`, checked; `sensor_id` is its extension field `id` (0 when absent).
+    pub fn from_message(m: &HIL_SENSOR_DATA, sensor_id: u8) -> Result<Self, HilError> {
+        if sensor_id != 0 {
+            return Err(HilError::OtherSensor { id: sensor_id });
         }
         if !m.fields_updated.contains(accel_gyro_bits()) {
             return Err(HilError::SensorFieldsMissing {
@@ -172,7 +172,6 @@ impl MocapFix {
             x: self.position[0],
             y: self.position[1],
             z: self.position[2],
-            ..Default::default()
         }
     }
 
@@ -386,6 +385,55 @@ impl VehicleClock {
     }
 }
 
+/// When a job's result is due (issue 11, section 1): a fixed number of control steps after the
+/// step that asked for it, whatever the speed of the processor or the emulator. At that step
+/// the vehicle takes the result, and in lockstep holds its reply until the job is done, as
+/// PX4's lockstep waits for its modules.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct JobDeadline {
+    due: Option<u64>,
+}
+
+/// A job was asked for while another one is still running.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct JobBusy {
+    /// Step at which the running job's result is due.
+    pub due: u64,
+}
+
+impl JobDeadline {
+    /// No job running.
+    pub const fn new() -> Self {
+        Self { due: None }
+    }
+
+    /// A job asked for at step `step`, its result due `deadline_steps` later (at least 1):
+    /// returns the step at which it is due.
+    pub fn request(&mut self, step: u64, deadline_steps: u32) -> Result<u64, JobBusy> {
+        if let Some(due) = self.due {
+            return Err(JobBusy { due });
+        }
+        let due = step + u64::from(deadline_steps.max(1));
+        self.due = Some(due);
+        Ok(due)
+    }
+
+    /// Whether step `step` must take the result (it is due now, or overdue).
+    pub fn is_due(&self, step: u64) -> bool {
+        self.due.is_some_and(|due| step >= due)
+    }
+
+    /// Whether a job is running.
+    pub fn pending(&self) -> bool {
+        self.due.is_some()
+    }
+
+    /// The result was taken.
+    pub fn taken(&mut self) {
+        self.due = None;
+    }
+}
+
 /// The plant's side of lockstep: which reply it waits for, and the extra status of steps with
 /// more than 8 robots.
 #[derive(Clone, Debug, Default)]
@@ -523,19 +571,23 @@ mod tests {
             gyro: [0.1, -0.2, 0.3],
             accel: [0.0, 0.0, -9.81],
         };
-        assert_eq!(ImuSample::from_message(&s.to_message()), Ok(s));
+        assert_eq!(ImuSample::from_message(&s.to_message(), 0), Ok(s));
         let mut m = s.to_message();
         m.fields_updated = HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_XACC;
         assert!(matches!(
-            ImuSample::from_message(&m),
+            ImuSample::from_message(&m, 0),
             Err(HilError::SensorFieldsMissing { .. })
         ));
         let mut m = s.to_message();
         m.zgyro = f32::NAN;
         assert!(matches!(
-            ImuSample::from_message(&m),
+            ImuSample::from_message(&m, 0),
             Err(HilError::NotFinite { .. })
         ));
+        assert_eq!(
+            ImuSample::from_message(&s.to_message(), 1),
+            Err(HilError::OtherSensor { id: 1 })
+        );
         let fix = MocapFix {
             stamp_us: 10_000,
             position: [1.0, 2.0, -0.5],
@@ -559,6 +611,23 @@ mod tests {
             })
         );
         assert_eq!(c.steps(), 2);
+    }
+
+    #[test]
+    fn a_job_result_is_due_a_fixed_number_of_steps_after_its_request() {
+        let mut d = JobDeadline::new();
+        assert!(!d.is_due(0));
+        assert_eq!(d.request(10, 40), Ok(50));
+        assert_eq!(d.request(11, 40), Err(JobBusy { due: 50 }));
+        assert!(!d.is_due(49));
+        assert!(d.is_due(50));
+        d.taken();
+        assert!(!d.pending());
+        assert_eq!(
+            d.request(60, 0),
+            Ok(61),
+            "a result is never due in its own step"
+        );
     }
 
     #[test]

@@ -32,6 +32,8 @@ pub mod hil;
 pub mod status;
 pub mod vehicle;
 
+/// The trait of every message type (its id, `CRC_EXTRA`, encoding).
+pub use mavlink::MessageData;
 /// The MAVLink common dialect's messages and enums, as this crate uses them.
 pub use mavlink::dialects::common as msg;
 

@@ -13,7 +13,12 @@
 
 use heapless::{String, Vec};
 
-use crate::msg::{MavSeverity, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA, STATUSTEXT_DATA};
+use crate::frame::{Encoder, Frame};
+
+use crate::msg::{
+    HEARTBEAT_DATA, MavAutopilot, MavModeFlag, MavSeverity, MavState, MavType,
+    NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA, STATUSTEXT_DATA,
+};
 
 /// Bytes of text in one `STATUSTEXT`.
 pub const CHUNK_LEN: usize = 50;
@@ -29,13 +34,114 @@ pub const NAME_LEN: usize = 10;
 /// A text to send, with its severity.
 pub type Text = String<MAX_TEXT_LEN>;
 
-/// The `STATUSTEXT` messages of `text`; `id` numbers a multi-chunk text (never 0; a text of one
+/// Where the mission stands, as the vehicle's `HEARTBEAT` carries it in `custom_mode` (and in
+/// `system_status`: standby, active, or critical after an abort).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum MissionState {
+    /// Waiting for its payload description and the start command.
+    Idle = 0,
+    /// Running (from the start command to landing and disarm).
+    Running = 1,
+    /// Ended as planned.
+    Completed = 2,
+    /// Ended early, for a reason the vehicle has sent as `STATUSTEXT`.
+    Aborted = 3,
+}
+
+impl MissionState {
+    /// The state coded in a `HEARTBEAT`'s `custom_mode`.
+    pub fn from_custom_mode(code: u32) -> Option<Self> {
+        [Self::Idle, Self::Running, Self::Completed, Self::Aborted]
+            .into_iter()
+            .find(|s| *s as u32 == code)
+    }
+
+    /// Whether the mission is over.
+    pub fn is_over(self) -> bool {
+        matches!(self, Self::Completed | Self::Aborted)
+    }
+}
+
+/// The vehicle's `HEARTBEAT`: a multirotor whose `custom_mode` is the [`MissionState`], armed
+/// and HIL flags in `base_mode`.
+pub fn heartbeat(state: MissionState, armed: bool, in_hil: bool) -> HEARTBEAT_DATA {
+    let mut base_mode = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
+    if armed {
+        base_mode |= MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
+    }
+    if in_hil {
+        base_mode |= MavModeFlag::MAV_MODE_FLAG_HIL_ENABLED;
+    }
+    HEARTBEAT_DATA {
+        custom_mode: state as u32,
+        mavtype: MavType::MAV_TYPE_GENERIC_MULTIROTOR,
+        autopilot: MavAutopilot::MAV_AUTOPILOT_GENERIC,
+        base_mode,
+        system_status: match state {
+            MissionState::Idle | MissionState::Completed => MavState::MAV_STATE_STANDBY,
+            MissionState::Running => MavState::MAV_STATE_ACTIVE,
+            MissionState::Aborted => MavState::MAV_STATE_CRITICAL,
+        },
+        mavlink_version: 3,
+    }
+}
+
+/// One `STATUSTEXT` with its MAVLink 2 extension fields `id` and `chunk_seq` (written and read
+/// here: see the note on `mavlink` features in the workspace manifest).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StatusChunk {
+    /// The base message: severity and up to 50 bytes of text.
+    pub message: STATUSTEXT_DATA,
+    /// Number shared by the chunks of one text (0: a text of one chunk).
+    pub id: u16,
+    /// Place of this chunk in its text.
+    pub chunk_seq: u8,
+}
+
+impl StatusChunk {
+    /// Encodes it, extension fields included.
+    pub fn encode(&self, encoder: &mut Encoder, out: &mut Frame) {
+        let id = self.id.to_le_bytes();
+        encoder.encode_extended(&self.message, &[id[0], id[1], self.chunk_seq], out);
+    }
+
+    /// Reads one from a frame (`None` if it is not a `STATUSTEXT`).
+    pub fn from_frame(frame: &Frame) -> Option<Self> {
+        let message = frame.decode::<STATUSTEXT_DATA>()?;
+        let ext = |i: usize| {
+            frame
+                .payload()
+                .get(STATUSTEXT_DATA::ENCODED_LEN + i)
+                .copied()
+                .unwrap_or(0)
+        };
+        Some(Self {
+            message,
+            id: u16::from_le_bytes([ext(0), ext(1)]),
+            chunk_seq: ext(2),
+        })
+    }
+
+    /// Its text (up to the first NUL).
+    pub fn text(&self) -> &[u8] {
+        let end = self
+            .message
+            .text
+            .iter()
+            .position(|&b| b == 0)
+            .unwrap_or(CHUNK_LEN);
+        &self.message.text[..end]
+    }
+}
+
+/// The `STATUSTEXT` chunks of `text`; `id` numbers a multi-chunk text (never 0; a text of one
 /// chunk goes with id 0). Bytes past [`MAX_TEXT_LEN`] are dropped.
 pub fn chunks(
     text: &str,
     severity: MavSeverity,
     id: u16,
-) -> Vec<STATUSTEXT_DATA, { MAX_TEXT_LEN / CHUNK_LEN + 1 }> {
+) -> Vec<StatusChunk, { MAX_TEXT_LEN / CHUNK_LEN + 1 }> {
     let bytes = &text.as_bytes()[..text.len().min(MAX_TEXT_LEN)];
     let mut out = Vec::new();
     let single = bytes.len() <= CHUNK_LEN;
@@ -46,9 +152,11 @@ pub fn chunks(
         let n = rest.len().min(CHUNK_LEN);
         let mut data = [0u8; CHUNK_LEN];
         data[..n].copy_from_slice(&rest[..n]);
-        let _ = out.push(STATUSTEXT_DATA {
-            severity,
-            text: data.into(),
+        let _ = out.push(StatusChunk {
+            message: STATUSTEXT_DATA {
+                severity,
+                text: data.into(),
+            },
             id,
             chunk_seq: seq,
         });
@@ -81,12 +189,6 @@ pub fn named_int(name: &str, value: i32, time_boot_ms: u32) -> NAMED_VALUE_INT_D
     }
 }
 
-/// The text of a chunk (up to its first NUL).
-pub fn chunk_text(m: &STATUSTEXT_DATA) -> &[u8] {
-    let end = m.text.iter().position(|&b| b == 0).unwrap_or(CHUNK_LEN);
-    &m.text[..end]
-}
-
 /// Puts chunked `STATUSTEXT`s back together (one text at a time, as the vehicle sends them).
 #[derive(Default)]
 pub struct Reassembler {
@@ -103,8 +205,8 @@ impl Reassembler {
 
     /// Takes one `STATUSTEXT`; returns the whole text (lossy UTF-8 is the caller's) when this
     /// one completes it.
-    pub fn push(&mut self, m: &STATUSTEXT_DATA) -> Option<Vec<u8, MAX_TEXT_LEN>> {
-        let part = chunk_text(m);
+    pub fn push(&mut self, m: &StatusChunk) -> Option<Vec<u8, MAX_TEXT_LEN>> {
+        let part = m.text();
         if m.id == 0 {
             return Vec::from_slice(part).ok();
         }
@@ -135,7 +237,19 @@ mod tests {
     fn round_trip(text: &str) -> std::string::String {
         let mut r = Reassembler::new();
         let mut out = None;
+        let mut encoder = Encoder::new(1, 1);
+        let mut frame = Frame::default();
         for c in chunks(text, MavSeverity::MAV_SEVERITY_INFO, 7) {
+            // Through the wire, extension fields included.
+            c.encode(&mut encoder, &mut frame);
+            let mut parser = crate::frame::Parser::new(crate::vehicle::crc_extra);
+            let mut back = None;
+            for &b in frame.bytes() {
+                if let Some((f, _)) = parser.push(b) {
+                    back = StatusChunk::from_frame(f);
+                }
+            }
+            let c = back.expect("a STATUSTEXT");
             if let Some(t) = r.push(&c) {
                 assert!(out.is_none(), "one text comes out once");
                 out = Some(std::string::String::from_utf8_lossy(&t).into_owned());
@@ -172,6 +286,25 @@ mod tests {
         assert!(r.push(&second[0]).is_none());
         let t = r.push(&second[1]).expect("second text whole");
         assert_eq!(&t[..], "b".repeat(60).as_bytes());
+    }
+
+    #[test]
+    fn the_heartbeat_carries_the_mission_state() {
+        for state in [
+            MissionState::Idle,
+            MissionState::Running,
+            MissionState::Completed,
+            MissionState::Aborted,
+        ] {
+            let h = heartbeat(state, state == MissionState::Running, true);
+            assert_eq!(MissionState::from_custom_mode(h.custom_mode), Some(state));
+            assert_eq!(
+                h.base_mode
+                    .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED),
+                state == MissionState::Running
+            );
+        }
+        assert_eq!(MissionState::from_custom_mode(9), None);
     }
 
     #[test]

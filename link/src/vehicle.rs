@@ -105,7 +105,13 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
     let ignored = Inbound::Ignored { id };
     match id {
         HIL_SENSOR_DATA::ID => frame.decode::<HIL_SENSOR_DATA>().map_or(ignored, |m| {
-            match ImuSample::from_message(&m) {
+            // The extension field `id` follows the base fields.
+            let sensor_id = frame
+                .payload()
+                .get(HIL_SENSOR_DATA::ENCODED_LEN)
+                .copied()
+                .unwrap_or(0);
+            match ImuSample::from_message(&m, sensor_id) {
                 Ok(s) => Inbound::Sensor(s),
                 Err(e) => Inbound::Invalid(e),
             }
@@ -192,5 +198,15 @@ mod tests {
         let mut bad = ImuSample::default().to_message();
         bad.xacc = f32::INFINITY;
         assert!(matches!(through_the_wire(&bad), Inbound::Invalid(_)));
+        // A second IMU (extension field id = 1) is not the one the vehicle steps on.
+        let mut enc = Encoder::new(crate::PLANT_SYSTEM_ID, crate::PLANT_COMPONENT_ID);
+        let mut f = Frame::default();
+        enc.encode_extended(&ImuSample::default().to_message(), &[1], &mut f);
+        let mut p = Parser::new(crc_extra);
+        let got = f
+            .bytes()
+            .iter()
+            .find_map(|&b| p.push(b).map(|(fr, i)| dispatch(fr, i)));
+        assert_eq!(got, Some(Inbound::Invalid(HilError::OtherSensor { id: 1 })));
     }
 }
