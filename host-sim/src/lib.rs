@@ -7,6 +7,7 @@ pub mod cli;
 pub mod commands;
 pub mod figures;
 pub mod harness;
+pub mod hil;
 pub mod mission_run;
 pub mod monte_carlo;
 pub mod plant;

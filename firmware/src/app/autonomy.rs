@@ -12,7 +12,7 @@
 //! What is here now is a PLACEHOLDER, written without `shared`'s mission so the firmware's
 //! plumbing can be proven alone: it holds zero thrust and never arms, keeps the robots where
 //! the payload description puts them, takes the start command, asks for one synthetic job (a
-//! checksum loop long enough to outlast its deadline under QEMU, so the hold is exercised) and
+//! checksum loop that outlasts its deadline, so the lockstep hold is exercised) and
 //! completes two seconds after the start. The real mission replaces [`Autonomy`],
 //! [`JobWork`], [`JobResult`] and [`run_job`]; the types the control and link tasks use
 //! ([`TickInput`], [`TickOutput`], [`Report`], [`JobRequest`]) are meant to stay.
@@ -200,11 +200,14 @@ pub struct TickOutput {
     pub report: Report,
 }
 
-/// Placeholder: steps the synthetic job takes (about 20 million instructions, longer than
-/// its deadline under QEMU, so the lockstep hold is exercised; 40 ms at 480 MHz).
-const PLACEHOLDER_JOB_ITERATIONS: u32 = 2_000_000;
-/// Placeholder: the job's deadline, control steps (100 ms at 400 Hz).
-const PLACEHOLDER_JOB_DEADLINE: u32 = 40;
+/// Placeholder: steps the synthetic job takes (about 48 million instructions: some 100 ms on
+/// the M7 at 480 MHz, the size of a formation solve).
+const PLACEHOLDER_JOB_ITERATIONS: u32 = 6_000_000;
+/// Placeholder: the job's deadline, control steps (the next step). Deliberately far shorter
+/// than the job, so that in lockstep the control task must hold that step's reply until the
+/// job is done (the path a mission job takes when the M7 is slower than its worst case
+/// promised); off HIL the step goes on without it and reports the job late.
+const PLACEHOLDER_JOB_DEADLINE: u32 = 1;
 /// Placeholder: the mission completes this long after its start, us.
 const PLACEHOLDER_MISSION_US: u64 = 2_000_000;
 
