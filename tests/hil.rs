@@ -277,6 +277,79 @@ fn the_serial_path_runs_through_a_pty() {
 }
 
 #[test]
+fn a_ground_station_sees_and_commands_the_vehicle_through_the_bridge() {
+    let Some(elf) =
+        image_or_skip("a_ground_station_sees_and_commands_the_vehicle_through_the_bridge")
+    else {
+        return;
+    };
+    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    use link::MessageData;
+    use link::frame::{Encoder, Frame, Parser};
+    use link::msg::{AUTOPILOT_VERSION_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA};
+    // A ground station on a local UDP port: once the vehicle speaks, it asks who it is.
+    let ground = std::net::UdpSocket::bind("127.0.0.1:0").expect("udp");
+    ground
+        .set_read_timeout(Some(Duration::from_millis(200)))
+        .expect("timeout");
+    let addr = ground.local_addr().expect("address");
+    // What it saw: every message id, and whether an AUTOPILOT_VERSION came after its request.
+    let station = std::thread::spawn(move || {
+        let mut parser = Parser::new(link::vehicle::crc_extra);
+        let mut seen = Vec::new();
+        let mut asked = false;
+        let mut answered = false;
+        let mut buf = [0u8; 2048];
+        let end = Instant::now() + Duration::from_secs(60);
+        while Instant::now() < end && !(answered && seen.contains(&HEARTBEAT_DATA::ID)) {
+            let Ok((n, vehicle)) = ground.recv_from(&mut buf) else {
+                continue;
+            };
+            for &b in &buf[..n] {
+                if let Some((f, _)) = parser.push(b) {
+                    seen.push(f.message_id());
+                    answered |= asked && f.message_id() == AUTOPILOT_VERSION_DATA::ID;
+                }
+            }
+            if !asked {
+                asked = true;
+                let mut enc = Encoder::new(255, 190);
+                let mut f = Frame::default();
+                let ask = link::command::command_long(
+                    MavCmd::MAV_CMD_REQUEST_MESSAGE,
+                    AUTOPILOT_VERSION_DATA::ID as f32,
+                    0.0,
+                );
+                enc.encode(&ask, &mut f);
+                let _ = ground.send_to(f.bytes(), vehicle);
+            }
+        }
+        (seen, answered)
+    });
+    let (_qemu, stream) = Qemu::launch(&elf).expect("QEMU starts");
+    let link = Link::over_tcp(stream).expect("link");
+    let setup = HilSetup {
+        duration_s: Some(2.5),
+        gcs: Some(addr),
+        ..HilSetup::default()
+    };
+    run(&rect_ex1(), link, &setup, print_text()).expect("hil with a ground station");
+    let (seen, answered) = station.join().expect("ground station");
+    assert!(
+        seen.contains(&HEARTBEAT_DATA::ID),
+        "no heartbeat reached the ground station"
+    );
+    assert!(
+        answered,
+        "the ground station's request did not reach the vehicle and back"
+    );
+    assert!(
+        !seen.contains(&HIL_ACTUATOR_CONTROLS_DATA::ID),
+        "HIL traffic leaked to the ground station"
+    );
+}
+
+#[test]
 fn the_hil_command_prints_the_mission_keys_as_json() {
     let Some(elf) = image_or_skip("the_hil_command_prints_the_mission_keys_as_json") else {
         return;
