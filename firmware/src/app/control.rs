@@ -8,6 +8,9 @@
 //! the step waits for it in HIL (the plant waits for the reply, so nothing is late), and on
 //! real hardware the step goes on without it and says so.
 //!
+//! Off HIL the step never waits on the link: a step whose messages find the send queue full
+//! loses them (counted, `tlm_drop`). In HIL it waits, as the plant waits for its reply.
+//!
 //! Each step's cost (board cycle counter: instructions under QEMU `-icount`, cycles on the
 //! Pixhawk), the wait for a job excluded, is tracked; the worst so far goes out once a second
 //! of vehicle time as a `NAMED_VALUE_INT` named by the board (`tick_insn` under QEMU).
@@ -34,6 +37,8 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
     let mut deadline = JobDeadline::new();
     let mut worst_cost: u32 = 0;
     let mut holds: u32 = 0;
+    // Steps whose messages found the link's queue full (off HIL only).
+    let mut dropped_reports: u32 = 0;
     // Number of the last job asked for; results of other (late, dropped) jobs are discarded.
     let mut job_id: u32 = 0;
     loop {
@@ -45,7 +50,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 let mut out = idle_output();
                 out.report
                     .text(Severity::Error, format_args!("sensor refused: {e}"));
-                OUTBOX.send(Outbound::Report(out.report)).await;
+                let _ = OUTBOX.try_send(Outbound::Report(out.report));
                 continue;
             }
         };
@@ -125,6 +130,10 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
         if held_counts > 0 {
             out.report.value("job_holds", Value::Int(holds as i32));
         }
+        if dropped_reports > 0 && step.index % COST_REPORT_STEPS == 0 {
+            out.report
+                .value("tlm_drop", Value::Int(dropped_reports as i32));
+        }
         if step.index % COST_REPORT_STEPS == 0 || out.state.is_over() {
             out.report.value(
                 <Selected as Board>::TICK_COST_NAME,
@@ -138,22 +147,27 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             rail: out.rail,
             armed: out.armed,
         };
-        OUTBOX
-            .send(Outbound::Step {
-                time_us: step.time_us,
-                report: out.report,
-                // Every command is acknowledged; one the autonomy took without a word is accepted.
-                ack: pending.map(|p| {
-                    (
-                        p,
-                        out.ack
-                            .map_or(CommandResult::Accepted, |(_, result)| result),
-                    )
-                }),
-                state: out.state,
-                actuators: sample.hil.then_some(actuators),
-            })
-            .await;
+        let message = Outbound::Step {
+            time_us: step.time_us,
+            report: out.report,
+            // Every command is acknowledged; one the autonomy took without a word is accepted.
+            ack: pending.map(|p| {
+                (
+                    p,
+                    out.ack
+                        .map_or(CommandResult::Accepted, |(_, result)| result),
+                )
+            }),
+            state: out.state,
+            actuators: sample.hil.then_some(actuators),
+        };
+        if sample.hil {
+            // The plant waits for this reply: it must go, and nothing else is waiting.
+            OUTBOX.send(message).await;
+        } else if OUTBOX.try_send(message).is_err() {
+            // In flight the step never waits for the link: this step's telemetry is lost.
+            dropped_reports = dropped_reports.wrapping_add(1);
+        }
     }
 }
 
