@@ -59,8 +59,17 @@ fn image_or_skip(test: &str) -> Option<PathBuf> {
     if std::env::var("HIL_REQUIRED").is_ok_and(|v| v == "1") {
         panic!("{test}: HIL_REQUIRED=1 but {reason}");
     }
-    eprintln!("{test}: SKIPPED: {reason}");
+    // Straight to stderr: the test harness hides what `eprintln!` prints in a passing test.
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "{test}: SKIPPED: {reason}");
     None
+}
+
+/// Prints a measurement where it is seen even when the test passes (the harness hides what
+/// `println!` prints then).
+fn report(line: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "{line}");
 }
 
 fn rect_ex1() -> scenario_file::LoadedScenario {
@@ -103,13 +112,13 @@ fn the_qemu_firmware_runs_its_mission_in_lockstep() {
     let outcome = run(&loaded, link, &HilSetup::default(), print_text())
         .unwrap_or_else(|e| panic!("hil run failed: {e:#}\nQEMU said: {}", qemu.output()));
 
-    println!(
-        "lockstep: {} ticks, {:.2} s simulated in {:.2} s wall ({:.0} ticks/s)",
+    report(format_args!(
+        "hil: lockstep: {} ticks, {:.2} s simulated in {:.2} s wall ({:.0} ticks/s)",
         outcome.ticks,
         outcome.simulated_s,
         outcome.wall_s,
         outcome.ticks as f64 / outcome.wall_s
-    );
+    ));
     assert_eq!(outcome.firmware, "qemu-mps2-an500");
     assert_eq!(outcome.start_ack, Some(MavResult::MAV_RESULT_ACCEPTED));
     assert_eq!(outcome.state, MissionState::Completed);
@@ -152,10 +161,10 @@ fn the_qemu_firmware_runs_its_mission_in_lockstep() {
         .expect("the firmware reports its worst tick");
     assert_eq!(name, "tick_insn");
     assert!(worst > 0.0);
-    println!(
-        "worst control tick under QEMU -icount: {worst:.0} instructions (job holds: {})",
+    report(format_args!(
+        "hil: worst control tick under QEMU -icount (NAMED_VALUE_INT {name}): {worst:.0} instructions (job holds: {})",
         outcome.log.last_value("job_holds").unwrap_or(0.0)
-    );
+    ));
 }
 
 #[test]
