@@ -34,6 +34,9 @@ pub enum Command {
     Fly(commands::fly::FlyArgs),
     /// The whole autonomous mission in the physics plant (default: the paper's rect-ex1).
     Mission(commands::mission::MissionArgs),
+    /// The mission with the firmware in the loop (PX4's HIL MAVLink messages, in lockstep):
+    /// under QEMU, on a board over serial, or behind a TCP socket.
+    Hil(commands::hil::HilArgs),
 }
 
 /// Options every command takes.
@@ -70,6 +73,7 @@ where
         Command::Formation(args) => commands::formation::run(&args),
         Command::Fly(args) => commands::fly::run(&args),
         Command::Mission(args) => commands::mission::run(&args),
+        Command::Hil(args) => commands::hil::run(&args),
     }
     .map_err(CliError::Failed)
 }

@@ -3,10 +3,15 @@
 //!
 //! No algorithm lives here: everything the vehicle decides is computed by `shared`.
 
+// The workspace's rust-version went to 1.88 (mavlink 0.21); clippy then asks for
+// `is_multiple_of` in code written for 1.85 (the harness). Allowed until that code adopts it.
+#![allow(clippy::manual_is_multiple_of)]
+
 pub mod cli;
 pub mod commands;
 pub mod figures;
 pub mod harness;
+pub mod hil;
 pub mod mission_run;
 pub mod monte_carlo;
 pub mod plant;

@@ -25,5 +25,6 @@ pub mod mission;
 pub mod paper;
 pub mod rail;
 pub mod scenario;
+pub mod scenario_wire;
 pub mod statics;
 pub mod timing;

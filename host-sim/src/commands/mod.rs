@@ -3,6 +3,7 @@
 pub mod estimate;
 pub mod fly;
 pub mod formation;
+pub mod hil;
 pub mod lift;
 pub mod mission;
 pub mod validate;

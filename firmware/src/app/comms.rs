@@ -1,0 +1,358 @@
+//! The MAVLink link's two tasks, on the link executor (issue 11, section 3): receiving
+//! (framing, dispatch to the services, the FTP server, the payload's checks) and sending (each
+//! control step's messages in order, replies, heartbeat). The protocol logic is the `link`
+//! crate's, host-tested; this is the glue to the board's byte stream and the other tasks.
+//!
+//! Each control step goes out as: its texts (`STATUSTEXT`), values (`NAMED_VALUE_*`), the
+//! command's `COMMAND_ACK`, a `HEARTBEAT` when the mission state changed, then in HIL the
+//! actuator commands (`ACTUATOR_OUTPUT_STATUS` past 8 robots, and `HIL_ACTUATOR_CONTROLS`,
+//! the lockstep reply, last). So the plant has everything a step said before it steps on.
+
+use core::sync::atomic::Ordering;
+
+use embassy_futures::select::{Either, select};
+use embassy_time::{Duration, Instant, Timer};
+use embedded_io_async::{Read, Write};
+use link::MessageData;
+use link::command::{Request, ack};
+use link::frame::{Encoder, Frame, Parser};
+use link::ftp::{FileEvent, FtpMessage, Server};
+use link::hil::{Actuators, ImuSample};
+use link::msg::{AUTOPILOT_VERSION_DATA, MavCmd, MavProtocolCapability, MavResult, MavSeverity};
+use link::status::{MissionState, Text, chunks, heartbeat, named_float, named_int};
+use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
+use shared::scenario_wire::{MAX_ENCODED_LEN, decode_and_check};
+use static_cell::StaticCell;
+
+use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
+use super::{ARMED, COMMANDS, IN_HIL, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD, SENSOR};
+use crate::board::{Board, Selected};
+
+/// An IMU sample for the control task.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorSample {
+    /// The sample, stamped with the vehicle's time.
+    pub imu: ImuSample,
+    /// It came from the HIL plant (the step's reply goes back to it).
+    pub hil: bool,
+}
+
+impl SensorSample {
+    /// The sample as the autonomy takes it.
+    pub fn reading(&self) -> ImuReading {
+        ImuReading {
+            gyro: self.imu.gyro,
+            accel: self.imu.accel,
+        }
+    }
+}
+
+/// An operator command waiting for the autonomy, with what its acknowledgement needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PendingCommand {
+    /// The command.
+    pub command: OperatorCommand,
+    /// The MAVLink command it came as.
+    pub mav_cmd: MavCmd,
+    /// Who sent it.
+    pub from: Sender,
+}
+
+/// What the send task sends.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Outbound {
+    /// One control step's messages.
+    Step {
+        /// The vehicle's time of the step, us.
+        time_us: u64,
+        /// Texts and values.
+        report: Report,
+        /// The step's command and how it was taken.
+        ack: Option<(PendingCommand, CommandResult)>,
+        /// The mission state after the step.
+        state: MissionState,
+        /// In HIL: the actuator commands for the plant.
+        actuators: Option<Actuators>,
+    },
+    /// Texts and values outside a step.
+    Report(Report),
+    /// An FTP answer.
+    Ftp {
+        /// The answer.
+        message: FtpMessage,
+        /// To whom.
+        to: Sender,
+    },
+    /// A command's acknowledgement decided by the link itself.
+    Ack {
+        /// The command.
+        command: MavCmd,
+        /// The result.
+        result: MavResult,
+    },
+    /// `AUTOPILOT_VERSION` and the board's name, on request.
+    Identity,
+}
+
+/// Largest payload description file the vehicle takes.
+const FILE_CAPACITY: usize = MAX_ENCODED_LEN;
+
+static FTP: StaticCell<Server<FILE_CAPACITY>> = StaticCell::new();
+
+fn report(severity: Severity, args: core::fmt::Arguments<'_>) -> Outbound {
+    let mut r = Report::default();
+    r.text(severity, args);
+    Outbound::Report(r)
+}
+
+/// Reads the link, forever: every frame to its service.
+#[embassy_executor::task]
+pub async fn receive(mut rx: <Selected as Board>::LinkRx) {
+    let mut parser = Parser::new(crc_extra);
+    let ftp = FTP.init(Server::new());
+    let mut buf = [0u8; 64];
+    loop {
+        // A board's read error (a UART framing error) loses bytes the parser resyncs over.
+        let n = rx.read(&mut buf).await.unwrap_or(0);
+        for &byte in &buf[..n] {
+            let Some((frame, integrity)) = parser.push(byte) else {
+                continue;
+            };
+            let inbound = dispatch(frame, integrity);
+            handle(inbound, ftp).await;
+        }
+    }
+}
+
+async fn handle(inbound: Inbound, ftp: &mut Server<FILE_CAPACITY>) {
+    match inbound {
+        Inbound::Sensor(imu) => {
+            if SENSOR.try_send(SensorSample { imu, hil: true }).is_err() {
+                OUTBOX
+                    .send(report(
+                        Severity::Warning,
+                        format_args!("HIL_SENSOR dropped: the control step is behind"),
+                    ))
+                    .await;
+            }
+        }
+        Inbound::Mocap(fix) => MOCAP.signal(fix),
+        Inbound::Command {
+            command,
+            request,
+            from,
+        } => match request {
+            Request::Operator(operator) => {
+                let pending = PendingCommand {
+                    command: operator,
+                    mav_cmd: command,
+                    from,
+                };
+                if COMMANDS.try_send(pending).is_err() {
+                    let result = MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
+                    OUTBOX.send(Outbound::Ack { command, result }).await;
+                }
+            }
+            Request::Message(id) if id == AUTOPILOT_VERSION_DATA::ID => {
+                let result = MavResult::MAV_RESULT_ACCEPTED;
+                OUTBOX.send(Outbound::Ack { command, result }).await;
+                OUTBOX.send(Outbound::Identity).await;
+            }
+            Request::Message(_) => {
+                let result = MavResult::MAV_RESULT_UNSUPPORTED;
+                OUTBOX.send(Outbound::Ack { command, result }).await;
+            }
+            Request::Refused(result) => {
+                OUTBOX.send(Outbound::Ack { command, result }).await;
+            }
+        },
+        Inbound::Ftp { message, from } => {
+            let (answer, event) = ftp.handle(&message);
+            OUTBOX
+                .send(Outbound::Ftp {
+                    message: answer,
+                    to: from,
+                })
+                .await;
+            if let FileEvent::Written { .. } = event {
+                OUTBOX.send(check_payload(ftp.file())).await;
+            }
+        }
+        Inbound::Invalid(e) => {
+            OUTBOX
+                .send(report(
+                    Severity::Warning,
+                    format_args!("HIL message refused: {e}"),
+                ))
+                .await;
+        }
+        Inbound::Heartbeat(_) | Inbound::Ignored { .. } => {}
+    }
+}
+
+/// Decodes and checks a received payload description with the host's checks; hands it to the
+/// autonomy, or says which key is wrong.
+fn check_payload(file: &[u8]) -> Outbound {
+    match decode_and_check(file) {
+        Ok((wire, scenario)) => {
+            let grid = &scenario.estimation;
+            let out = report(
+                Severity::Info,
+                format_args!(
+                    "payload {} accepted: {} robots, {} candidates, grid {}x{}x{}",
+                    wire.name,
+                    scenario.robots.count(),
+                    scenario.payload.candidates.len(),
+                    grid.axis_len(0),
+                    grid.axis_len(1),
+                    grid.axis_len(2)
+                ),
+            );
+            PAYLOAD.signal(scenario);
+            out
+        }
+        Err(e) => report(Severity::Error, format_args!("payload refused: {e}")),
+    }
+}
+
+fn mav_severity(s: Severity) -> MavSeverity {
+    match s {
+        Severity::Info => MavSeverity::MAV_SEVERITY_INFO,
+        Severity::Notice => MavSeverity::MAV_SEVERITY_NOTICE,
+        Severity::Warning => MavSeverity::MAV_SEVERITY_WARNING,
+        Severity::Error => MavSeverity::MAV_SEVERITY_ERROR,
+        Severity::Critical => MavSeverity::MAV_SEVERITY_CRITICAL,
+    }
+}
+
+fn mav_result(r: CommandResult) -> MavResult {
+    match r {
+        CommandResult::Accepted => MavResult::MAV_RESULT_ACCEPTED,
+        CommandResult::TemporarilyRejected => MavResult::MAV_RESULT_TEMPORARILY_REJECTED,
+        CommandResult::Denied => MavResult::MAV_RESULT_DENIED,
+    }
+}
+
+/// The send side: numbered frames onto the board's byte stream.
+struct Sending<W> {
+    tx: W,
+    encoder: Encoder,
+    frame: Frame,
+    text_id: u16,
+}
+
+impl<W: Write> Sending<W> {
+    async fn put<M: MessageData>(&mut self, message: &M) {
+        self.encoder.encode(message, &mut self.frame);
+        // A board link cannot fail in a way the firmware could mend; the bytes are dropped.
+        let _ = self.tx.write_all(self.frame.bytes()).await;
+    }
+
+    async fn text(&mut self, severity: Severity, text: &str) {
+        self.text_id = self.text_id.wrapping_add(1).max(1);
+        for chunk in chunks(text, mav_severity(severity), self.text_id) {
+            chunk.encode(&mut self.encoder, &mut self.frame);
+            let _ = self.tx.write_all(self.frame.bytes()).await;
+        }
+    }
+
+    async fn report(&mut self, report: &Report, time_ms: u32) {
+        for line in &report.texts {
+            self.text(line.severity, &line.text).await;
+        }
+        for v in &report.values {
+            match v.value {
+                Value::Float(x) => self.put(&named_float(v.name, x, time_ms)).await,
+                Value::Int(x) => self.put(&named_int(v.name, x, time_ms)).await,
+            }
+        }
+    }
+
+    async fn heartbeat(&mut self) {
+        let state =
+            MissionState::from_custom_mode(u32::from(MISSION_STATE.load(Ordering::Relaxed)))
+                .unwrap_or(MissionState::Idle);
+        let beat = heartbeat(
+            state,
+            ARMED.load(Ordering::Relaxed),
+            IN_HIL.load(Ordering::Relaxed),
+        );
+        self.put(&beat).await;
+    }
+
+    async fn identity(&mut self) {
+        let version = AUTOPILOT_VERSION_DATA {
+            capabilities: MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MAVLINK2
+                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_FTP,
+            flight_sw_version: 0x0001_0000,
+            ..Default::default()
+        };
+        self.put(&version).await;
+        let mut text = Text::new();
+        let _ = core::fmt::write(
+            &mut text,
+            format_args!(
+                "{}{} (firmware {})",
+                link::status::BOARD_PREFIX,
+                <Selected as Board>::NAME,
+                env!("CARGO_PKG_VERSION")
+            ),
+        );
+        self.text(Severity::Info, &text).await;
+    }
+}
+
+/// Sends what the other tasks queue, and a heartbeat every second, forever.
+#[embassy_executor::task]
+pub async fn send(tx: <Selected as Board>::LinkTx) {
+    let mut out = Sending {
+        tx,
+        encoder: Encoder::new(link::VEHICLE_SYSTEM_ID, link::VEHICLE_COMPONENT_ID),
+        frame: Frame::default(),
+        text_id: 0,
+    };
+    out.identity().await;
+    let mut state = MissionState::Idle;
+    let mut next_beat = Instant::now();
+    loop {
+        match select(OUTBOX.receive(), Timer::at(next_beat)).await {
+            Either::First(message) => match message {
+                Outbound::Step {
+                    time_us,
+                    report,
+                    ack: step_ack,
+                    state: now,
+                    actuators,
+                } => {
+                    out.report(&report, (time_us / 1000) as u32).await;
+                    if let Some((pending, result)) = step_ack {
+                        out.put(&ack(pending.mav_cmd, mav_result(result))).await;
+                    }
+                    if now != state {
+                        state = now;
+                        out.heartbeat().await;
+                    }
+                    if let Some(actuators) = actuators {
+                        let messages = actuators.to_messages();
+                        if let Some(status) = &messages.status {
+                            out.put(status).await;
+                        }
+                        out.put(&messages.controls).await;
+                    }
+                }
+                Outbound::Report(report) => {
+                    out.report(&report, Instant::now().as_millis() as u32).await;
+                }
+                Outbound::Ftp { message, to } => {
+                    out.put(&message.to_message(to.system, to.component)).await;
+                }
+                Outbound::Ack { command, result } => out.put(&ack(command, result)).await,
+                Outbound::Identity => out.identity().await,
+            },
+            Either::Second(()) => {
+                out.heartbeat().await;
+                next_beat = Instant::now() + Duration::from_secs(1);
+            }
+        }
+    }
+}

@@ -1,0 +1,205 @@
+//! The control task: one step of the autonomy per IMU sample, at the highest priority (issue
+//! 11, sections 1 to 3).
+//!
+//! In hardware-in-the-loop the sample is the plant's `HIL_SENSOR` and the vehicle's clock is
+//! its time (PX4 lockstep): the step runs when it arrives and its reply, the actuator
+//! commands, goes back over the link; the physical outputs stay disarmed. A job's result is
+//! handed to the autonomy in the step at the job's deadline: if the job is not done by then,
+//! the step waits for it in HIL (the plant waits for the reply, so nothing is late), and on
+//! real hardware the step goes on without it and says so.
+//!
+//! Off HIL the step never waits on the link: a step whose messages find the send queue full
+//! loses them (counted, `tlm_drop`). In HIL it waits, as the plant waits for its reply.
+//!
+//! Each step's cost (board cycle counter: instructions under QEMU `-icount`, cycles on the
+//! Pixhawk), the wait for a job excluded, is tracked; the worst so far goes out once a second
+//! of vehicle time as a `NAMED_VALUE_INT` named by the board (`tick_insn` under QEMU).
+
+use core::sync::atomic::Ordering;
+
+use link::hil::{Actuators, JobDeadline, VehicleClock};
+
+use super::autonomy::{Autonomy, CommandResult, JobResult, Severity, TickInput, TickOutput, Value};
+use super::comms::{Outbound, SensorSample};
+use super::{
+    ARMED, COMMANDS, IN_HIL, JOB_REQUESTS, JOB_RESULTS, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD,
+    SENSOR,
+};
+use crate::board::{ActuatorOutputs, Board, Selected};
+
+/// Steps between reports of the worst step cost (1 s at 400 Hz).
+const COST_REPORT_STEPS: u64 = 400;
+
+/// Runs the autonomy on every IMU sample, forever.
+#[embassy_executor::task]
+pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as Board>::Outputs) {
+    let mut clock = VehicleClock::new();
+    let mut deadline = JobDeadline::new();
+    let mut worst_cost: u32 = 0;
+    let mut holds: u32 = 0;
+    // Steps whose messages found the link's queue full (off HIL only).
+    let mut dropped_reports: u32 = 0;
+    // Number of the last job asked for; results of other (late, dropped) jobs are discarded.
+    let mut job_id: u32 = 0;
+    loop {
+        let sample: SensorSample = SENSOR.receive().await;
+        let start = <Selected as Board>::cycle_count();
+        let step = match clock.on_sensor(sample.imu.time_us) {
+            Ok(step) => step,
+            Err(e) => {
+                let mut out = idle_output();
+                out.report
+                    .text(Severity::Error, format_args!("sensor refused: {e}"));
+                let _ = OUTBOX.try_send(Outbound::Report(out.report));
+                continue;
+            }
+        };
+        IN_HIL.store(sample.hil, Ordering::Relaxed);
+
+        // The job's result, in exactly the step at its deadline.
+        let mut held_counts: u32 = 0;
+        let mut late = false;
+        let job = if deadline.is_due(step.index) {
+            deadline.taken();
+            match take_result(job_id) {
+                Some(result) => Some(result),
+                None if sample.hil => {
+                    let before = <Selected as Board>::cycle_count();
+                    let result = wait_result(job_id).await;
+                    held_counts = <Selected as Board>::cycle_count().wrapping_sub(before);
+                    holds += 1;
+                    Some(result)
+                }
+                None => {
+                    // Off HIL the step cannot wait: the result, when it comes, is dropped.
+                    late = true;
+                    None
+                }
+            }
+        } else {
+            None
+        };
+
+        let payload = PAYLOAD.try_take();
+        let pending = COMMANDS.try_receive().ok();
+        let input = TickInput {
+            time_us: step.time_us,
+            step: step.index,
+            imu: sample.reading(),
+            mocap: MOCAP.try_take(),
+            command: pending.map(|p| p.command),
+            payload: payload.as_ref(),
+            job,
+        };
+        let mut out = autonomy.tick(&input);
+        if late {
+            out.report
+                .text(Severity::Critical, format_args!("job late at its deadline"));
+        }
+        if let Some(request) = out.job {
+            let next_id = job_id.wrapping_add(1);
+            match deadline.request(step.index, request.deadline_steps) {
+                Ok(_) if JOB_REQUESTS.try_send((next_id, request)).is_ok() => job_id = next_id,
+                _ => {
+                    deadline.taken();
+                    out.report.text(
+                        Severity::Error,
+                        format_args!("job refused: another job is still running"),
+                    );
+                }
+            }
+        }
+        if sample.hil {
+            // In HIL the plant flies the commands; the real outputs stay off.
+            outputs.apply(&[], &[], false);
+        } else {
+            outputs.apply(
+                &out.thrust[..out.robots],
+                &out.rail[..out.robots],
+                out.armed,
+            );
+        }
+        MISSION_STATE.store(out.state as u8, Ordering::Relaxed);
+        ARMED.store(out.armed, Ordering::Relaxed);
+
+        let cost = <Selected as Board>::cycle_count()
+            .wrapping_sub(start)
+            .wrapping_sub(held_counts)
+            .saturating_mul(<Selected as Board>::TICK_COST_PER_COUNT);
+        worst_cost = worst_cost.max(cost);
+        if held_counts > 0 {
+            out.report.value("job_holds", Value::Int(holds as i32));
+        }
+        if dropped_reports > 0 && step.index % COST_REPORT_STEPS == 0 {
+            out.report
+                .value("tlm_drop", Value::Int(dropped_reports as i32));
+        }
+        if step.index % COST_REPORT_STEPS == 0 || out.state.is_over() {
+            out.report.value(
+                <Selected as Board>::TICK_COST_NAME,
+                Value::Int(worst_cost.min(i32::MAX as u32) as i32),
+            );
+        }
+        let actuators = Actuators {
+            time_us: step.time_us,
+            robots: out.robots,
+            thrust: out.thrust,
+            rail: out.rail,
+            armed: out.armed,
+        };
+        let message = Outbound::Step {
+            time_us: step.time_us,
+            report: out.report,
+            // Every command is acknowledged; one the autonomy took without a word is accepted.
+            ack: pending.map(|p| {
+                (
+                    p,
+                    out.ack
+                        .map_or(CommandResult::Accepted, |(_, result)| result),
+                )
+            }),
+            state: out.state,
+            actuators: sample.hil.then_some(actuators),
+        };
+        if sample.hil {
+            // The plant waits for this reply: it must go, and nothing else is waiting.
+            OUTBOX.send(message).await;
+        } else if OUTBOX.try_send(message).is_err() {
+            // In flight the step never waits for the link: this step's telemetry is lost.
+            dropped_reports = dropped_reports.wrapping_add(1);
+        }
+    }
+}
+
+/// The result of job `id` if it is in; results of earlier jobs are dropped.
+fn take_result(id: u32) -> Option<JobResult> {
+    while let Ok((got, result)) = JOB_RESULTS.try_receive() {
+        if got == id {
+            return Some(result);
+        }
+    }
+    None
+}
+
+/// Waits for the result of job `id`, dropping results of earlier jobs.
+async fn wait_result(id: u32) -> JobResult {
+    loop {
+        let (got, result) = JOB_RESULTS.receive().await;
+        if got == id {
+            return result;
+        }
+    }
+}
+
+fn idle_output() -> TickOutput {
+    TickOutput {
+        robots: 0,
+        thrust: [0.0; link::hil::MAX_ROBOTS],
+        rail: [0.0; link::hil::MAX_ROBOTS],
+        armed: false,
+        state: super::autonomy::MissionState::Idle,
+        ack: None,
+        job: None,
+        report: Default::default(),
+    }
+}

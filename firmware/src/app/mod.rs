@@ -1,0 +1,119 @@
+//! The application, written once for every board (issue 11, section 2): four tasks on three
+//! executors, embassy's multi-priority pattern.
+//!
+//! | task | executor | does |
+//! |---|---|---|
+//! | [`control`] | [`CONTROL_EXECUTOR`], an `InterruptExecutor` at the highest priority | one step of the autonomy per IMU sample (400 Hz), actuator outputs |
+//! | [`comms`] receive and send | [`LINK_EXECUTOR`], an `InterruptExecutor` below control | MAVLink: HIL sensors in, commands, FTP, status out |
+//! | [`jobs`] | thread mode (`WFI` between polls) | the autonomy's long computations, off the tick |
+//!
+//! The tasks talk through the channels and signals below, never by shared mutable state. The
+//! autonomy sits behind one narrow seam, [`autonomy`]: the integration point of the mission.
+
+pub mod autonomy;
+pub mod comms;
+pub mod control;
+pub mod jobs;
+
+use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+
+use embassy_executor::{InterruptExecutor, Spawner, raw};
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::channel::Channel;
+use embassy_sync::signal::Signal;
+use shared::scenario::Scenario;
+use static_cell::StaticCell;
+
+use crate::board::{Parts, Selected};
+
+/// The control executor (highest priority of the three).
+pub static CONTROL_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+/// The link executor.
+pub static LINK_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+
+type Cs = CriticalSectionRawMutex;
+
+/// IMU samples for the control task (from the HIL link; from the IMU driver on hardware).
+pub static SENSOR: Channel<Cs, comms::SensorSample, 2> = Channel::new();
+/// The latest motion-capture fix not yet taken by a control step.
+pub static MOCAP: Signal<Cs, link::hil::MocapFix> = Signal::new();
+/// Operator commands for the autonomy, with what their acknowledgement needs.
+pub static COMMANDS: Channel<Cs, comms::PendingCommand, 4> = Channel::new();
+/// A payload description received and checked, for the autonomy.
+pub static PAYLOAD: Signal<Cs, Scenario> = Signal::new();
+/// A job for the thread-mode task, numbered by the control task.
+pub static JOB_REQUESTS: Channel<Cs, (u32, autonomy::JobRequest), 1> = Channel::new();
+/// Results of jobs, with their numbers.
+pub static JOB_RESULTS: Channel<Cs, (u32, autonomy::JobResult), 2> = Channel::new();
+/// What goes out on the link, in order.
+pub static OUTBOX: Channel<Cs, comms::Outbound, 4> = Channel::new();
+
+/// The mission state as last reported by the control task (for the heartbeat).
+pub static MISSION_STATE: AtomicU8 = AtomicU8::new(0);
+/// Whether the vehicle is armed (for the heartbeat).
+pub static ARMED: AtomicBool = AtomicBool::new(false);
+/// Whether the vehicle runs in hardware-in-the-loop (a `HIL_SENSOR` has arrived).
+pub static IN_HIL: AtomicBool = AtomicBool::new(false);
+
+/// The thread-mode wake-up interrupt fired since the executor last looked.
+static THREAD_WOKEN: AtomicBool = AtomicBool::new(false);
+
+/// Called by the board's thread-wake interrupt handler.
+pub fn thread_woken() {
+    THREAD_WOKEN.store(true, Ordering::Release);
+}
+
+static THREAD_EXECUTOR: StaticCell<raw::Executor> = StaticCell::new();
+static AUTONOMY: StaticCell<autonomy::Autonomy> = StaticCell::new();
+
+/// Starts the application on a board that is up; `board_tasks` spawns the board's own tasks
+/// (status LEDs) in thread mode. Never returns: thread mode then runs the jobs.
+pub fn run(parts: Parts<Selected>, board_tasks: impl FnOnce(Spawner)) -> ! {
+    let Parts {
+        link_rx,
+        link_tx,
+        outputs,
+        irqs,
+    } = parts;
+
+    let control = CONTROL_EXECUTOR.start(irqs.control);
+    let autonomy = AUTONOMY.init(autonomy::Autonomy::new());
+    match control::control(autonomy, outputs) {
+        Ok(token) => control.spawn(token),
+        Err(_) => panic!("control task not spawned"),
+    }
+
+    let comms_spawner = LINK_EXECUTOR.start(irqs.link);
+    match comms::receive(link_rx) {
+        Ok(token) => comms_spawner.spawn(token),
+        Err(_) => panic!("link receive task not spawned"),
+    }
+    match comms::send(link_tx) {
+        Ok(token) => comms_spawner.spawn(token),
+        Err(_) => panic!("link send task not spawned"),
+    }
+
+    // Thread mode: a raw executor whose pender pends the board's wake-up interrupt, so `WFI`
+    // (not `WFE`, which QEMU does not halt on under -icount) wakes when a job is woken.
+    use cortex_m::interrupt::InterruptNumber;
+    let executor = THREAD_EXECUTOR.init(raw::Executor::new(
+        usize::from(irqs.thread_wake.number()) as *mut ()
+    ));
+    let spawner = executor.spawner();
+    match jobs::jobs() {
+        Ok(token) => spawner.spawn(token),
+        Err(_) => panic!("job task not spawned"),
+    }
+    board_tasks(spawner);
+    loop {
+        // SAFETY: polled from thread mode only, never re-entrantly.
+        unsafe { executor.poll() };
+        cortex_m::interrupt::free(|_| {
+            // A wake-up between the poll and here has set the flag; one after is pending and
+            // ends the WFI at once.
+            if !THREAD_WOKEN.swap(false, Ordering::Acquire) {
+                cortex_m::asm::wfi();
+            }
+        });
+    }
+}

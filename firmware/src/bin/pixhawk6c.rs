@@ -1,0 +1,14 @@
+//! The firmware on a Pixhawk 6C (`cargo fw`, flashed with `cargo fw-run` or the PX4
+//! bootloader).
+#![no_std]
+#![no_main]
+
+use cortex_m_rt::entry;
+
+#[entry]
+fn main() -> ! {
+    let (parts, leds) = firmware::board::pixhawk6c::init();
+    firmware::app::run(parts, move |spawner| {
+        firmware::board::pixhawk6c::spawn_tasks(spawner, leds)
+    })
+}

@@ -1,0 +1,84 @@
+//! The boards the application runs on, and the small interface each one gives it (issue 11,
+//! section 2). One board per build, chosen by cargo feature:
+//!
+//! | feature | board | binary |
+//! |---|---|---|
+//! | `pixhawk6c` | Pixhawk 6C, STM32H743 with embassy-stm32 ([`pixhawk6c`]) | `firmware` (`cargo fw`) |
+//! | `qemu` | QEMU's mps2-an500 Cortex-M7 ([`qemu`]) | `firmware-qemu` (`cargo fw-qemu`) |
+//!
+//! A board brings up its clocks and pins, gives the application its MAVLink link as an
+//! `embedded-io-async` byte stream, its actuator outputs, a cycle counter for the tick's cost,
+//! and three spare interrupts for the executors (control, link, thread-mode wake-up) with their
+//! priorities set. Everything else is the application's ([`crate::app`]).
+
+use cortex_m::interrupt::InterruptNumber;
+
+#[cfg(all(feature = "pixhawk6c", feature = "qemu"))]
+compile_error!("firmware: choose one board feature, `pixhawk6c` or `qemu`, not both");
+#[cfg(not(any(feature = "pixhawk6c", feature = "qemu")))]
+compile_error!(
+    "firmware: choose a board feature: `pixhawk6c` (cargo fw) or `qemu` (cargo fw-qemu)"
+);
+
+#[cfg(feature = "pixhawk6c")]
+pub mod pixhawk6c;
+#[cfg(feature = "pixhawk6c")]
+pub use pixhawk6c::Pixhawk6c as Selected;
+
+#[cfg(feature = "qemu")]
+pub mod qemu;
+#[cfg(feature = "qemu")]
+pub use qemu::QemuMps2An500 as Selected;
+
+/// What a board provides to the application.
+pub trait Board: 'static {
+    /// The board's name, as the firmware reports it (`STATUSTEXT` "board: NAME").
+    const NAME: &'static str;
+    /// Name of the `NAMED_VALUE_INT` carrying the worst control tick's cost, and its unit.
+    const TICK_COST_NAME: &'static str;
+    /// Units of [`Board::TICK_COST_NAME`] per count of [`Board::cycle_count`].
+    const TICK_COST_PER_COUNT: u32;
+
+    /// The link's receiving half.
+    type LinkRx: embedded_io_async::Read + Send + 'static;
+    /// The link's sending half.
+    type LinkTx: embedded_io_async::Write + Send + 'static;
+    /// The rotor and stepper outputs.
+    type Outputs: ActuatorOutputs + Send + 'static;
+    /// An interrupt line.
+    type Irq: InterruptNumber;
+
+    /// A free-running counter (wrapping) for measuring the control tick.
+    fn cycle_count() -> u32;
+}
+
+/// The robots' actuators: each rotor's ESC and each robot's stepper. In hardware-in-the-loop
+/// the plant receives the commands over the link instead and the outputs stay disarmed.
+pub trait ActuatorOutputs {
+    /// Applies one control step's commands: thrust fractions `[0, 1]` and rail positions (m),
+    /// one per robot; with `armed` false the rotors are stopped whatever `thrust` says.
+    fn apply(&mut self, thrust: &[f32], rail: &[f32], armed: bool);
+}
+
+/// The interrupts the application's executors run on: spare lines, their priorities set by
+/// the board (control above link, link above the thread-mode wake-up).
+pub struct ExecutorIrqs<I> {
+    /// The 400 Hz control executor (highest of the three).
+    pub control: I,
+    /// The link executor (MAVLink parsing, FTP, sending).
+    pub link: I,
+    /// Pended to wake the thread-mode executor (jobs) from `WFI`.
+    pub thread_wake: I,
+}
+
+/// A board, brought up: what the application takes over.
+pub struct Parts<B: Board> {
+    /// The link's receiving half.
+    pub link_rx: B::LinkRx,
+    /// The link's sending half.
+    pub link_tx: B::LinkTx,
+    /// The actuator outputs.
+    pub outputs: B::Outputs,
+    /// The executors' interrupts.
+    pub irqs: ExecutorIrqs<B::Irq>,
+}

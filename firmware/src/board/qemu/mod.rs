@@ -1,0 +1,196 @@
+//! QEMU's `mps2-an500` board: a Cortex-M7 (Arm AN500 FPGA image on the MPS2 board) with
+//! CMSDK APB peripherals, as QEMU 7.2 models it. The HIL target the tests and CI fly: no
+//! embassy-stm32 here (only one embassy time driver can be linked).
+//!
+//! Memory (`memory-qemu.x`): 4 MiB SSRAM at 0x0000_0000 for code, 4 MiB at 0x2000_0000 for
+//! data. Peripherals (AN500 and QEMU's `hw/arm/mps2.c`), all clocked at 25 MHz:
+//!
+//! | peripheral | address | interrupt |
+//! |---|---|---|
+//! | CMSDK timer 0: the free-running clock ([`time_driver`]) | 0x4000_0000 | 8 |
+//! | CMSDK timer 1: the alarm ([`time_driver`]) | 0x4000_1000 | 9 |
+//! | CMSDK UART 0: the MAVLink link ([`uart`]; QEMU's `-serial`) | 0x4000_4000 | RX 0, TX 1 |
+//! | executors: control, link, thread wake-up (unused lines) | - | 24, 25, 26 |
+//!
+//! Under `qemu-system-arm -icount shift=0` every instruction advances the virtual clock by
+//! 1 ns, so the 25 MHz timer counts one per 40 instructions: [`QemuMps2An500::cycle_count`]
+//! measures the control tick in instructions. The thread-mode executor sleeps with `WFI`
+//! (QEMU does not halt on `WFE` under `-icount`).
+
+pub mod time_driver;
+pub mod uart;
+
+use cortex_m::interrupt::InterruptNumber;
+use cortex_m::peripheral::NVIC;
+
+use super::{ActuatorOutputs, Board, ExecutorIrqs, Parts};
+
+/// The board.
+pub struct QemuMps2An500;
+
+/// Interrupt lines of the mps2-an500 this firmware uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u16)]
+pub enum Irq {
+    /// UART 0 received a byte.
+    Uart0Rx = 0,
+    /// UART 0 sent a byte.
+    Uart0Tx = 1,
+    /// Timer 0 wrapped.
+    Timer0 = 8,
+    /// Timer 1 reached zero.
+    Timer1 = 9,
+    /// Control executor (no peripheral on this line).
+    ControlExecutor = 24,
+    /// Link executor (no peripheral on this line).
+    LinkExecutor = 25,
+    /// Thread-mode wake-up (no peripheral on this line).
+    ThreadWake = 26,
+}
+
+// SAFETY: the numbers are interrupt lines of the mps2-an500 (it has 32).
+unsafe impl InterruptNumber for Irq {
+    fn number(self) -> u16 {
+        self as u16
+    }
+}
+
+/// NVIC priorities (upper bits; smaller is more urgent): byte I/O and time first, then the
+/// control executor, then the link's, then the thread-mode wake-up.
+const PRIO_IO: u8 = 0x20;
+const PRIO_CONTROL: u8 = 0x40;
+const PRIO_LINK: u8 = 0x60;
+const PRIO_THREAD_WAKE: u8 = 0xE0;
+
+/// No physical outputs on the emulated board: in HIL the commands go to the plant over the
+/// link.
+pub struct NoOutputs;
+
+impl ActuatorOutputs for NoOutputs {
+    fn apply(&mut self, _thrust: &[f32], _rail: &[f32], _armed: bool) {}
+}
+
+impl Board for QemuMps2An500 {
+    const NAME: &'static str = "qemu-mps2-an500";
+    const TICK_COST_NAME: &'static str = "tick_insn";
+    const TICK_COST_PER_COUNT: u32 = 40;
+    type LinkRx = uart::UartRx;
+    type LinkTx = uart::UartTx;
+    type Outputs = NoOutputs;
+    type Irq = Irq;
+
+    fn cycle_count() -> u32 {
+        time_driver::raw_count()
+    }
+}
+
+/// Brings the board up: timers, UART, interrupt priorities.
+pub fn init() -> Parts<QemuMps2An500> {
+    let Some(mut p) = cortex_m::Peripherals::take() else {
+        // Only reachable if called twice; the firmware calls it once from its entry.
+        panic!("board::qemu::init called twice");
+    };
+    // SAFETY: priorities are set before the interrupts are unmasked, on one core.
+    unsafe {
+        p.NVIC.set_priority(Irq::Uart0Rx, PRIO_IO);
+        p.NVIC.set_priority(Irq::Uart0Tx, PRIO_IO);
+        p.NVIC.set_priority(Irq::Timer0, PRIO_IO);
+        p.NVIC.set_priority(Irq::Timer1, PRIO_IO);
+        p.NVIC.set_priority(Irq::ControlExecutor, PRIO_CONTROL);
+        p.NVIC.set_priority(Irq::LinkExecutor, PRIO_LINK);
+        p.NVIC.set_priority(Irq::ThreadWake, PRIO_THREAD_WAKE);
+    }
+    time_driver::init();
+    let (link_rx, link_tx) = uart::init();
+    // SAFETY: the handlers of these lines are in the vector table below.
+    unsafe {
+        NVIC::unmask(Irq::Timer0);
+        NVIC::unmask(Irq::Timer1);
+        NVIC::unmask(Irq::Uart0Rx);
+        NVIC::unmask(Irq::Uart0Tx);
+        NVIC::unmask(Irq::ThreadWake);
+    }
+    Parts {
+        link_rx,
+        link_tx,
+        outputs: NoOutputs,
+        irqs: ExecutorIrqs {
+            control: Irq::ControlExecutor,
+            link: Irq::LinkExecutor,
+            thread_wake: Irq::ThreadWake,
+        },
+    }
+}
+
+/// One entry of the device part of the vector table.
+#[repr(C)]
+pub union Vector {
+    handler: unsafe extern "C" fn(),
+    reserved: usize,
+}
+
+unsafe extern "C" fn control_executor() {
+    // SAFETY: the control executor's own interrupt, started by the application.
+    unsafe { crate::app::CONTROL_EXECUTOR.on_interrupt() }
+}
+
+unsafe extern "C" fn link_executor() {
+    // SAFETY: the link executor's own interrupt, started by the application.
+    unsafe { crate::app::LINK_EXECUTOR.on_interrupt() }
+}
+
+unsafe extern "C" fn thread_wake() {
+    crate::app::thread_woken();
+}
+
+unsafe extern "C" fn default_handler() {}
+
+const NONE: Vector = Vector {
+    handler: default_handler,
+};
+
+/// The mps2-an500's 32 device interrupts (cortex-m-rt's `device` feature places this after
+/// the exceptions).
+#[unsafe(link_section = ".vector_table.interrupts")]
+#[unsafe(no_mangle)]
+pub static __INTERRUPTS: [Vector; 32] = {
+    let mut v = [NONE; 32];
+    v[Irq::Uart0Rx as usize] = Vector {
+        handler: uart::on_rx_interrupt,
+    };
+    v[Irq::Uart0Tx as usize] = Vector {
+        handler: uart::on_tx_interrupt,
+    };
+    v[Irq::Timer0 as usize] = Vector {
+        handler: time_driver::on_timer0_interrupt,
+    };
+    v[Irq::Timer1 as usize] = Vector {
+        handler: time_driver::on_timer1_interrupt,
+    };
+    v[Irq::ControlExecutor as usize] = Vector {
+        handler: control_executor,
+    };
+    v[Irq::LinkExecutor as usize] = Vector {
+        handler: link_executor,
+    };
+    v[Irq::ThreadWake as usize] = Vector {
+        handler: thread_wake,
+    };
+    v
+};
+
+/// Stops QEMU with a failure status after printing `message` on the host's terminal
+/// (semihosting): how a panic ends an emulated run.
+pub fn fail(message: core::fmt::Arguments<'_>) -> ! {
+    cortex_m_semihosting::hprintln!("firmware panicked: {}", message);
+    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
+    cortex_m::interrupt::disable();
+    fail(format_args!("{info}"))
+}

@@ -1,0 +1,176 @@
+//! `host-sim hil`: the mission with the firmware in the loop (SPEC.md section 5; issue 11,
+//! section 3): the plant side of PX4's simulator MAVLink API, in lockstep. The firmware runs
+//! under QEMU (`--qemu ELF`, started here), on a board over a serial device (`--serial DEV`),
+//! or behind any TCP socket (`--connect tcp:HOST:PORT`).
+//!
+//! Prints what the firmware says as it says it; `--json` prints one object with the keys of
+//! `mission` plus `firmware` (the board it reported) and `ticks` (lockstep exchanges). Exits
+//! non-zero when the firmware refuses the payload or the start, the lockstep breaks, the
+//! mission aborts or the payload drops.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::{Result, bail};
+use clap::{ArgGroup, Args};
+use link::status::MissionState;
+use serde_json::json;
+
+use crate::hil::gcs::GcsBridge;
+use crate::hil::qemu::Qemu;
+use crate::hil::run::{HilOutcome, HilSetup, run as run_hil};
+use crate::hil::session::LoggedText;
+use crate::hil::transport::{Endpoint, Link};
+use crate::scenario_file;
+
+/// Arguments of `hil`.
+#[derive(Debug, Args)]
+#[command(group(ArgGroup::new("firmware").required(true).args(["qemu", "serial", "connect"])))]
+pub struct HilArgs {
+    /// Scenario file (TOML, SPEC.md section 5).
+    #[arg(long, value_name = "FILE")]
+    pub scenario: PathBuf,
+    /// Run this firmware image under qemu-system-arm (mps2-an500), e.g.
+    /// target/thumbv7em-none-eabihf/release/firmware-qemu.
+    #[arg(long, value_name = "ELF")]
+    pub qemu: Option<PathBuf>,
+    /// The firmware on a board (or QEMU's -serial pty) over this serial device.
+    #[arg(long, value_name = "DEV")]
+    pub serial: Option<String>,
+    /// Baud rate of --serial (the Pixhawk's TELEM1 runs at 921600; USB ignores it).
+    #[arg(long, value_name = "N", default_value_t = 921_600, requires = "serial")]
+    pub baud: u32,
+    /// The firmware behind a TCP socket: tcp:HOST:PORT.
+    #[arg(long, value_name = "tcp:HOST:PORT", value_parser = Endpoint::parse_tcp)]
+    pub connect: Option<Endpoint>,
+    /// Seed of the sensors' noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Print one JSON object on stdout and nothing else.
+    #[arg(long)]
+    pub json: bool,
+    /// Bridge all non-HIL MAVLink traffic to a ground station: udp:HOST:PORT.
+    #[arg(long, value_name = "udp:HOST:PORT", value_parser = GcsBridge::parse)]
+    pub gcs: Option<std::net::SocketAddr>,
+    /// Pace the lockstep to X times real time (default: as fast as it goes).
+    #[arg(long, value_name = "X")]
+    pub speed: Option<f64>,
+    /// Stop after this many simulated seconds even if the mission goes on.
+    #[arg(long, value_name = "S")]
+    pub duration: Option<f64>,
+    /// Seconds the plant waits for each lockstep reply before it gives up.
+    #[arg(long, value_name = "S", default_value_t = 10.0)]
+    pub reply_timeout: f64,
+}
+
+/// Runs the command.
+pub fn run(args: &HilArgs) -> Result<()> {
+    let loaded = scenario_file::load(&args.scenario)?;
+    for (name, v) in [("--speed", args.speed), ("--duration", args.duration)] {
+        if let Some(v) = v
+            && !(v.is_finite() && v > 0.0)
+        {
+            bail!("{name} {v}: must be a positive number");
+        }
+    }
+    if !(args.reply_timeout.is_finite() && args.reply_timeout > 0.0) {
+        bail!(
+            "--reply-timeout {}: must be a positive number of seconds",
+            args.reply_timeout
+        );
+    }
+    let setup = HilSetup {
+        seed: args.seed,
+        speed: args.speed,
+        duration_s: args.duration,
+        reply_timeout: Duration::from_secs_f64(args.reply_timeout),
+        gcs: args.gcs,
+    };
+    let json = args.json;
+    let on_text: Box<dyn FnMut(&LoggedText) + Send> = Box::new(move |t: &LoggedText| {
+        if !json {
+            println!("  step {:6}  firmware: {}", t.step, t.text);
+        }
+    });
+    let (_qemu, link) = if let Some(elf) = &args.qemu {
+        let (qemu, stream) = Qemu::launch(elf)?;
+        (Some(qemu), Link::over_tcp(stream)?)
+    } else if let Some(path) = &args.serial {
+        let endpoint = Endpoint::Serial {
+            path: path.clone(),
+            baud: args.baud,
+        };
+        (None, Link::open(&endpoint)?)
+    } else if let Some(endpoint) = &args.connect {
+        (None, Link::open(endpoint)?)
+    } else {
+        bail!("give the firmware: --qemu ELF, --serial DEV or --connect tcp:HOST:PORT");
+    };
+    if !json {
+        println!("hil on {}", loaded.name);
+    }
+    let outcome = run_hil(&loaded, link, &setup, on_text)?;
+    if json {
+        println!("{}", to_json(&loaded.name, &outcome));
+    } else {
+        print_summary(&outcome);
+    }
+    match outcome.state {
+        _ if outcome.dropped => bail!("the payload dropped (tilt past 45 degrees)"),
+        MissionState::Aborted => bail!("the firmware aborted the mission"),
+        _ => Ok(()),
+    }
+}
+
+/// The JSON report: the keys of `mission`, plus `firmware` and `ticks`.
+pub fn to_json(scenario: &str, o: &HilOutcome) -> serde_json::Value {
+    let worst = o.worst_tick();
+    json!({
+        "scenario": scenario,
+        "firmware": o.firmware,
+        "ticks": o.ticks,
+        // Mission keys. The firmware's autonomy is a placeholder until the mission is
+        // integrated: no estimate yet, and it never flies.
+        "estimate": serde_json::Value::Null,
+        "measurements": 0,
+        "positions": o.positions,
+        "delivered": false,
+        "dropped": o.dropped,
+        "final_position_error_m": o.final_position_error_m,
+        "phases": o.phases.iter().map(|(name, d)| json!({"name": name, "duration_s": d})).collect::<Vec<_>>(),
+        "mission_state": format!("{:?}", o.state).to_lowercase(),
+        "start_ack": o.start_ack.map(|r| format!("{r:?}")),
+        "simulated_s": o.simulated_s,
+        "wall_s": o.wall_s,
+        "ticks_per_s": o.ticks as f64 / o.wall_s.max(1e-9),
+        "worst_tick": worst.map(|(name, v)| json!({"name": name, "value": v})),
+        // The last value of each name the firmware sent (NAMED_VALUE_FLOAT/INT).
+        "values": o.log.values.iter().map(|v| (v.name.clone(), json!(v.value))).collect::<serde_json::Map<String, serde_json::Value>>(),
+        "statustexts": o.log.texts.iter().map(|t| json!({"step": t.step, "text": t.text})).collect::<Vec<_>>(),
+    })
+}
+
+fn print_summary(o: &HilOutcome) {
+    println!(
+        "{} ticks in lockstep with the firmware on {}: {:.2} s simulated in {:.2} s ({:.0} ticks/s)",
+        o.ticks,
+        o.firmware,
+        o.simulated_s,
+        o.wall_s,
+        o.ticks as f64 / o.wall_s.max(1e-9)
+    );
+    if let Some((name, v)) = o.worst_tick() {
+        let unit = if name == "tick_insn" {
+            "instructions"
+        } else {
+            "cycles"
+        };
+        println!("worst control step: {v:.0} {unit}");
+    }
+    println!(
+        "mission {:?}; final position error {:.3} m{}",
+        o.state,
+        o.final_position_error_m,
+        if o.dropped { "; DROPPED" } else { "" }
+    );
+}

@@ -1,0 +1,200 @@
+//! The ground-station bridge of `hil --gcs udp:HOST:PORT` (issue 11, section 3), as PX4's
+//! HITL bridge does it: every MAVLink frame between the firmware and a ground station
+//! (QGroundControl, MAVProxy, pymavlink) passes through, except the simulator's own HIL
+//! messages, so the tool watches and commands the simulated vehicle.
+//!
+//! Frames from the firmware go to the given address, or to wherever the ground station last
+//! spoke from. Frames from the ground station go to the firmware whole, between the plant's.
+
+use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::{self, JoinHandle};
+use std::time::Duration;
+
+use anyhow::{Context, Result, anyhow};
+use link::MessageData;
+use link::frame::Parser;
+use link::msg::{
+    ACTUATOR_OUTPUT_STATUS_DATA, ATT_POS_MOCAP_DATA, HIL_ACTUATOR_CONTROLS_DATA, HIL_SENSOR_DATA,
+};
+use link::vehicle::crc_extra;
+
+use super::transport::{SharedWriter, write_frame};
+
+/// Whether a message id belongs to the simulator's lockstep (never bridged).
+pub fn is_hil(id: u32) -> bool {
+    [
+        HIL_SENSOR_DATA::ID,
+        ATT_POS_MOCAP_DATA::ID,
+        HIL_ACTUATOR_CONTROLS_DATA::ID,
+        ACTUATOR_OUTPUT_STATUS_DATA::ID,
+    ]
+    .contains(&id)
+}
+
+/// A running bridge.
+pub struct GcsBridge {
+    socket: UdpSocket,
+    peer: Arc<Mutex<SocketAddr>>,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl GcsBridge {
+    /// Parses `udp:HOST:PORT`.
+    pub fn parse(text: &str) -> Result<SocketAddr, String> {
+        let addr = text
+            .strip_prefix("udp:")
+            .ok_or_else(|| format!("`{text}` is not udp:HOST:PORT"))?;
+        addr.to_socket_addrs()
+            .ok()
+            .and_then(|mut a| a.next())
+            .ok_or_else(|| format!("`{text}` is not udp:HOST:PORT"))
+    }
+
+    /// Starts bridging between the firmware (`writer`) and the ground station at `ground`.
+    pub fn start(ground: SocketAddr, writer: SharedWriter) -> Result<Self> {
+        let bind = if ground.is_ipv4() {
+            "0.0.0.0:0"
+        } else {
+            "[::]:0"
+        };
+        let socket =
+            UdpSocket::bind(bind).context("cannot open the ground station's UDP socket")?;
+        socket.set_read_timeout(Some(Duration::from_millis(100)))?;
+        let peer = Arc::new(Mutex::new(ground));
+        let stop = Arc::new(AtomicBool::new(false));
+        let thread = {
+            let socket = socket.try_clone()?;
+            let peer = Arc::clone(&peer);
+            let stop = Arc::clone(&stop);
+            thread::spawn(move || from_ground(&socket, &peer, &writer, &stop))
+        };
+        Ok(Self {
+            socket,
+            peer,
+            stop,
+            thread: Some(thread),
+        })
+    }
+
+    /// The local address the bridge sends from (and the ground station answers to).
+    pub fn local_addr(&self) -> Result<SocketAddr> {
+        self.socket.local_addr().map_err(|e| anyhow!(e))
+    }
+
+    /// Sends one frame from the firmware to the ground station (HIL frames are skipped by the
+    /// caller). A ground station that is not there loses nothing but the datagram.
+    pub fn to_ground(&self, frame: &[u8]) {
+        if let Ok(peer) = self.peer.lock() {
+            let _ = self.socket.send_to(frame, *peer);
+        }
+    }
+}
+
+fn from_ground(
+    socket: &UdpSocket,
+    peer: &Mutex<SocketAddr>,
+    writer: &SharedWriter,
+    stop: &AtomicBool,
+) {
+    let mut parser = Parser::new(crc_extra);
+    let mut buf = [0u8; 2048];
+    while !stop.load(Ordering::Relaxed) {
+        let Ok((n, from)) = socket.recv_from(&mut buf) else {
+            continue;
+        };
+        if let Ok(mut p) = peer.lock() {
+            *p = from;
+        }
+        for &byte in &buf[..n] {
+            if let Some((frame, _)) = parser.push(byte)
+                && !is_hil(frame.message_id())
+                && write_frame(writer, frame.bytes()).is_err()
+            {
+                return;
+            }
+        }
+    }
+}
+
+impl Drop for GcsBridge {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn addresses_are_parsed_and_bad_ones_named() {
+        assert!(GcsBridge::parse("udp:127.0.0.1:14550").is_ok());
+        assert!(GcsBridge::parse("tcp:127.0.0.1:14550").is_err());
+        assert!(GcsBridge::parse("udp:nowhere").is_err());
+    }
+
+    struct Collect(Arc<Mutex<Vec<u8>>>);
+
+    impl std::io::Write for Collect {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            self.0
+                .lock()
+                .map_err(|_| std::io::ErrorKind::Other)?
+                .extend_from_slice(b);
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn frames_pass_both_ways_but_hil_ones_stay() -> Result<()> {
+        use link::frame::{Encoder, Frame};
+        let ground = UdpSocket::bind("127.0.0.1:0")?;
+        ground.set_read_timeout(Some(Duration::from_secs(2)))?;
+        let to_firmware = Arc::new(Mutex::new(Vec::new()));
+        let writer: SharedWriter =
+            Arc::new(Mutex::new(Box::new(Collect(Arc::clone(&to_firmware)))));
+        let bridge = GcsBridge::start(ground.local_addr()?, writer)?;
+        // Firmware to ground.
+        let mut enc = Encoder::new(1, 1);
+        let mut f = Frame::default();
+        enc.encode(&link::msg::HEARTBEAT_DATA::default(), &mut f);
+        bridge.to_ground(f.bytes());
+        let mut buf = [0u8; 300];
+        let (n, from) = ground.recv_from(&mut buf)?;
+        assert_eq!(&buf[..n], f.bytes());
+        // Ground to firmware: a HIL_SENSOR (dropped) then a heartbeat (passed).
+        let mut gcs = Encoder::new(255, 190);
+        let mut sensor = Frame::default();
+        gcs.encode(&link::hil::ImuSample::default().to_message(), &mut sensor);
+        let mut beat = Frame::default();
+        gcs.encode(&link::msg::HEARTBEAT_DATA::default(), &mut beat);
+        let mut datagram = sensor.bytes().to_vec();
+        datagram.extend_from_slice(beat.bytes());
+        ground.send_to(&datagram, from)?;
+        let start = std::time::Instant::now();
+        while to_firmware.lock().map(|v| v.is_empty()).unwrap_or(true)
+            && start.elapsed() < Duration::from_secs(2)
+        {
+            thread::sleep(Duration::from_millis(10));
+        }
+        let got = to_firmware.lock().map(|v| v.clone()).unwrap_or_default();
+        assert_eq!(got, beat.bytes());
+        Ok(())
+    }
+
+    #[test]
+    fn hil_messages_are_not_bridged() {
+        assert!(is_hil(HIL_SENSOR_DATA::ID));
+        assert!(is_hil(HIL_ACTUATOR_CONTROLS_DATA::ID));
+        assert!(!is_hil(link::msg::HEARTBEAT_DATA::ID));
+    }
+}

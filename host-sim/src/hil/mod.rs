@@ -1,0 +1,18 @@
+//! Hardware in the loop: the plant side of PX4's simulator MAVLink API, in lockstep, against
+//! the real firmware (issue 11, section 3; SPEC.md section 5, `hil`).
+//!
+//! - [`transport`]: the byte link (QEMU's UART on a local socket, a serial device), framed.
+//! - [`qemu`]: runs the firmware's QEMU image under `qemu-system-arm`.
+//! - [`session`]: the conversation: identity, the payload description over MAVLink FTP, the
+//!   start command, lockstep steps, and the log of what the firmware said.
+//! - [`gcs`]: the ground-station bridge (`--gcs`).
+//! - [`run`]: the plant loop: physics, sensors, lockstep, pacing, the outcome.
+//!
+//! The protocol logic itself (framing, messages, FTP, lockstep matching) is the `link` crate's,
+//! the same code the firmware runs.
+
+pub mod gcs;
+pub mod qemu;
+pub mod run;
+pub mod session;
+pub mod transport;

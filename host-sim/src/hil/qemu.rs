@@ -1,0 +1,220 @@
+//! Runs the firmware's QEMU image (`cargo fw-qemu`) under `qemu-system-arm -M mps2-an500`
+//! (issue 11, section 3): its UART bridged to a local TCP socket this process listens on (or
+//! to a pseudo-terminal, as a serial device would be), `-icount shift=0` so one instruction is
+//! one virtual nanosecond (the firmware measures its control step in instructions), and
+//! semihosting so a panic prints and stops QEMU.
+//!
+//! The QEMU process never outlives this one: it is killed when [`Qemu`] is dropped, and on
+//! Linux also when this process dies (parent-death signal).
+
+use std::io::{BufRead, BufReader, Read};
+use std::net::{TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, anyhow, bail};
+
+/// The emulator binary.
+pub const QEMU: &str = "qemu-system-arm";
+/// How long QEMU may take to connect or to open its terminal.
+const START_TIMEOUT: Duration = Duration::from_secs(20);
+
+/// A running QEMU with the firmware.
+pub struct Qemu {
+    child: Child,
+    output: Arc<Mutex<String>>,
+}
+
+/// How the firmware's UART is brought out.
+enum Serial {
+    /// QEMU connects to this local TCP port.
+    Tcp(u16),
+    /// QEMU opens a pseudo-terminal and names it.
+    Pty,
+}
+
+/// Whether `qemu-system-arm` can be run here.
+pub fn available() -> bool {
+    Command::new(QEMU)
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+impl Qemu {
+    /// Starts the firmware `elf` with its UART connected to a TCP socket; returns QEMU and the
+    /// socket.
+    pub fn launch(elf: &Path) -> Result<(Self, TcpStream)> {
+        let listener = TcpListener::bind("127.0.0.1:0").context("cannot listen for QEMU's UART")?;
+        let port = listener.local_addr()?.port();
+        let mut qemu = Self::spawn(elf, Serial::Tcp(port))?;
+        listener.set_nonblocking(true)?;
+        let start = Instant::now();
+        loop {
+            match listener.accept() {
+                Ok((stream, _)) => {
+                    stream.set_nonblocking(false)?;
+                    return Ok((qemu, stream));
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+                Err(e) => return Err(anyhow!(e).context("accepting QEMU's UART connection")),
+            }
+            qemu.check_running()?;
+            if start.elapsed() > START_TIMEOUT {
+                bail!(
+                    "QEMU did not connect its UART within {} s{}",
+                    START_TIMEOUT.as_secs(),
+                    qemu.output_note()
+                );
+            }
+            thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// Starts the firmware `elf` with its UART on a pseudo-terminal; returns QEMU and the
+    /// terminal's path (a serial device for `--serial`).
+    pub fn launch_pty(elf: &Path) -> Result<(Self, PathBuf)> {
+        let mut qemu = Self::spawn(elf, Serial::Pty)?;
+        let start = Instant::now();
+        loop {
+            let found = {
+                let out = qemu
+                    .output
+                    .lock()
+                    .map_err(|_| anyhow!("QEMU output reader failed"))?;
+                out.lines().find_map(|l| {
+                    let at = l.find("/dev/pts/")?;
+                    let path: String = l[at..]
+                        .chars()
+                        .take_while(|c| !c.is_whitespace() && *c != ')')
+                        .collect();
+                    Some(PathBuf::from(path))
+                })
+            };
+            if let Some(path) = found {
+                return Ok((qemu, path));
+            }
+            qemu.check_running()?;
+            if start.elapsed() > START_TIMEOUT {
+                bail!(
+                    "QEMU did not report its pseudo-terminal{}",
+                    qemu.output_note()
+                );
+            }
+            thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    fn spawn(elf: &Path, serial: Serial) -> Result<Self> {
+        if !elf.is_file() {
+            bail!(
+                "firmware image {} not found (build it with `cargo fw-qemu`)",
+                elf.display()
+            );
+        }
+        let mut cmd = Command::new(QEMU);
+        cmd.args(["-M", "mps2-an500", "-nographic", "-monitor", "none"])
+            .args(["-icount", "shift=0"])
+            .args(["-semihosting-config", "enable=on,target=native"])
+            .arg("-kernel")
+            .arg(elf);
+        match serial {
+            Serial::Tcp(port) => {
+                cmd.args([
+                    "-chardev",
+                    &format!("socket,id=link,host=127.0.0.1,port={port},server=off,nodelay=on"),
+                    "-serial",
+                    "chardev:link",
+                ]);
+            }
+            Serial::Pty => {
+                cmd.args(["-serial", "pty"]);
+            }
+        }
+        cmd.stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
+        #[cfg(target_os = "linux")]
+        {
+            use std::os::unix::process::CommandExt;
+            // SAFETY: prctl is async-signal-safe; it only asks the kernel to kill the child
+            // when this process dies.
+            unsafe {
+                cmd.pre_exec(|| {
+                    libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+                    Ok(())
+                });
+            }
+        }
+        let mut child = cmd.spawn().with_context(|| {
+            format!("cannot run {QEMU} (install it: apt-get install qemu-system-arm)")
+        })?;
+        let output = Arc::new(Mutex::new(String::new()));
+        for stream in [
+            child
+                .stdout
+                .take()
+                .map(|s| Box::new(s) as Box<dyn Read + Send>),
+            child
+                .stderr
+                .take()
+                .map(|s| Box::new(s) as Box<dyn Read + Send>),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            let sink = Arc::clone(&output);
+            thread::spawn(move || {
+                for line in BufReader::new(stream).lines().map_while(Result::ok) {
+                    if let Ok(mut out) = sink.lock() {
+                        out.push_str(&line);
+                        out.push('\n');
+                    }
+                }
+            });
+        }
+        Ok(Self { child, output })
+    }
+
+    /// The QEMU process id (tests stop and resume it to simulate a stalled firmware).
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Fails if QEMU has exited (a firmware panic exits it), with what it printed.
+    pub fn check_running(&mut self) -> Result<()> {
+        if let Some(status) = self.child.try_wait()? {
+            // Give the output readers a moment to collect the last lines.
+            thread::sleep(Duration::from_millis(100));
+            bail!("QEMU exited ({status}){}", self.output_note());
+        }
+        Ok(())
+    }
+
+    /// What QEMU printed (semihosting output, QEMU's own errors).
+    pub fn output(&self) -> String {
+        self.output.lock().map(|o| o.clone()).unwrap_or_default()
+    }
+
+    fn output_note(&self) -> String {
+        let out = self.output();
+        let out = out.trim();
+        if out.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", out.lines().collect::<Vec<_>>().join(" / "))
+        }
+    }
+}
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}

@@ -1,0 +1,301 @@
+//! The plant's conversation with the firmware (issue 11, section 3): who it is, the payload
+//! description over MAVLink FTP, the start command, and the lockstep steps, with everything
+//! the firmware says along the way (texts, values, acknowledgements, heartbeats) logged.
+//!
+//! Every wait has a deadline and ends in an error saying what did not come.
+
+use std::time::{Duration, Instant};
+
+use anyhow::{Result, anyhow, bail};
+use link::MessageData;
+use link::command::command_long;
+use link::frame::{Frame, Integrity};
+use link::ftp::{FtpMessage, PAYLOAD_PATH, Progress, Upload};
+use link::hil::{Actuators, ImuSample, MocapFix, Reply, ReplyMatcher};
+use link::msg::{
+    ACTUATOR_OUTPUT_STATUS_DATA, AUTOPILOT_VERSION_DATA, COMMAND_ACK_DATA,
+    FILE_TRANSFER_PROTOCOL_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA, MavCmd, MavResult,
+    MavSeverity, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA,
+};
+use link::status::{BOARD_PREFIX, MissionState, Reassembler, StatusChunk};
+
+use super::gcs::GcsBridge;
+use super::transport::Link;
+
+/// One text from the firmware.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoggedText {
+    /// Lockstep steps done when it arrived.
+    pub step: u64,
+    /// Its severity.
+    pub severity: MavSeverity,
+    /// The text.
+    pub text: String,
+}
+
+/// One named value from the firmware.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoggedValue {
+    /// Lockstep steps done when it arrived.
+    pub step: u64,
+    /// Its name.
+    pub name: String,
+    /// Its value.
+    pub value: f64,
+}
+
+/// What the firmware said.
+#[derive(Clone, Debug, Default)]
+pub struct FirmwareLog {
+    /// The board it runs on (its "board: " text).
+    pub board: Option<String>,
+    /// Its texts, in order.
+    pub texts: Vec<LoggedText>,
+    /// Its named values, in order.
+    pub values: Vec<LoggedValue>,
+    /// Its command acknowledgements, in order.
+    pub acks: Vec<(MavCmd, MavResult)>,
+    /// The mission state of its last heartbeat.
+    pub state: Option<MissionState>,
+    /// Heartbeats received.
+    pub heartbeats: u32,
+}
+
+impl FirmwareLog {
+    /// The last value named `name`.
+    pub fn last_value(&self, name: &str) -> Option<f64> {
+        self.values
+            .iter()
+            .rev()
+            .find(|v| v.name == name)
+            .map(|v| v.value)
+    }
+
+    /// The acknowledgement of `command`, if one came.
+    pub fn ack_of(&self, command: MavCmd) -> Option<MavResult> {
+        self.acks
+            .iter()
+            .rev()
+            .find(|(c, _)| *c == command)
+            .map(|(_, r)| *r)
+    }
+}
+
+/// A session with the firmware over a [`Link`].
+pub struct Session {
+    link: Link,
+    texts: Reassembler,
+    log: FirmwareLog,
+    matcher: ReplyMatcher,
+    gcs: Option<GcsBridge>,
+    steps: u64,
+    on_text: Box<dyn FnMut(&LoggedText) + Send>,
+}
+
+/// Time between resends of a request that got no answer.
+const RESEND: Duration = Duration::from_millis(1000);
+
+impl Session {
+    /// A session over `link`; `gcs` (optional) gets every non-HIL frame, and `on_text` sees
+    /// each text as it arrives.
+    pub fn new(
+        link: Link,
+        gcs: Option<GcsBridge>,
+        on_text: Box<dyn FnMut(&LoggedText) + Send>,
+    ) -> Self {
+        Self {
+            link,
+            texts: Reassembler::new(),
+            log: FirmwareLog::default(),
+            matcher: ReplyMatcher::new(),
+            gcs,
+            steps: 0,
+            on_text,
+        }
+    }
+
+    /// What the firmware said so far.
+    pub fn log(&self) -> &FirmwareLog {
+        &self.log
+    }
+
+    /// Lockstep steps done.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// The next frame (after logging what it says), or `None` at `deadline`.
+    fn next(&mut self, deadline: Instant) -> Result<Option<Frame>> {
+        let Some((frame, integrity)) = self.link.receive(deadline)? else {
+            return Ok(None);
+        };
+        let id = frame.message_id();
+        let hil = id == HIL_ACTUATOR_CONTROLS_DATA::ID || id == ACTUATOR_OUTPUT_STATUS_DATA::ID;
+        if let (Some(gcs), false) = (&self.gcs, hil) {
+            gcs.to_ground(frame.bytes());
+        }
+        if integrity == Integrity::Verified {
+            self.note(&frame);
+        }
+        Ok(Some(frame))
+    }
+
+    fn note(&mut self, frame: &Frame) {
+        if let Some(chunk) = StatusChunk::from_frame(frame)
+            && let Some(text) = self.texts.push(&chunk)
+        {
+            let text = String::from_utf8_lossy(&text).into_owned();
+            if let Some(board) = text.strip_prefix(BOARD_PREFIX) {
+                let name = board.split_whitespace().next().unwrap_or(board);
+                self.log.board = Some(name.to_string());
+            }
+            let logged = LoggedText {
+                step: self.steps,
+                severity: chunk.message.severity,
+                text,
+            };
+            (self.on_text)(&logged);
+            self.log.texts.push(logged);
+        } else if let Some(v) = frame.decode::<NAMED_VALUE_FLOAT_DATA>() {
+            self.value(v.name.to_str().unwrap_or("?"), f64::from(v.value));
+        } else if let Some(v) = frame.decode::<NAMED_VALUE_INT_DATA>() {
+            self.value(v.name.to_str().unwrap_or("?"), f64::from(v.value));
+        } else if let Some(a) = frame.decode::<COMMAND_ACK_DATA>() {
+            self.log.acks.push((a.command, a.result));
+        } else if let Some(h) = frame.decode::<HEARTBEAT_DATA>()
+            && frame.system_id() == link::VEHICLE_SYSTEM_ID
+        {
+            self.log.heartbeats += 1;
+            self.log.state = MissionState::from_custom_mode(h.custom_mode);
+        }
+    }
+
+    fn value(&mut self, name: &str, value: f64) {
+        self.log.values.push(LoggedValue {
+            step: self.steps,
+            name: name.to_string(),
+            value,
+        });
+    }
+
+    /// Asks the firmware who it is until its board's name comes, within `timeout`.
+    pub fn identify(&mut self, timeout: Duration) -> Result<String> {
+        let end = Instant::now() + timeout;
+        let request = command_long(
+            MavCmd::MAV_CMD_REQUEST_MESSAGE,
+            AUTOPILOT_VERSION_DATA::ID as f32,
+            0.0,
+        );
+        while Instant::now() < end {
+            if let Some(board) = &self.log.board {
+                return Ok(board.clone());
+            }
+            self.link.send(&request)?;
+            let resend = (Instant::now() + RESEND).min(end);
+            while self.log.board.is_none() && self.next(resend)?.is_some() {}
+        }
+        match &self.log.board {
+            Some(board) => Ok(board.clone()),
+            None => bail!(
+                "the firmware did not say which board it runs on within {} s ({} heartbeats seen): is it running and is the link right?",
+                timeout.as_secs(),
+                self.log.heartbeats
+            ),
+        }
+    }
+
+    /// Writes the payload description `file` over MAVLink FTP and waits for the firmware's
+    /// verdict: `Ok` with its text when accepted, an error with its reason when refused.
+    pub fn upload_payload(&mut self, file: &[u8], timeout: Duration) -> Result<String> {
+        let end = Instant::now() + timeout;
+        let mut upload = Upload::new(PAYLOAD_PATH, file);
+        let texts_before = self.log.texts.len();
+        'commands: loop {
+            let request = upload.current();
+            self.link
+                .send(&request.to_message(link::VEHICLE_SYSTEM_ID, link::VEHICLE_COMPONENT_ID))?;
+            let resend = (Instant::now() + RESEND).min(end);
+            while let Some(frame) = self.next(resend)? {
+                let Some(f) = frame.decode::<FILE_TRANSFER_PROTOCOL_DATA>() else {
+                    continue;
+                };
+                let answer = FtpMessage::from_payload(&f.payload);
+                match upload
+                    .on_answer(&answer)
+                    .map_err(|e| anyhow!("payload upload: {e}"))?
+                {
+                    Progress::Ignored => {}
+                    Progress::Continue => continue 'commands,
+                    Progress::Done => break 'commands,
+                }
+            }
+            if Instant::now() >= end {
+                bail!(
+                    "payload upload: no FTP answer from the firmware within {} s",
+                    timeout.as_secs()
+                );
+            }
+        }
+        loop {
+            if let Some(t) = self.log.texts[texts_before..]
+                .iter()
+                .find(|t| t.text.starts_with("payload "))
+            {
+                if t.text.starts_with("payload refused") {
+                    bail!("the firmware refused the payload description: {}", t.text);
+                }
+                return Ok(t.text.clone());
+            }
+            if self.next(end)?.is_none() {
+                bail!(
+                    "the firmware did not say whether it accepted the payload description within {} s",
+                    timeout.as_secs()
+                );
+            }
+        }
+    }
+
+    /// Sends `MAV_CMD_MISSION_START` (acknowledged with the next step's reply).
+    pub fn send_start(&mut self) -> Result<()> {
+        self.link
+            .send(&command_long(MavCmd::MAV_CMD_MISSION_START, 0.0, 0.0))
+    }
+
+    /// One lockstep step: sends the motion-capture fixes due and the IMU sample, and waits (at
+    /// most `timeout`) for the `HIL_ACTUATOR_CONTROLS` stamped with the sample's time.
+    pub fn step(
+        &mut self,
+        imu: &ImuSample,
+        fixes: &[MocapFix],
+        robots: usize,
+        timeout: Duration,
+    ) -> Result<Actuators> {
+        for fix in fixes {
+            self.link.send(&fix.to_message())?;
+        }
+        self.link.send(&imu.to_message())?;
+        self.matcher.sent(imu.time_us);
+        let deadline = Instant::now() + timeout;
+        loop {
+            let Some(frame) = self.next(deadline)? else {
+                bail!(
+                    "lockstep: no HIL_ACTUATOR_CONTROLS for the step at t = {:.4} s (step {}) within {:.1} s: the firmware stalled or the link is down",
+                    imu.time_us as f64 * 1e-6,
+                    self.steps,
+                    timeout.as_secs_f64()
+                );
+            };
+            if let Some(status) = frame.decode::<ACTUATOR_OUTPUT_STATUS_DATA>() {
+                self.matcher.on_status(&status);
+            } else if let Some(controls) = frame.decode::<HIL_ACTUATOR_CONTROLS_DATA>()
+                && let Reply::Commands(commands) = self
+                    .matcher
+                    .on_controls(&controls, robots)
+                    .map_err(|e| anyhow!("lockstep: {e}"))?
+            {
+                self.steps += 1;
+                return Ok(commands);
+            }
+        }
+    }
+}

@@ -1,0 +1,181 @@
+//! The byte link to the firmware, whatever carries it (issue 11, section 3): QEMU's UART
+//! bridged to a local TCP socket (`--qemu`, `--connect tcp:HOST:PORT`) or a serial device
+//! (`--serial DEV`: a real board on USB or a UART adapter, or QEMU's `-serial pty`).
+//!
+//! [`Link`] frames it with the `link` crate's parser and encoder (the same code the firmware
+//! runs), reads with a deadline, and lets a second thread (the ground-station bridge) write
+//! whole frames in between.
+
+use std::io::{self, Read, Write};
+use std::net::TcpStream;
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, anyhow, bail};
+use link::MessageData;
+use link::frame::{Encoder, Frame, Integrity, Parser};
+use link::status::StatusChunk;
+use link::vehicle::crc_extra;
+
+/// Where the firmware is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Endpoint {
+    /// A TCP server (QEMU's UART bridged to a socket): `tcp:HOST:PORT`.
+    Tcp(String),
+    /// A serial device at a baud rate.
+    Serial {
+        /// Device path (`/dev/ttyACM0`, `/dev/pts/3`).
+        path: String,
+        /// Baud rate (ignored by USB CDC-ACM and ptys).
+        baud: u32,
+    },
+}
+
+impl Endpoint {
+    /// Parses `tcp:HOST:PORT`.
+    pub fn parse_tcp(text: &str) -> Result<Self, String> {
+        let Some(addr) = text.strip_prefix("tcp:") else {
+            return Err(format!("`{text}` is not tcp:HOST:PORT"));
+        };
+        match addr.rsplit_once(':') {
+            Some((host, port)) if !host.is_empty() && port.parse::<u16>().is_ok() => {
+                Ok(Self::Tcp(addr.to_string()))
+            }
+            _ => Err(format!("`{text}` is not tcp:HOST:PORT")),
+        }
+    }
+}
+
+/// Writes whole frames; shared with the ground-station bridge.
+pub type SharedWriter = Arc<Mutex<Box<dyn Write + Send>>>;
+
+/// A framed MAVLink link to the firmware.
+pub struct Link {
+    reader: Box<dyn Read + Send>,
+    writer: SharedWriter,
+    parser: Parser,
+    encoder: Encoder,
+    frame: Frame,
+    buf: [u8; 512],
+    pending: (usize, usize),
+}
+
+/// How long one read may block before the deadline is checked again.
+const READ_SLICE: Duration = Duration::from_millis(50);
+
+impl Link {
+    /// Opens `endpoint`.
+    pub fn open(endpoint: &Endpoint) -> Result<Self> {
+        match endpoint {
+            Endpoint::Tcp(addr) => {
+                let stream = TcpStream::connect(addr)
+                    .with_context(|| format!("cannot connect to the firmware at tcp:{addr}"))?;
+                Self::over_tcp(stream)
+            }
+            Endpoint::Serial { path, baud } => Self::over_serial(Path::new(path), *baud),
+        }
+    }
+
+    /// A link over an open TCP stream.
+    pub fn over_tcp(stream: TcpStream) -> Result<Self> {
+        stream.set_nodelay(true)?;
+        stream.set_read_timeout(Some(READ_SLICE))?;
+        let writer = stream.try_clone().context("cannot share the TCP stream")?;
+        Ok(Self::new(Box::new(stream), Box::new(writer)))
+    }
+
+    /// A link over a serial device (raw mode, 8N1, no flow control).
+    pub fn over_serial(path: &Path, baud: u32) -> Result<Self> {
+        let name = path.to_string_lossy().into_owned();
+        let port = serialport::new(&name, baud)
+            .timeout(READ_SLICE)
+            .open_native()
+            .with_context(|| format!("cannot open serial device {name}"))?;
+        let writer = port
+            .try_clone_native()
+            .with_context(|| format!("cannot share serial device {name}"))?;
+        Ok(Self::new(Box::new(port), Box::new(writer)))
+    }
+
+    fn new(reader: Box<dyn Read + Send>, writer: Box<dyn Write + Send>) -> Self {
+        Self {
+            reader,
+            writer: Arc::new(Mutex::new(writer)),
+            parser: Parser::new(crc_extra),
+            encoder: Encoder::new(link::PLANT_SYSTEM_ID, link::PLANT_COMPONENT_ID),
+            frame: Frame::default(),
+            buf: [0; 512],
+            pending: (0, 0),
+        }
+    }
+
+    /// The writing half, for the ground-station bridge.
+    pub fn writer(&self) -> SharedWriter {
+        Arc::clone(&self.writer)
+    }
+
+    /// Sends one message.
+    pub fn send<M: MessageData>(&mut self, message: &M) -> Result<()> {
+        self.encoder.encode(message, &mut self.frame);
+        write_frame(&self.writer, self.frame.bytes())
+    }
+
+    /// Sends one `STATUSTEXT` chunk (with its extension fields).
+    pub fn send_text_chunk(&mut self, chunk: &StatusChunk) -> Result<()> {
+        chunk.encode(&mut self.encoder, &mut self.frame);
+        write_frame(&self.writer, self.frame.bytes())
+    }
+
+    /// The next frame, or `None` once `deadline` has passed.
+    pub fn receive(&mut self, deadline: Instant) -> Result<Option<(Frame, Integrity)>> {
+        loop {
+            while self.pending.0 < self.pending.1 {
+                let byte = self.buf[self.pending.0];
+                self.pending.0 += 1;
+                if let Some((frame, integrity)) = self.parser.push(byte) {
+                    return Ok(Some((frame.clone(), integrity)));
+                }
+            }
+            if Instant::now() >= deadline {
+                return Ok(None);
+            }
+            match self.reader.read(&mut self.buf) {
+                Ok(0) => bail!("the firmware closed the link"),
+                Ok(n) => self.pending = (0, n),
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                    ) => {}
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(anyhow!(e).context("reading from the firmware")),
+            }
+        }
+    }
+}
+
+/// Writes one whole frame under the writer's lock (frames from two threads never interleave).
+pub fn write_frame(writer: &SharedWriter, bytes: &[u8]) -> Result<()> {
+    let mut w = writer
+        .lock()
+        .map_err(|_| anyhow!("the link writer was poisoned by a failed thread"))?;
+    w.write_all(bytes).context("writing to the firmware")?;
+    w.flush().context("writing to the firmware")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tcp_endpoints_are_parsed_and_bad_ones_named() {
+        assert_eq!(
+            Endpoint::parse_tcp("tcp:127.0.0.1:5760"),
+            Ok(Endpoint::Tcp("127.0.0.1:5760".into()))
+        );
+        assert!(Endpoint::parse_tcp("udp:127.0.0.1:5760").is_err());
+        assert!(Endpoint::parse_tcp("tcp:127.0.0.1").is_err());
+        assert!(Endpoint::parse_tcp("tcp::5760").is_err());
+    }
+}

@@ -1,0 +1,157 @@
+//! The MAVLink command service (`COMMAND_LONG` answered by `COMMAND_ACK`) as the vehicle
+//! reads it: which operator command a request is (issue 11, sections 1 and 3).
+//!
+//! | `COMMAND_LONG` | meaning |
+//! |---|---|
+//! | `MAV_CMD_MISSION_START` | [`OperatorCommand::Start`] the mission |
+//! | `MAV_CMD_NAV_LAND` | [`OperatorCommand::LandNow`] |
+//! | `MAV_CMD_COMPONENT_ARM_DISARM`, param1 = 0 | [`OperatorCommand::Abort`] (the mission stops in a safe way) |
+//! | the same with param2 = 21196 (forced), or `MAV_CMD_DO_FLIGHTTERMINATION` param1 > 0.5 | [`OperatorCommand::Kill`]: rotors off now |
+//! | `MAV_CMD_REQUEST_MESSAGE` | [`Request::Message`] (the link answers it) |
+//!
+//! Arming by command is refused (the mission arms itself); any other command is unsupported.
+
+use crate::msg::{COMMAND_ACK_DATA, COMMAND_LONG_DATA, MavCmd, MavResult};
+
+/// Magic number of a forced disarm (MAVLink `MAV_CMD_COMPONENT_ARM_DISARM`, param2).
+pub const FORCE_DISARM_MAGIC: f32 = 21196.0;
+
+/// What the operator asks of the mission.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OperatorCommand {
+    /// Start the mission (the payload description must be loaded).
+    Start,
+    /// Stop the mission safely (on the ground: stop; in flight: land first).
+    Abort,
+    /// Land where the vehicle is.
+    LandNow,
+    /// Stop the rotors at once, wherever the vehicle is.
+    Kill,
+}
+
+impl OperatorCommand {
+    /// The MAVLink command it came as (for its acknowledgement).
+    pub fn mav_cmd(self) -> MavCmd {
+        match self {
+            Self::Start => MavCmd::MAV_CMD_MISSION_START,
+            Self::Abort => MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            Self::LandNow => MavCmd::MAV_CMD_NAV_LAND,
+            Self::Kill => MavCmd::MAV_CMD_DO_FLIGHTTERMINATION,
+        }
+    }
+}
+
+/// A received command, classified.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Request {
+    /// For the mission; acknowledged once the mission has taken it.
+    Operator(OperatorCommand),
+    /// `MAV_CMD_REQUEST_MESSAGE` of this message id.
+    Message(u32),
+    /// Refused at once with this result.
+    Refused(MavResult),
+}
+
+/// What `command` asks for.
+pub fn classify(command: &COMMAND_LONG_DATA) -> Request {
+    match command.command {
+        MavCmd::MAV_CMD_MISSION_START => Request::Operator(OperatorCommand::Start),
+        MavCmd::MAV_CMD_NAV_LAND => Request::Operator(OperatorCommand::LandNow),
+        MavCmd::MAV_CMD_DO_FLIGHTTERMINATION if command.param1 > 0.5 => {
+            Request::Operator(OperatorCommand::Kill)
+        }
+        MavCmd::MAV_CMD_COMPONENT_ARM_DISARM if command.param1 == 0.0 => {
+            if command.param2 == FORCE_DISARM_MAGIC {
+                Request::Operator(OperatorCommand::Kill)
+            } else {
+                Request::Operator(OperatorCommand::Abort)
+            }
+        }
+        MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => Request::Refused(MavResult::MAV_RESULT_DENIED),
+        MavCmd::MAV_CMD_REQUEST_MESSAGE if command.param1.is_finite() && command.param1 >= 0.0 => {
+            Request::Message(command.param1 as u32)
+        }
+        _ => Request::Refused(MavResult::MAV_RESULT_UNSUPPORTED),
+    }
+}
+
+/// The acknowledgement of `command` with `result` (its extension fields, progress and
+/// target, are left out: a ground station matches acknowledgements by command).
+pub fn ack(command: MavCmd, result: MavResult) -> COMMAND_ACK_DATA {
+    COMMAND_ACK_DATA { command, result }
+}
+
+/// A `COMMAND_LONG` of `command` to the vehicle with `param1` and `param2` (the ground side).
+pub fn command_long(command: MavCmd, param1: f32, param2: f32) -> COMMAND_LONG_DATA {
+    COMMAND_LONG_DATA {
+        command,
+        param1,
+        param2,
+        target_system: crate::VEHICLE_SYSTEM_ID,
+        target_component: crate::VEHICLE_COMPONENT_ID,
+        ..Default::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_operator_commands_are_read_from_their_mavlink_commands() {
+        let start = command_long(MavCmd::MAV_CMD_MISSION_START, 0.0, 0.0);
+        assert_eq!(classify(&start), Request::Operator(OperatorCommand::Start));
+        let land = command_long(MavCmd::MAV_CMD_NAV_LAND, 0.0, 0.0);
+        assert_eq!(classify(&land), Request::Operator(OperatorCommand::LandNow));
+        let disarm = command_long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 0.0, 0.0);
+        assert_eq!(classify(&disarm), Request::Operator(OperatorCommand::Abort));
+        let forced = command_long(
+            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            0.0,
+            FORCE_DISARM_MAGIC,
+        );
+        assert_eq!(classify(&forced), Request::Operator(OperatorCommand::Kill));
+        let terminate = command_long(MavCmd::MAV_CMD_DO_FLIGHTTERMINATION, 1.0, 0.0);
+        assert_eq!(
+            classify(&terminate),
+            Request::Operator(OperatorCommand::Kill)
+        );
+        for c in [
+            OperatorCommand::Start,
+            OperatorCommand::Abort,
+            OperatorCommand::LandNow,
+            OperatorCommand::Kill,
+        ] {
+            let again = command_long(c.mav_cmd(), 0.0, 0.0);
+            // Kill by flight termination needs param1 = 1; the others come back as themselves.
+            if c != OperatorCommand::Kill {
+                assert_eq!(classify(&again), Request::Operator(c));
+            }
+        }
+    }
+
+    #[test]
+    fn arming_and_unknown_commands_are_refused() {
+        let arm = command_long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0);
+        assert_eq!(
+            classify(&arm),
+            Request::Refused(MavResult::MAV_RESULT_DENIED)
+        );
+        let takeoff = command_long(MavCmd::MAV_CMD_NAV_TAKEOFF, 0.0, 0.0);
+        assert_eq!(
+            classify(&takeoff),
+            Request::Refused(MavResult::MAV_RESULT_UNSUPPORTED)
+        );
+        let no_termination = command_long(MavCmd::MAV_CMD_DO_FLIGHTTERMINATION, 0.0, 0.0);
+        assert_eq!(
+            classify(&no_termination),
+            Request::Refused(MavResult::MAV_RESULT_UNSUPPORTED)
+        );
+    }
+
+    #[test]
+    fn message_requests_carry_the_message_id() {
+        let req = command_long(MavCmd::MAV_CMD_REQUEST_MESSAGE, 148.0, 0.0);
+        assert_eq!(classify(&req), Request::Message(148));
+    }
+}

@@ -1,0 +1,587 @@
+//! MAVLink FTP (the MAVLink "File Transfer Protocol" service, `FILE_TRANSFER_PROTOCOL`):
+//! how a ground station writes the payload description to the vehicle before the mission
+//! (issue 11, section 3).
+//!
+//! The `FILE_TRANSFER_PROTOCOL` payload (251 bytes) carries, little-endian: `seq_number` u16,
+//! `session` u8, `opcode` u8, `size` u8, `req_opcode` u8, `burst_complete` u8, padding u8,
+//! `offset` u32 and up to [`DATA_LEN`] bytes of data. The ground side (client) sends commands;
+//! the vehicle (server) answers each with `ACK` or `NAK` (data\[0\] the error code) carrying
+//! `req_opcode` = the command's opcode and `seq_number` one more than the command's. A command
+//! repeated with the same `seq_number` (the client timed out) gets the same answer again,
+//! without being carried out twice.
+//!
+//! [`Server`] is the vehicle's minimal server: one session, one writable file
+//! ([`PAYLOAD_PATH`]) held in RAM, and the opcodes `TerminateSession`, `ResetSessions`,
+//! `CreateFile`, `OpenFileWO`, `WriteFile`; everything else is refused with `UnknownCommand`.
+//! [`Upload`] is the ground side of writing one file: `ResetSessions`, `CreateFile`, the
+//! `WriteFile`s, `TerminateSession`.
+
+use crate::msg::FILE_TRANSFER_PROTOCOL_DATA;
+
+/// Bytes of data one FTP message carries.
+pub const DATA_LEN: usize = 239;
+/// Length of the whole FTP payload.
+pub const PAYLOAD_LEN: usize = 251;
+/// The one file the vehicle accepts: the payload description (`shared::scenario_wire`).
+pub const PAYLOAD_PATH: &str = "/payload.rtsc";
+
+/// FTP opcodes (MAVLink FTP, "Opcodes").
+#[allow(missing_docs)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Opcode {
+    None = 0,
+    TerminateSession = 1,
+    ResetSessions = 2,
+    ListDirectory = 3,
+    OpenFileRO = 4,
+    ReadFile = 5,
+    CreateFile = 6,
+    WriteFile = 7,
+    RemoveFile = 8,
+    CreateDirectory = 9,
+    RemoveDirectory = 10,
+    OpenFileWO = 11,
+    TruncateFile = 12,
+    Rename = 13,
+    CalcFileCRC32 = 14,
+    BurstReadFile = 15,
+    Ack = 128,
+    Nak = 129,
+}
+
+/// FTP error codes of a `NAK` (MAVLink FTP, "NAK error information").
+#[allow(missing_docs)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum ErrorCode {
+    None = 0,
+    Fail = 1,
+    FailErrno = 2,
+    InvalidDataSize = 3,
+    InvalidSession = 4,
+    NoSessionsAvailable = 5,
+    Eof = 6,
+    UnknownCommand = 7,
+    FileExists = 8,
+    FileProtected = 9,
+    FileNotFound = 10,
+}
+
+impl ErrorCode {
+    fn from_u8(v: u8) -> Option<Self> {
+        use ErrorCode::*;
+        [
+            None,
+            Fail,
+            FailErrno,
+            InvalidDataSize,
+            InvalidSession,
+            NoSessionsAvailable,
+            Eof,
+            UnknownCommand,
+            FileExists,
+            FileProtected,
+            FileNotFound,
+        ]
+        .into_iter()
+        .find(|c| *c as u8 == v)
+    }
+}
+
+/// One FTP message (command or answer).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FtpMessage {
+    /// Sequence number.
+    pub seq: u16,
+    /// Session id.
+    pub session: u8,
+    /// Opcode (see [`Opcode`]).
+    pub opcode: u8,
+    /// Bytes of `data` in use.
+    pub size: u8,
+    /// In an answer: the opcode answered.
+    pub req_opcode: u8,
+    /// Burst reads only.
+    pub burst_complete: u8,
+    /// File offset, bytes.
+    pub offset: u32,
+    /// Data.
+    pub data: [u8; DATA_LEN],
+}
+
+impl Default for FtpMessage {
+    fn default() -> Self {
+        Self {
+            seq: 0,
+            session: 0,
+            opcode: 0,
+            size: 0,
+            req_opcode: 0,
+            burst_complete: 0,
+            offset: 0,
+            data: [0; DATA_LEN],
+        }
+    }
+}
+
+impl FtpMessage {
+    /// A command `opcode` with sequence number `seq`.
+    pub fn command(seq: u16, opcode: Opcode) -> Self {
+        Self {
+            seq,
+            opcode: opcode as u8,
+            ..Self::default()
+        }
+    }
+
+    /// Reads the FTP payload of a `FILE_TRANSFER_PROTOCOL`.
+    pub fn from_payload(p: &[u8; PAYLOAD_LEN]) -> Self {
+        let mut data = [0; DATA_LEN];
+        data.copy_from_slice(&p[12..]);
+        Self {
+            seq: u16::from_le_bytes([p[0], p[1]]),
+            session: p[2],
+            opcode: p[3],
+            size: p[4],
+            req_opcode: p[5],
+            burst_complete: p[6],
+            offset: u32::from_le_bytes([p[8], p[9], p[10], p[11]]),
+            data,
+        }
+    }
+
+    /// The FTP payload.
+    pub fn to_payload(&self) -> [u8; PAYLOAD_LEN] {
+        let mut p = [0; PAYLOAD_LEN];
+        p[..2].copy_from_slice(&self.seq.to_le_bytes());
+        p[2] = self.session;
+        p[3] = self.opcode;
+        p[4] = self.size;
+        p[5] = self.req_opcode;
+        p[6] = self.burst_complete;
+        p[8..12].copy_from_slice(&self.offset.to_le_bytes());
+        p[12..].copy_from_slice(&self.data);
+        p
+    }
+
+    /// As a `FILE_TRANSFER_PROTOCOL` to `system`/`component`.
+    pub fn to_message(&self, system: u8, component: u8) -> FILE_TRANSFER_PROTOCOL_DATA {
+        FILE_TRANSFER_PROTOCOL_DATA {
+            target_network: 0,
+            target_system: system,
+            target_component: component,
+            payload: self.to_payload(),
+        }
+    }
+
+    /// The data in use (`size` bytes, at most [`DATA_LEN`]).
+    pub fn data(&self) -> &[u8] {
+        &self.data[..usize::from(self.size).min(DATA_LEN)]
+    }
+
+    /// Sets the data (cut to [`DATA_LEN`]).
+    pub fn set_data(&mut self, bytes: &[u8]) {
+        let n = bytes.len().min(DATA_LEN);
+        self.data[..n].copy_from_slice(&bytes[..n]);
+        self.size = n as u8;
+    }
+
+    /// The error code of a `NAK`.
+    pub fn nak_code(&self) -> Option<ErrorCode> {
+        (self.opcode == Opcode::Nak as u8)
+            .then(|| ErrorCode::from_u8(self.data[0]))
+            .flatten()
+    }
+}
+
+/// What the server did with a command, beyond answering it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileEvent {
+    /// Nothing to act on.
+    None,
+    /// The write session on [`PAYLOAD_PATH`] was closed: the file (its first `len` bytes) is
+    /// complete.
+    Written {
+        /// File length, bytes.
+        len: usize,
+    },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Session {
+    id: u8,
+    wrote: bool,
+}
+
+/// The vehicle's FTP server: one session and one writable file of at most `N` bytes.
+pub struct Server<const N: usize> {
+    file: [u8; N],
+    len: usize,
+    session: Option<Session>,
+    next_session: u8,
+    last: Option<(u16, FtpMessage)>,
+}
+
+impl<const N: usize> Default for Server<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+fn path_of(m: &FtpMessage) -> &[u8] {
+    let d = m.data();
+    // Paths may come NUL-terminated.
+    let end = d.iter().position(|&b| b == 0).unwrap_or(d.len());
+    &d[..end]
+}
+
+impl<const N: usize> Server<N> {
+    /// A server with an empty file and no session.
+    pub const fn new() -> Self {
+        Self {
+            file: [0; N],
+            len: 0,
+            session: None,
+            next_session: 0,
+            last: None,
+        }
+    }
+
+    /// The file's contents so far.
+    pub fn file(&self) -> &[u8] {
+        &self.file[..self.len]
+    }
+
+    /// Answers `request`; the answer's `seq` is the request's plus one. A repeated request
+    /// (same `seq` as the last) gets the last answer again and changes nothing.
+    pub fn handle(&mut self, request: &FtpMessage) -> (FtpMessage, FileEvent) {
+        if let Some((seq, answer)) = self.last
+            && seq == request.seq
+        {
+            return (answer, FileEvent::None);
+        }
+        let (mut answer, event) = self.execute(request);
+        answer.seq = request.seq.wrapping_add(1);
+        answer.req_opcode = request.opcode;
+        self.last = Some((request.seq, answer));
+        (answer, event)
+    }
+
+    fn execute(&mut self, r: &FtpMessage) -> (FtpMessage, FileEvent) {
+        const TERMINATE: u8 = Opcode::TerminateSession as u8;
+        const RESET: u8 = Opcode::ResetSessions as u8;
+        const CREATE: u8 = Opcode::CreateFile as u8;
+        const OPEN_WO: u8 = Opcode::OpenFileWO as u8;
+        const WRITE: u8 = Opcode::WriteFile as u8;
+        match r.opcode {
+            TERMINATE => match self.session {
+                Some(s) if s.id == r.session => {
+                    self.session = None;
+                    let event = if s.wrote {
+                        FileEvent::Written { len: self.len }
+                    } else {
+                        FileEvent::None
+                    };
+                    (ack(r.session), event)
+                }
+                _ => (nak(r.session, ErrorCode::InvalidSession), FileEvent::None),
+            },
+            RESET => {
+                self.session = None;
+                (ack(0), FileEvent::None)
+            }
+            CREATE | OPEN_WO => {
+                if self.session.is_some() {
+                    return (nak(0, ErrorCode::NoSessionsAvailable), FileEvent::None);
+                }
+                let path = path_of(r);
+                let ours = PAYLOAD_PATH.as_bytes();
+                if path != ours && path != &ours[1..] {
+                    return (nak(0, ErrorCode::FileProtected), FileEvent::None);
+                }
+                if r.opcode == CREATE {
+                    self.len = 0;
+                }
+                let id = self.next_session;
+                self.next_session = self.next_session.wrapping_add(1);
+                // A created file counts as written even if no data follows.
+                self.session = Some(Session {
+                    id,
+                    wrote: r.opcode == CREATE,
+                });
+                (ack(id), FileEvent::None)
+            }
+            WRITE => {
+                let Some(session) = self.session.as_mut().filter(|s| s.id == r.session) else {
+                    return (nak(r.session, ErrorCode::InvalidSession), FileEvent::None);
+                };
+                if usize::from(r.size) > DATA_LEN {
+                    return (nak(r.session, ErrorCode::InvalidDataSize), FileEvent::None);
+                }
+                let start = r.offset as usize;
+                let end = start.saturating_add(usize::from(r.size));
+                if end > N {
+                    // The file would not fit: the payload description is far smaller.
+                    return (nak(r.session, ErrorCode::Fail), FileEvent::None);
+                }
+                if start > self.len {
+                    self.file[self.len..start].fill(0);
+                }
+                self.file[start..end].copy_from_slice(r.data());
+                self.len = self.len.max(end);
+                session.wrote = true;
+                (ack(r.session), FileEvent::None)
+            }
+            _ => (nak(r.session, ErrorCode::UnknownCommand), FileEvent::None),
+        }
+    }
+}
+
+fn ack(session: u8) -> FtpMessage {
+    FtpMessage {
+        session,
+        opcode: Opcode::Ack as u8,
+        ..FtpMessage::default()
+    }
+}
+
+fn nak(session: u8, code: ErrorCode) -> FtpMessage {
+    let mut m = FtpMessage {
+        session,
+        opcode: Opcode::Nak as u8,
+        ..FtpMessage::default()
+    };
+    m.set_data(&[code as u8]);
+    m
+}
+
+/// Why an upload failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum UploadError {
+    /// The vehicle refused a step.
+    Refused {
+        /// The step's opcode.
+        step: Opcode,
+        /// The vehicle's error code (`None` if it sent an unknown one).
+        code: Option<ErrorCode>,
+    },
+}
+
+impl core::fmt::Display for UploadError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Refused { step, code } => {
+                write!(f, "the vehicle refused FTP {step:?}")?;
+                match code {
+                    Some(c) => write!(f, " ({c:?})"),
+                    None => write!(f, " (unknown error code)"),
+                }
+            }
+        }
+    }
+}
+
+/// The ground side of writing one file: which command to send next, and what to make of the
+/// answers. Resend [`Upload::current`] unchanged when an answer does not come in time.
+pub struct Upload<'a> {
+    path: &'a str,
+    contents: &'a [u8],
+    seq: u16,
+    step: Opcode,
+    session: u8,
+    offset: usize,
+}
+
+/// Where an upload stands after an answer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Progress {
+    /// The answer is not to the current command (a stale or foreign one): keep waiting.
+    Ignored,
+    /// Send [`Upload::current`] next.
+    Continue,
+    /// The file is written and its session closed.
+    Done,
+}
+
+impl<'a> Upload<'a> {
+    /// An upload of `contents` to `path`.
+    pub fn new(path: &'a str, contents: &'a [u8]) -> Self {
+        Self {
+            path,
+            contents,
+            seq: 0,
+            step: Opcode::ResetSessions,
+            session: 0,
+            offset: 0,
+        }
+    }
+
+    /// The command to send now.
+    pub fn current(&self) -> FtpMessage {
+        let mut m = FtpMessage::command(self.seq, self.step);
+        m.session = self.session;
+        match self.step {
+            Opcode::CreateFile => m.set_data(self.path.as_bytes()),
+            Opcode::WriteFile => {
+                let end = (self.offset + DATA_LEN).min(self.contents.len());
+                m.offset = self.offset as u32;
+                m.set_data(&self.contents[self.offset..end]);
+            }
+            _ => {}
+        }
+        m
+    }
+
+    /// Takes the vehicle's answer.
+    pub fn on_answer(&mut self, answer: &FtpMessage) -> Result<Progress, UploadError> {
+        if answer.seq != self.seq.wrapping_add(1) || answer.req_opcode != self.step as u8 {
+            return Ok(Progress::Ignored);
+        }
+        if answer.opcode != Opcode::Ack as u8 {
+            return Err(UploadError::Refused {
+                step: self.step,
+                code: answer.nak_code(),
+            });
+        }
+        self.seq = self.seq.wrapping_add(2);
+        self.step = match self.step {
+            Opcode::ResetSessions => Opcode::CreateFile,
+            Opcode::CreateFile => {
+                self.session = answer.session;
+                Opcode::WriteFile
+            }
+            Opcode::WriteFile => {
+                self.offset = (self.offset + DATA_LEN).min(self.contents.len());
+                if self.offset < self.contents.len() {
+                    Opcode::WriteFile
+                } else {
+                    Opcode::TerminateSession
+                }
+            }
+            _ => return Ok(Progress::Done),
+        };
+        Ok(Progress::Continue)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::vec::Vec;
+
+    fn upload_through<const N: usize>(
+        server: &mut Server<N>,
+        contents: &[u8],
+    ) -> Result<Vec<FileEvent>, UploadError> {
+        let mut up = Upload::new(PAYLOAD_PATH, contents);
+        let mut events = Vec::new();
+        for _ in 0..100 {
+            let request = up.current();
+            // Go through the wire format both ways.
+            let request = FtpMessage::from_payload(&request.to_payload());
+            let (answer, event) = server.handle(&request);
+            events.push(event);
+            if up.on_answer(&FtpMessage::from_payload(&answer.to_payload()))? == Progress::Done {
+                return Ok(events);
+            }
+        }
+        panic!("upload did not finish");
+    }
+
+    #[test]
+    fn a_file_of_several_chunks_arrives_whole() {
+        let contents: Vec<u8> = (0..700u32).map(|i| (i * 7 % 251) as u8).collect();
+        let mut server = Server::<1024>::new();
+        let events = upload_through(&mut server, &contents).expect("accepted");
+        assert_eq!(server.file(), &contents[..]);
+        assert_eq!(events.last(), Some(&FileEvent::Written { len: 700 }));
+        assert_eq!(
+            events.iter().filter(|e| **e != FileEvent::None).count(),
+            1,
+            "one completed file"
+        );
+    }
+
+    #[test]
+    fn a_second_upload_replaces_the_first() {
+        let mut server = Server::<1024>::new();
+        upload_through(&mut server, &[1u8; 500]).unwrap();
+        upload_through(&mut server, &[2u8; 10]).unwrap();
+        assert_eq!(server.file(), &[2u8; 10]);
+    }
+
+    #[test]
+    fn a_repeated_command_gets_the_same_answer_and_is_not_done_twice() {
+        let mut server = Server::<1024>::new();
+        let mut create = FtpMessage::command(4, Opcode::CreateFile);
+        create.set_data(PAYLOAD_PATH.as_bytes());
+        let (first, _) = server.handle(&create);
+        let (again, _) = server.handle(&create);
+        assert_eq!(first, again);
+        assert_eq!(first.opcode, Opcode::Ack as u8);
+        assert_eq!(first.seq, 5);
+        // Had the repeat been executed it would have failed: the session is taken.
+        let mut other = create;
+        other.seq = 6;
+        let (busy, _) = server.handle(&other);
+        assert_eq!(busy.nak_code(), Some(ErrorCode::NoSessionsAvailable));
+    }
+
+    #[test]
+    fn other_files_oversized_writes_and_unknown_commands_are_refused() {
+        let mut server = Server::<64>::new();
+        let mut create = FtpMessage::command(0, Opcode::CreateFile);
+        create.set_data(b"/etc/passwd");
+        assert_eq!(
+            server.handle(&create).0.nak_code(),
+            Some(ErrorCode::FileProtected)
+        );
+        let mut create = FtpMessage::command(2, Opcode::CreateFile);
+        create.set_data(b"payload.rtsc\0");
+        let (ok, _) = server.handle(&create);
+        assert_eq!(ok.opcode, Opcode::Ack as u8);
+        let mut write = FtpMessage::command(4, Opcode::WriteFile);
+        write.session = ok.session;
+        write.offset = 60;
+        write.set_data(&[9; 10]);
+        assert_eq!(server.handle(&write).0.nak_code(), Some(ErrorCode::Fail));
+        let mut wrong_session = write;
+        wrong_session.seq = 6;
+        wrong_session.session = ok.session.wrapping_add(1);
+        wrong_session.offset = 0;
+        assert_eq!(
+            server.handle(&wrong_session).0.nak_code(),
+            Some(ErrorCode::InvalidSession)
+        );
+        let list = FtpMessage::command(8, Opcode::ListDirectory);
+        assert_eq!(
+            server.handle(&list).0.nak_code(),
+            Some(ErrorCode::UnknownCommand)
+        );
+    }
+
+    #[test]
+    fn a_refusal_ends_the_upload_naming_the_step() {
+        let mut server = Server::<16>::new();
+        assert_eq!(
+            upload_through(&mut server, &[0u8; 100]),
+            Err(UploadError::Refused {
+                step: Opcode::WriteFile,
+                code: Some(ErrorCode::Fail)
+            })
+        );
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn any_command_is_answered_without_panicking(payload in proptest::collection::vec(proptest::prelude::any::<u8>(), PAYLOAD_LEN)) {
+            let mut p = [0u8; PAYLOAD_LEN];
+            p.copy_from_slice(&payload);
+            let mut server = Server::<512>::new();
+            let request = FtpMessage::from_payload(&p);
+            let (answer, _) = server.handle(&request);
+            proptest::prop_assert_eq!(answer.seq, request.seq.wrapping_add(1));
+        }
+    }
+}

@@ -1,0 +1,47 @@
+//! The vehicle's MAVLink link as plain, synchronous, `no_std` logic (issue 11, section 3):
+//! what the firmware and the hardware-in-the-loop plant say to each other, and how.
+//!
+//! - [`frame`]: MAVLink 2 framing: a byte-at-a-time parser that survives any byte stream, and
+//!   the encoder (the `mavlink` crate's message types, CRCs and payload encoding).
+//! - [`hil`]: PX4's simulator MAVLink API: `HIL_SENSOR` and `ATT_POS_MOCAP` in,
+//!   `HIL_ACTUATOR_CONTROLS` (and `ACTUATOR_OUTPUT_STATUS` past 8 robots) out, with the channel
+//!   map, and the lockstep bookkeeping of both sides.
+//! - [`command`]: `COMMAND_LONG` to the operator's commands, and their `COMMAND_ACK`s.
+//! - [`ftp`]: MAVLink FTP: the vehicle's minimal server (one writable file, the payload
+//!   description) and the ground side's upload.
+//! - [`status`]: `STATUSTEXT` (long texts in chunks, and their reassembly) and named values.
+//! - [`vehicle`]: the vehicle's dispatch of received frames.
+//!
+//! Nothing here does I/O, allocates or panics on input: the firmware runs it under embassy on
+//! a Cortex-M7 and the host tests it and runs it in the plant. The `mavlink` crate needs one of
+//! its `std` or `embedded` features, which this crate passes through (`std` on the host,
+//! `embedded` in the firmware, never both).
+#![no_std]
+#![deny(missing_docs)]
+
+#[cfg(all(feature = "std", feature = "embedded"))]
+compile_error!("link: enable `std` (host) or `embedded` (firmware), not both");
+
+#[cfg(test)]
+extern crate std;
+
+pub mod command;
+pub mod frame;
+pub mod ftp;
+pub mod hil;
+pub mod status;
+pub mod vehicle;
+
+/// The trait of every message type (its id, `CRC_EXTRA`, encoding).
+pub use mavlink::MessageData;
+/// The MAVLink common dialect's messages and enums, as this crate uses them.
+pub use mavlink::dialects::common as msg;
+
+/// MAVLink system id of the vehicle.
+pub const VEHICLE_SYSTEM_ID: u8 = 1;
+/// MAVLink component id of the flight controller (`MAV_COMP_ID_AUTOPILOT1`).
+pub const VEHICLE_COMPONENT_ID: u8 = 1;
+/// MAVLink system id the HIL plant and its ground tools use (a ground station's).
+pub const PLANT_SYSTEM_ID: u8 = 255;
+/// MAVLink component id of the HIL plant (`MAV_COMP_ID_MISSIONPLANNER`).
+pub const PLANT_COMPONENT_ID: u8 = 190;

@@ -1,0 +1,212 @@
+//! The vehicle's dispatch of received frames: which of its services a frame is for, decoded and
+//! checked (issue 11, section 3). Only the messages the vehicle handles are decoded, so the
+//! firmware links those decoders and no others (decoding the whole dialect costs ~80 KB).
+
+use mavlink::MessageData;
+
+use crate::command::{Request, classify};
+use crate::frame::{Frame, Integrity};
+use crate::ftp::{FtpMessage, PAYLOAD_LEN};
+use crate::hil::{HilError, ImuSample, MocapFix};
+use crate::msg::{
+    ACTUATOR_OUTPUT_STATUS_DATA, ATT_POS_MOCAP_DATA, AUTOPILOT_VERSION_DATA, COMMAND_ACK_DATA,
+    COMMAND_LONG_DATA, FILE_TRANSFER_PROTOCOL_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA,
+    HIL_SENSOR_DATA, MavCmd, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA, STATUSTEXT_DATA,
+};
+
+macro_rules! crc_extras {
+    ($($m:ty),* $(,)?) => {
+        /// `CRC_EXTRA` of the messages this link speaks (either direction), `None` for others.
+        pub fn crc_extra(id: u32) -> Option<u8> {
+            match id {
+                $(<$m>::ID => Some(<$m>::EXTRA_CRC),)*
+                _ => None,
+            }
+        }
+    };
+}
+
+crc_extras!(
+    HEARTBEAT_DATA,
+    COMMAND_LONG_DATA,
+    COMMAND_ACK_DATA,
+    STATUSTEXT_DATA,
+    NAMED_VALUE_FLOAT_DATA,
+    NAMED_VALUE_INT_DATA,
+    HIL_SENSOR_DATA,
+    ATT_POS_MOCAP_DATA,
+    HIL_ACTUATOR_CONTROLS_DATA,
+    ACTUATOR_OUTPUT_STATUS_DATA,
+    FILE_TRANSFER_PROTOCOL_DATA,
+    AUTOPILOT_VERSION_DATA,
+);
+
+/// Who sent a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Sender {
+    /// System id.
+    pub system: u8,
+    /// Component id.
+    pub component: u8,
+}
+
+/// A received frame, for the vehicle.
+// The FTP variant is a whole FTP message (~250 bytes); values of this type live briefly on the
+// stack of the link task, and no_std has no box to shrink it.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Inbound {
+    /// `HIL_SENSOR`: a control step in lockstep.
+    Sensor(ImuSample),
+    /// `ATT_POS_MOCAP`.
+    Mocap(MocapFix),
+    /// `COMMAND_LONG` addressed to the vehicle, classified.
+    Command {
+        /// The command as sent (for its acknowledgement).
+        command: MavCmd,
+        /// What it asks for.
+        request: Request,
+        /// Its sender (the acknowledgement's target).
+        from: Sender,
+    },
+    /// `FILE_TRANSFER_PROTOCOL` addressed to the vehicle.
+    Ftp {
+        /// The FTP command.
+        message: FtpMessage,
+        /// Its sender.
+        from: Sender,
+    },
+    /// A ground station's `HEARTBEAT`.
+    Heartbeat(Sender),
+    /// A HIL message that does not hold (the text says why).
+    Invalid(HilError),
+    /// Not for the vehicle, or not a message it handles.
+    Ignored {
+        /// Message id.
+        id: u32,
+    },
+}
+
+fn for_us(system: u8, component: u8) -> bool {
+    (system == 0 || system == crate::VEHICLE_SYSTEM_ID)
+        && (component == 0 || component == crate::VEHICLE_COMPONENT_ID)
+}
+
+/// What `frame` is for the vehicle.
+pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
+    let id = frame.message_id();
+    if integrity != Integrity::Verified {
+        return Inbound::Ignored { id };
+    }
+    let from = Sender {
+        system: frame.system_id(),
+        component: frame.component_id(),
+    };
+    let ignored = Inbound::Ignored { id };
+    match id {
+        HIL_SENSOR_DATA::ID => frame.decode::<HIL_SENSOR_DATA>().map_or(ignored, |m| {
+            // The extension field `id` follows the base fields.
+            let sensor_id = frame
+                .payload()
+                .get(HIL_SENSOR_DATA::ENCODED_LEN)
+                .copied()
+                .unwrap_or(0);
+            match ImuSample::from_message(&m, sensor_id) {
+                Ok(s) => Inbound::Sensor(s),
+                Err(e) => Inbound::Invalid(e),
+            }
+        }),
+        ATT_POS_MOCAP_DATA::ID => frame.decode::<ATT_POS_MOCAP_DATA>().map_or(ignored, |m| {
+            match MocapFix::from_message(&m) {
+                Ok(f) => Inbound::Mocap(f),
+                Err(e) => Inbound::Invalid(e),
+            }
+        }),
+        COMMAND_LONG_DATA::ID => match frame.decode::<COMMAND_LONG_DATA>() {
+            Some(c) if for_us(c.target_system, c.target_component) => Inbound::Command {
+                command: c.command,
+                request: classify(&c),
+                from,
+            },
+            _ => ignored,
+        },
+        FILE_TRANSFER_PROTOCOL_DATA::ID => match frame.decode::<FILE_TRANSFER_PROTOCOL_DATA>() {
+            Some(f) if for_us(f.target_system, f.target_component) => {
+                let payload: &[u8; PAYLOAD_LEN] = &f.payload;
+                Inbound::Ftp {
+                    message: FtpMessage::from_payload(payload),
+                    from,
+                }
+            }
+            _ => ignored,
+        },
+        HEARTBEAT_DATA::ID => Inbound::Heartbeat(from),
+        _ => ignored,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::command::{OperatorCommand, command_long};
+    use crate::frame::{Encoder, Parser};
+    use crate::ftp::Opcode;
+
+    fn through_the_wire<M: MessageData>(m: &M) -> Inbound {
+        let mut enc = Encoder::new(crate::PLANT_SYSTEM_ID, crate::PLANT_COMPONENT_ID);
+        let mut f = Frame::default();
+        enc.encode(m, &mut f);
+        let mut p = Parser::new(crc_extra);
+        let mut out = None;
+        for &b in f.bytes() {
+            if let Some((frame, integrity)) = p.push(b) {
+                out = Some(dispatch(frame, integrity));
+            }
+        }
+        out.expect("one frame")
+    }
+
+    #[test]
+    fn each_service_gets_its_messages() {
+        let s = ImuSample {
+            time_us: 2500,
+            gyro: [0.0; 3],
+            accel: [0.0, 0.0, -9.81],
+        };
+        assert_eq!(through_the_wire(&s.to_message()), Inbound::Sensor(s));
+        let start = command_long(MavCmd::MAV_CMD_MISSION_START, 0.0, 0.0);
+        assert!(matches!(
+            through_the_wire(&start),
+            Inbound::Command {
+                request: Request::Operator(OperatorCommand::Start),
+                from: Sender {
+                    system: 255,
+                    component: 190
+                },
+                ..
+            }
+        ));
+        let ftp = FtpMessage::command(3, Opcode::ResetSessions).to_message(1, 1);
+        assert!(matches!(through_the_wire(&ftp), Inbound::Ftp { message, .. } if message.seq == 3));
+    }
+
+    #[test]
+    fn commands_for_other_vehicles_and_bad_sensor_data_are_not_acted_on() {
+        let mut start = command_long(MavCmd::MAV_CMD_MISSION_START, 0.0, 0.0);
+        start.target_system = 42;
+        assert!(matches!(through_the_wire(&start), Inbound::Ignored { .. }));
+        let mut bad = ImuSample::default().to_message();
+        bad.xacc = f32::INFINITY;
+        assert!(matches!(through_the_wire(&bad), Inbound::Invalid(_)));
+        // A second IMU (extension field id = 1) is not the one the vehicle steps on.
+        let mut enc = Encoder::new(crate::PLANT_SYSTEM_ID, crate::PLANT_COMPONENT_ID);
+        let mut f = Frame::default();
+        enc.encode_extended(&ImuSample::default().to_message(), &[1], &mut f);
+        let mut p = Parser::new(crc_extra);
+        let got = f
+            .bytes()
+            .iter()
+            .find_map(|&b| p.push(b).map(|(fr, i)| dispatch(fr, i)));
+        assert_eq!(got, Some(Inbound::Invalid(HilError::OtherSensor { id: 1 })));
+    }
+}
