@@ -26,10 +26,9 @@ fn run(scenario: &Scenario, map_error: f32, bias_term: bool) -> (MissionOutcome,
         },
         ..MissionSetup::default()
     };
-    let mut reasons = Vec::new();
-    let outcome = mission_run::run(scenario, &setup, &mut |_, tr| reasons.push(tr.reason))
-        .expect("mission runs");
-    (outcome, reasons)
+    let (outcome, autopilot) =
+        mission_run::run(scenario, &setup, &mut |_, _, _| {}).expect("mission runs");
+    (outcome, autopilot.reasons)
 }
 
 /// Estimate error per axis, in resolutions.
@@ -131,8 +130,8 @@ fn refuses_to_take_off_without_thrust_margin_or_convergence() {
         },
         ..MissionSetup::default()
     };
-    let mut reasons = Vec::new();
-    let outcome = mission_run::run(&s, &setup, &mut |_, tr| reasons.push(tr.reason)).expect("runs");
+    let (outcome, autopilot) = mission_run::run(&s, &setup, &mut |_, _, _| {}).expect("runs");
+    let reasons = autopilot.reasons;
     assert!(!outcome.delivered);
     assert!(outcome.estimate.is_some(), "estimated first");
     assert!(
@@ -216,8 +215,8 @@ fn losing_motion_capture_in_flight_lands_in_place_instead_of_falling() {
         mocap_lost_after_takeoff: Some(6.0),
         ..MissionSetup::default()
     };
-    let mut reasons = Vec::new();
-    let outcome = mission_run::run(&s, &setup, &mut |_, tr| reasons.push(tr.reason)).expect("runs");
+    let (outcome, autopilot) = mission_run::run(&s, &setup, &mut |_, _, _| {}).expect("runs");
+    let reasons = autopilot.reasons;
     assert!(!outcome.dropped, "kept flying: {outcome:?}");
     assert_eq!(
         outcome.aborted,
@@ -255,9 +254,9 @@ fn a_payload_beyond_the_grid_and_the_rotors_aborts_on_the_ground() {
             map_error,
             ..MissionSetup::default()
         };
-        let mut reasons = Vec::new();
-        let outcome =
-            mission_run::run(&s, &setup, &mut |_, tr| reasons.push(tr.reason)).expect("runs");
+        let (outcome, autopilot) =
+            mission_run::run(&s, &setup, &mut |_, _, _| {}).expect("runs");
+        let reasons = autopilot.reasons;
         eprintln!(
             "{label}: aborted {:?}, lifts {:?}",
             outcome.aborted, outcome.lifts

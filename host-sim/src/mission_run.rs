@@ -1,14 +1,22 @@
-//! Runs `shared`'s mission against the physics plant (SPEC.md section 5, `mission`): the
+//! Runs a mission against the physics plant (SPEC.md section 5, `mission` and `hil`): the
 //! estimation lifts are real lift-offs of the simulated payload read from the simulated IMU,
-//! the robots move along the rail as the mission commands, and the flight is the plant's.
+//! the robots move along the rail as commanded, and the flight is the plant's.
+//!
+//! One plant loop, [`fly`], serves both commands. What flies is an [`Autopilot`]: `shared`'s
+//! mission in this process ([`InProcess`], the `mission` command) or the firmware over PX4's
+//! HIL MAVLink API (`crate::hil`). Either way the loop hands it the same sensor samples tick
+//! by tick and takes back rotor commands as fractions of the rotors' maximum (as
+//! `HIL_ACTUATOR_CONTROLS` carries them) and rail positions, so the same seed gives the same
+//! flight whichever runs the mission.
 
 use anyhow::{Result, anyhow};
+use shared::control::navigator::{ImuSample, MocapFix};
 use shared::control::vector::Vec3;
 use shared::estimation::Measurement;
 use shared::geometry::Vec2;
 use shared::mission::{
-    AbortReason, Mission, MissionConfig, MissionPlanner, OperatorCommand, Phase, Reason, TickInput,
-    Transition,
+    AbortReason, JobRequest, Mission, MissionConfig, MissionPlanner, OperatorCommand, Phase,
+    Reason, TickInput,
 };
 use shared::scenario::Scenario;
 
@@ -19,6 +27,9 @@ use crate::plant::{PHYSICS_DT, Plant, PlantConfig};
 /// Longest mission simulated, s.
 pub const MISSION_TIME_LIMIT: f32 = 900.0;
 
+/// Height the payload frame must rise above its start to count as having flown, m.
+const FLEW_HEIGHT: f32 = 0.1;
+
 /// One mission run's set-up.
 #[derive(Clone, Debug)]
 pub struct MissionSetup {
@@ -26,12 +37,14 @@ pub struct MissionSetup {
     pub seed: u64,
     /// The rotors' command-to-thrust over-read factor.
     pub map_error: f32,
-    /// The mission's configuration.
+    /// The mission's configuration (in this process; the firmware has its own).
     pub config: MissionConfig,
     /// Failure injection: motion capture stops this long after take-off began, s.
     pub mocap_lost_after_takeoff: Option<f32>,
     /// Operator commands after the start: (seconds after take-off began, command).
     pub commands: Vec<(f32, OperatorCommand)>,
+    /// Stop after this much simulated time, s (at most [`MISSION_TIME_LIMIT`]).
+    pub time_limit: f32,
 }
 
 impl Default for MissionSetup {
@@ -44,48 +57,97 @@ impl Default for MissionSetup {
             config: MissionConfig::default(),
             mocap_lost_after_takeoff: None,
             commands: Vec::new(),
+            time_limit: MISSION_TIME_LIMIT,
         }
     }
 }
 
-/// What the mission did.
-#[derive(Clone, Debug)]
-pub struct MissionOutcome {
-    /// The converged estimate [COM x, COM y, mass], if estimation converged.
-    pub estimate: Option<[f32; 3]>,
-    /// Lifts taken.
-    pub measurements: u32,
-    /// The flight formation, if one was chosen.
-    pub positions: Option<Vec<f32>>,
-    /// Landed at the target and disarmed.
-    pub delivered: bool,
-    /// Roll or pitch exceeded 45 degrees.
-    pub dropped: bool,
-    /// Distance from the landing point at the end, m.
-    pub final_position_error_m: f32,
+/// What the autopilot gets each tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sensed {
+    /// The sample's time, us.
+    pub time_us: u64,
+    /// The IMU sample.
+    pub imu: ImuSample,
+    /// A motion-capture fix that arrived since the last tick.
+    pub mocap: Option<MocapFix>,
+    /// An operator command.
+    pub command: Option<OperatorCommand>,
+}
+
+/// Something the autopilot reported this tick.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Event {
+    /// The mission entered phase `name` for `reason` (both as people read them).
+    Phase {
+        /// The phase's short name (`Phase::name`).
+        name: String,
+        /// Why.
+        reason: String,
+    },
+    /// The next lift's pair.
+    PairChosen(usize),
+    /// A lift's reading, N per robot (`None`: could not lift).
+    LiftRead(Option<f32>),
+}
+
+/// What the autopilot commands each tick.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Commanded {
+    /// Each rotor's thrust command as a fraction of its maximum.
+    pub thrust: Vec<f32>,
+    /// Each robot's rail position, arc length, m.
+    pub rail: Vec<f32>,
+    /// The rotors may turn.
+    pub armed: bool,
+    /// What happened.
+    pub events: Vec<Event>,
+    /// The mission is over (landed and disarmed, or aborted).
+    pub over: bool,
+}
+
+/// What flies the payload.
+pub trait Autopilot {
+    /// One control tick.
+    fn step(&mut self, sensed: &Sensed) -> Result<Commanded>;
+}
+
+/// What the plant saw.
+#[derive(Clone, Debug, Default)]
+pub struct PlantRecord {
     /// Each phase entered and how long it lasted, s.
     pub phases: Vec<(String, f32)>,
     /// Each lift: group, reading (N, or `None` when it could not lift), model lift-off thrust
     /// for the truth (N).
     pub lifts: Vec<(usize, Option<f32>, f32)>,
-    /// Why it stopped early (or landed in place), if it did.
-    pub aborted: Option<AbortReason>,
+    /// Roll or pitch exceeded 45 degrees.
+    pub dropped: bool,
+    /// Distance from the landing point at the end, m.
+    pub final_position_error_m: f32,
     /// Whether the rotors were ever armed.
     pub armed: bool,
-    /// Whether the payload left the ground.
+    /// Whether the payload rose [`FLEW_HEIGHT`] above its start.
     pub flew: bool,
     /// Thrust of every rotor at the end, N.
     pub final_thrusts: Vec<f32>,
+    /// The robots' rail positions at the end, m.
+    pub final_rail: Vec<f32>,
+    /// The autopilot said the mission is over.
+    pub over: bool,
+    /// Control ticks.
+    pub ticks: u64,
     /// Simulated time, s.
     pub simulated_s: f32,
 }
 
-/// Runs the mission; `on_transition` sees each transition with its time as it happens.
-pub fn run(
+/// Flies `autopilot` in the plant of `scenario`'s truth until its mission is over, the
+/// payload drops or the time limit; `on_phase` sees each phase (time, name, reason).
+pub fn fly(
     scenario: &Scenario,
     setup: &MissionSetup,
-    on_transition: &mut dyn FnMut(f32, &Transition),
-) -> Result<MissionOutcome> {
+    autopilot: &mut dyn Autopilot,
+    on_phase: &mut dyn FnMut(f32, &str, &str),
+) -> Result<PlantRecord> {
     let truth = scenario
         .truth
         .ok_or_else(|| anyhow!("[truth]: the mission needs the scenario's truth to simulate"))?;
@@ -111,33 +173,25 @@ pub fn run(
         disturbance_phase: [0.4 + setup.seed as f32 % 3.0, 1.9],
     });
     let mut sensors = Sensors::new(setup.seed);
-    let mut planner = MissionPlanner::new(scenario, setup.config)
-        .map_err(|e| anyhow!("the mission cannot start: {e}"))?;
-    let mut mission = Mission::new(scenario, setup.config);
     let dt = 1.0 / CONTROL_HZ as f32;
     let physics_per_tick = (dt / PHYSICS_DT).round() as usize;
     let n = robots.count();
-    let mut phases: Vec<(String, f32)> = Vec::new();
-    let mut entered = 0.0f32;
-    let mut record = |t: f32, tr: &Transition, phases: &mut Vec<(String, f32)>| {
-        if let Some(last) = phases.last_mut() {
-            last.1 = t - entered;
-        }
-        phases.push((tr.to.name().to_string(), 0.0));
-        entered = t;
+    let start = plant.state().position;
+    let limit = setup.time_limit.min(MISSION_TIME_LIMIT);
+    let mut record = PlantRecord {
+        final_thrusts: vec![0.0; n],
+        final_rail: robots.initial.to_vec(),
+        ..PlantRecord::default()
     };
-    let mut current = robots.initial.to_vec();
+    let mut entered = 0.0f32;
     let mut mocap_lost_at = f32::INFINITY;
     let mut takeoff_at = f32::INFINITY;
     let mut next_command = 0usize;
     let mut command = Some(OperatorCommand::Start);
-    let mut lifts = Vec::new();
     let mut group = 0usize;
-    let (mut dropped, mut armed, mut flew) = (false, false, false);
-    let mut thrusts = vec![0.0f32; n];
     loop {
         let t = plant.time();
-        if t > MISSION_TIME_LIMIT {
+        if t > limit {
             break;
         }
         let truth_now = plant.state();
@@ -145,40 +199,41 @@ pub fn run(
         let mocap = sensors
             .mocap(&truth_now, plant.time_us())
             .filter(|_| t < mocap_lost_at);
-        if command.is_none() {
-            if let Some(&(after, c)) = setup.commands.get(next_command) {
-                if t >= takeoff_at + after {
-                    command = Some(c);
-                    next_command += 1;
-                }
-            }
+        if command.is_none()
+            && let Some(&(after, c)) = setup.commands.get(next_command)
+            && t >= takeoff_at + after
+        {
+            command = Some(c);
+            next_command += 1;
         }
-        let out = mission.step(&TickInput {
+        let out = autopilot.step(&Sensed {
             time_us: plant.time_us(),
             imu,
             mocap,
             command: command.take(),
-        });
-        if let Some(job) = &out.job {
-            // The firmware runs this off the tick; its result is taken at its deadline tick
-            // either way.
-            mission.deliver(planner.run(job));
-        }
-        armed |= out.armed;
-        flew |= mission.flight().is_some_and(|f| f.airborne());
-        if let Some(tr) = out.transition {
-            if matches!(tr.to, Phase::Flying(_)) && matches!(tr.reason, Reason::Armed) {
-                plant.set_disturbance_peak(flight.disturbance_torque);
-                takeoff_at = t;
-                if let Some(after) = setup.mocap_lost_after_takeoff {
-                    mocap_lost_at = t + after;
+        })?;
+        record.ticks += 1;
+        record.armed |= out.armed;
+        record.flew |= start.z - truth_now.position.z > FLEW_HEIGHT;
+        for event in &out.events {
+            match event {
+                Event::Phase { name, reason } => {
+                    if name == "takeoff" && takeoff_at.is_infinite() {
+                        plant.set_disturbance_peak(flight.disturbance_torque);
+                        takeoff_at = t;
+                        if let Some(after) = setup.mocap_lost_after_takeoff {
+                            mocap_lost_at = t + after;
+                        }
+                    }
+                    on_phase(t, name, reason);
+                    if let Some(last) = record.phases.last_mut() {
+                        last.1 = t - entered;
+                    }
+                    record.phases.push((name.clone(), 0.0));
+                    entered = t;
                 }
-            }
-            on_transition(t, &tr);
-            record(t, &tr, &mut phases);
-            match tr.reason {
-                Reason::PairChosen { group: g, .. } => group = g,
-                Reason::LiftRead(m) => {
+                Event::PairChosen(g) => group = *g,
+                Event::LiftRead(reading) => {
                     let model = shared::estimation::groups::lift_group(scenario, group)
                         .and_then(|g| {
                             shared::statics::lift_off_thrust(
@@ -190,56 +245,189 @@ pub fn run(
                             )
                         })
                         .unwrap_or(f32::NAN);
-                    let reading = match m {
-                        Measurement::Lifted { thrust } => Some(thrust),
-                        Measurement::CouldNotLift => None,
-                    };
-                    lifts.push((group, reading, model));
+                    record.lifts.push((group, *reading, model));
                 }
-                _ => {}
             }
         }
-        if out.robots.as_slice() != current.as_slice() {
-            current = out.robots.to_vec();
-            plant.set_rotor_points(&rotor_points(&current));
+        let wanted: Vec<f32> = out.rail.iter().take(n).map(|&p| rail.wrap(p)).collect();
+        if wanted.len() == n && wanted != record.final_rail {
+            record.final_rail = wanted;
+            plant.set_rotor_points(&rotor_points(&record.final_rail));
         }
-        thrusts.copy_from_slice(&out.thrusts[..n]);
+        for (j, c) in record.final_thrusts.iter_mut().enumerate() {
+            let fraction = if out.armed {
+                out.thrust.get(j).copied().unwrap_or(0.0)
+            } else {
+                0.0
+            };
+            *c = fraction.clamp(0.0, 1.0) * robots.max_thrust;
+        }
         let euler = truth_now.attitude.to_euler();
         if euler.x.abs().to_degrees() > DROP_TILT_DEG || euler.y.abs().to_degrees() > DROP_TILT_DEG
         {
-            dropped = true;
+            record.dropped = true;
             break;
         }
-        if matches!(out.phase, Phase::Disarmed | Phase::Aborted) {
+        if out.over {
+            record.over = true;
             break;
         }
         for _ in 0..physics_per_tick {
-            plant.step(&thrusts);
+            plant.step(&record.final_thrusts);
         }
     }
     let end = plant.time();
-    if let Some(last) = phases.last_mut() {
+    if let Some(last) = record.phases.last_mut() {
         last.1 = end - entered;
     }
-    let landing = Vec3::new(flight.target[0], flight.target[1], 0.0);
-    let final_error = (plant.state().position - landing).norm();
+    let landing = Vec3::new(flight.target[0], flight.target[1], start.z);
+    record.final_position_error_m = (plant.state().position - landing).norm();
+    record.simulated_s = end;
+    Ok(record)
+}
+
+/// `shared`'s mission in this process: the tick side and the planner, each job run in line
+/// and taken at its deadline tick, as the firmware takes it.
+pub struct InProcess {
+    mission: Mission,
+    planner: MissionPlanner,
+    max_thrust: f32,
+    /// Every transition's reason, in order.
+    pub reasons: Vec<Reason>,
+    /// Every job asked for, in order.
+    pub jobs: Vec<JobRequest>,
+}
+
+impl InProcess {
+    /// The mission of `scenario` with `config`, idle.
+    pub fn new(scenario: &Scenario, config: MissionConfig) -> Result<Self> {
+        Ok(Self {
+            mission: Mission::new(scenario, config),
+            planner: MissionPlanner::new(scenario, config)
+                .map_err(|e| anyhow!("the mission cannot start: {e}"))?,
+            max_thrust: scenario.robots.max_thrust,
+            reasons: Vec::new(),
+            jobs: Vec::new(),
+        })
+    }
+
+    /// The mission's tick side.
+    pub fn mission(&self) -> &Mission {
+        &self.mission
+    }
+}
+
+impl Autopilot for InProcess {
+    fn step(&mut self, sensed: &Sensed) -> Result<Commanded> {
+        let out = self.mission.step(&TickInput {
+            time_us: sensed.time_us,
+            imu: sensed.imu,
+            mocap: sensed.mocap,
+            command: sensed.command,
+        });
+        if let Some(job) = &out.job {
+            // The firmware runs it off the tick; its result is taken at its deadline tick
+            // either way.
+            self.mission.deliver(self.planner.run(job));
+            self.jobs.push(job.clone());
+        }
+        let mut events = Vec::new();
+        if let Some(tr) = out.transition {
+            self.reasons.push(tr.reason);
+            events.push(Event::Phase {
+                name: tr.to.name().to_string(),
+                reason: tr.reason.to_string(),
+            });
+            match tr.reason {
+                Reason::PairChosen { group, .. } => events.push(Event::PairChosen(group)),
+                Reason::LiftRead(Measurement::Lifted { thrust }) => {
+                    events.push(Event::LiftRead(Some(thrust)));
+                }
+                Reason::LiftRead(Measurement::CouldNotLift) => events.push(Event::LiftRead(None)),
+                _ => {}
+            }
+        }
+        let n = out.robots.len();
+        Ok(Commanded {
+            // As the firmware sends them: fractions of the rotors' maximum.
+            thrust: out.thrusts[..n]
+                .iter()
+                .map(|t| (t / self.max_thrust).clamp(0.0, 1.0))
+                .collect(),
+            rail: out.robots.to_vec(),
+            armed: out.armed,
+            events,
+            over: matches!(out.phase, Phase::Disarmed | Phase::Aborted),
+        })
+    }
+}
+
+/// What the mission did.
+#[derive(Clone, Debug)]
+pub struct MissionOutcome {
+    /// The converged estimate [COM x, COM y, mass], if estimation converged.
+    pub estimate: Option<[f32; 3]>,
+    /// Lifts taken.
+    pub measurements: u32,
+    /// The flight formation, if one was chosen.
+    pub positions: Option<Vec<f32>>,
+    /// Landed at the target and disarmed, with no abort on the way.
+    pub delivered: bool,
+    /// Roll or pitch exceeded 45 degrees.
+    pub dropped: bool,
+    /// Distance from the landing point at the end, m.
+    pub final_position_error_m: f32,
+    /// Each phase entered and how long it lasted, s.
+    pub phases: Vec<(String, f32)>,
+    /// Each lift: group, reading (N, or `None` when it could not lift), model lift-off thrust
+    /// for the truth (N).
+    pub lifts: Vec<(usize, Option<f32>, f32)>,
+    /// Why it stopped early (or landed in place), if it did.
+    pub aborted: Option<AbortReason>,
+    /// Whether the rotors were ever armed.
+    pub armed: bool,
+    /// Whether the payload left the ground.
+    pub flew: bool,
+    /// Thrust of every rotor at the end, N.
+    pub final_thrusts: Vec<f32>,
+    /// Simulated time, s.
+    pub simulated_s: f32,
+    /// Control ticks.
+    pub ticks: u64,
+}
+
+/// A flight counts as delivered within this distance of the target, m.
+pub const DELIVERY_RADIUS: f32 = 0.25;
+
+/// Runs `shared`'s mission in this process; `on_phase` sees each phase (time, name, reason)
+/// as it happens.
+pub fn run(
+    scenario: &Scenario,
+    setup: &MissionSetup,
+    on_phase: &mut dyn FnMut(f32, &str, &str),
+) -> Result<(MissionOutcome, InProcess)> {
+    let mut autopilot = InProcess::new(scenario, setup.config)?;
+    let record = fly(scenario, setup, &mut autopilot, on_phase)?;
+    let mission = autopilot.mission();
     let delivered = mission.phase() == Phase::Disarmed
         && mission.abort_reason().is_none()
-        && !dropped
-        && final_error < 0.25;
-    Ok(MissionOutcome {
+        && !record.dropped
+        && record.final_position_error_m < DELIVERY_RADIUS;
+    let outcome = MissionOutcome {
         estimate: mission.estimate().map(|e| e.theta),
         measurements: mission.measurements(),
         positions: mission.formation().map(|p| p.to_vec()),
         delivered,
-        dropped,
-        final_position_error_m: final_error,
-        phases,
-        lifts,
+        dropped: record.dropped,
+        final_position_error_m: record.final_position_error_m,
+        phases: record.phases,
+        lifts: record.lifts,
         aborted: mission.abort_reason(),
-        armed,
-        flew,
-        final_thrusts: thrusts,
-        simulated_s: end,
-    })
+        armed: record.armed,
+        flew: record.flew,
+        final_thrusts: record.final_thrusts,
+        simulated_s: record.simulated_s,
+        ticks: record.ticks,
+    };
+    Ok((outcome, autopilot))
 }

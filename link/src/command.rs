@@ -41,6 +41,18 @@ impl OperatorCommand {
     }
 }
 
+impl OperatorCommand {
+    /// The `COMMAND_LONG` a ground station sends for it (read back by [`classify`]).
+    pub fn to_command_long(self) -> COMMAND_LONG_DATA {
+        match self {
+            Self::Start => command_long(MavCmd::MAV_CMD_MISSION_START, 0.0, 0.0),
+            Self::Abort => command_long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 0.0, 0.0),
+            Self::LandNow => command_long(MavCmd::MAV_CMD_NAV_LAND, 0.0, 0.0),
+            Self::Kill => command_long(MavCmd::MAV_CMD_DO_FLIGHTTERMINATION, 1.0, 0.0),
+        }
+    }
+}
+
 /// A received command, classified.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Request {
@@ -96,6 +108,20 @@ pub fn command_long(command: MavCmd, param1: f32, param2: f32) -> COMMAND_LONG_D
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_operator_command_is_read_back_from_what_a_ground_station_sends() {
+        for c in [
+            OperatorCommand::Start,
+            OperatorCommand::Abort,
+            OperatorCommand::LandNow,
+            OperatorCommand::Kill,
+        ] {
+            let sent = c.to_command_long();
+            assert_eq!(classify(&sent), Request::Operator(c));
+            assert_eq!(sent.command, c.mav_cmd());
+        }
+    }
 
     #[test]
     fn the_operator_commands_are_read_from_their_mavlink_commands() {

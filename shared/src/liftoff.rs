@@ -122,31 +122,38 @@ impl LiftoffDetector {
     /// `tilt_vector` (change of the body z axis since the reference).
     fn onset(&self, tilt_vector: Vec3) -> f32 {
         let direction = tilt_vector.normalized();
-        // Project once, then smooth with a trailing moving average.
-        let mut raw = [0.0f32; HISTORY];
-        let mut times = [0.0f32; HISTORY];
-        let mut n: usize = 0;
-        for (slot, (time, &(t, _, v))) in raw
-            .iter_mut()
-            .zip(times.iter_mut().zip(self.history.iter()))
-        {
-            *slot = v.dot(direction);
-            *time = t;
-            n += 1;
+        // Walk back from the newest sample, projecting as it goes and smoothing with a
+        // trailing moving average kept as a running sum over the window: only the samples
+        // since the tilt rose are touched (this runs inside a control tick).
+        let mut older = self
+            .history
+            .iter()
+            .rev()
+            .map(|&(t, _, v)| (t, v.dot(direction)));
+        // Samples i, i - 1, ..., i - SMOOTHING + 1: the window of the smoothed value at i.
+        let mut window: heapless::Deque<(f32, f32), SMOOTHING> = heapless::Deque::new();
+        let mut sum = 0.0f32;
+        for sample in older.by_ref().take(SMOOTHING) {
+            sum += sample.1;
+            // At most SMOOTHING samples were taken.
+            let _ = window.push_back(sample);
         }
-        let smoothed = |i: usize| -> f32 {
-            let from = i.saturating_sub(SMOOTHING - 1);
-            raw[from..=i].iter().sum::<f32>() / (i - from + 1) as f32
-        };
         let floor = self.config.onset_fraction * self.config.tilt_threshold;
-        let (t2, tilt2) = (self.clock, smoothed(n.saturating_sub(1)));
+        let t2 = self.clock;
+        let tilt2 = sum / math::max(window.len() as f32, 1.0);
         let mut first = (t2, tilt2);
-        for i in (0..n).rev() {
-            let p = smoothed(i);
-            if p <= floor {
+        while let Some(&(t_i, raw_i)) = window.front() {
+            let smoothed = sum / window.len() as f32;
+            if smoothed <= floor {
                 break;
             }
-            first = (times[i], p);
+            first = (t_i, smoothed);
+            let _ = window.pop_front();
+            sum -= raw_i;
+            if let Some(sample) = older.next() {
+                sum += sample.1;
+                let _ = window.push_back(sample);
+            }
         }
         // Cubic growth through (t1, tilt1) and (t2, tilt2): the onset t0.
         let (t1, tilt1) = first;

@@ -1,21 +1,18 @@
-//! THE INTEGRATION POINT: the one seam between the firmware and the autonomy (issue 11,
-//! sections 1 and 2).
+//! The one seam between the firmware and the autonomy (issue 11, sections 1 and 2): the
+//! mission of `shared`, exactly the code the simulator flies.
 //!
 //! The control task calls [`Autonomy::tick`] once per IMU sample (400 Hz) with a [`TickInput`]
 //! and applies the [`TickOutput`]: rotor thrusts and rail positions to the actuators (or, in
 //! HIL, to the plant over MAVLink), texts and values to the link, the command's
-//! acknowledgement, and a job to start. The job task runs [`run_job`] in thread mode and hands
-//! its [`JobResult`] back in the `TickInput` of the step at the request's deadline, exactly
-//! that step and no other, so runs are deterministic (in lockstep HIL the control task holds
-//! that step's reply until the job is done).
+//! acknowledgement, and a job to start. The job task runs [`run_job`] on the
+//! [`MissionPlanner`] in thread mode and hands its [`JobResult`] back in the `TickInput` of the
+//! step at the request's deadline, exactly that step and no other, so runs are deterministic
+//! (in lockstep HIL the control task holds that step's reply until the job is done).
 //!
-//! What is here now is a PLACEHOLDER, written without `shared`'s mission so the firmware's
-//! plumbing can be proven alone: it holds zero thrust and never arms, keeps the robots where
-//! the payload description puts them, takes the start command, asks for one synthetic job (a
-//! checksum loop that outlasts its deadline, so the lockstep hold is exercised) and
-//! completes two seconds after the start. The real mission replaces [`Autonomy`],
-//! [`JobWork`], [`JobResult`] and [`run_job`]; the types the control and link tasks use
-//! ([`TickInput`], [`TickOutput`], [`Report`], [`JobRequest`]) are meant to stay.
+//! What goes to the ground: each transition as `STATUSTEXT` `phase: NAME: reason`, and as
+//! `NAMED_VALUE_*` the chosen pair (`lift_pair`), each reading (`lift_N`, -1 when the pair
+//! could not lift), the estimate (`est_x`, `est_y` in m, `est_m` in kg, `lifts`) and the
+//! formation's `det`.
 
 use core::fmt::Write as _;
 
@@ -24,6 +21,13 @@ pub use link::command::OperatorCommand;
 pub use link::hil::{MAX_ROBOTS, MocapFix};
 pub use link::status::MissionState;
 use link::status::Text;
+use shared::control::navigator::{ImuSample, MocapFix as Fix};
+use shared::control::vector::{Quat, Vec3};
+use shared::estimation::Measurement;
+use shared::mission::{
+    AbortReason, CommandRefusal, Mission, MissionConfig, MissionPlanner, OperatorCommand as Command,
+    Phase, Reason, TickInput as MissionInput,
+};
 use shared::scenario::Scenario;
 
 /// One IMU sample, body frame (FRD).
@@ -36,7 +40,7 @@ pub struct ImuReading {
 }
 
 /// What one control step gets.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct TickInput<'a> {
     /// The vehicle's time, us (in HIL: the plant's `HIL_SENSOR` time).
     pub time_us: u64,
@@ -132,52 +136,25 @@ impl Report {
 }
 
 /// A long computation to run in thread mode, off the tick.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct JobRequest {
     /// Control steps after the request at which the result is taken (its worst case on the
     /// M7, rounded up).
     pub deadline_steps: u32,
-    /// What to compute.
-    pub work: JobWork,
+    /// What to compute: one of the mission's jobs.
+    pub work: shared::mission::JobRequest,
 }
 
-/// What a job computes. PLACEHOLDER: the mission's jobs (pair selection, posterior update,
-/// formation solve, mixer build) replace it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum JobWork {
-    /// `iterations` steps of xorshift32 from [`CHECKSUM_SEED`], xor-folded.
-    Checksum {
-        /// Steps.
-        iterations: u32,
-    },
+/// What a job returns.
+pub type JobResult = shared::mission::JobResult;
+
+/// Runs a job on the planner (in thread mode).
+pub fn run_job(planner: &mut MissionPlanner, work: &shared::mission::JobRequest) -> JobResult {
+    planner.run(work)
 }
 
-/// What a job returns. PLACEHOLDER (see [`JobWork`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum JobResult {
-    /// The checksum of [`JobWork::Checksum`].
-    Checksum(u32),
-}
-
-/// Seed of the placeholder job's checksum.
-pub const CHECKSUM_SEED: u32 = 0x1234_5678;
-
-/// Runs a job (in thread mode).
-pub fn run_job(work: &JobWork) -> JobResult {
-    match *work {
-        JobWork::Checksum { iterations } => {
-            let mut x = CHECKSUM_SEED;
-            let mut folded = 0u32;
-            for _ in 0..iterations {
-                x ^= x << 13;
-                x ^= x >> 17;
-                x ^= x << 5;
-                folded ^= x;
-            }
-            JobResult::Checksum(folded)
-        }
-    }
-}
+/// The mission's tuning on this vehicle (parameters come with the ground link).
+pub const CONFIG: MissionConfig = MissionConfig::DEFAULT;
 
 /// What one control step commands and reports.
 #[derive(Clone, Debug, PartialEq)]
@@ -200,24 +177,12 @@ pub struct TickOutput {
     pub report: Report,
 }
 
-/// Placeholder: steps the synthetic job takes (about 48 million instructions: some 100 ms on
-/// the M7 at 480 MHz, the size of a formation solve).
-const PLACEHOLDER_JOB_ITERATIONS: u32 = 6_000_000;
-/// Placeholder: the job's deadline, control steps (the next step). Deliberately far shorter
-/// than the job, so that in lockstep the control task must hold that step's reply until the
-/// job is done (the path a mission job takes when the M7 is slower than its worst case
-/// promised); off HIL the step goes on without it and reports the job late.
-const PLACEHOLDER_JOB_DEADLINE: u32 = 1;
-/// Placeholder: the mission completes this long after its start, us.
-const PLACEHOLDER_MISSION_US: u64 = 2_000_000;
-
-/// The autonomy. PLACEHOLDER: holds zero thrust (see the module documentation).
+/// The autonomy: the mission's tick side. Its job side, the [`MissionPlanner`], lives with
+/// the job task; it is loaded with the payload description before the description reaches
+/// the mission (see `super::jobs`).
 pub struct Autonomy {
-    robots: usize,
-    rail: [f32; MAX_ROBOTS],
+    mission: Mission,
     loaded: bool,
-    state: MissionState,
-    started_us: u64,
 }
 
 impl Default for Autonomy {
@@ -226,112 +191,141 @@ impl Default for Autonomy {
     }
 }
 
+fn command(c: OperatorCommand) -> Command {
+    match c {
+        OperatorCommand::Start => Command::Start,
+        OperatorCommand::Abort => Command::Abort,
+        OperatorCommand::LandNow => Command::LandNow,
+        OperatorCommand::Kill => Command::Kill,
+    }
+}
+
+fn fix(f: &MocapFix) -> Fix {
+    let [w, x, y, z] = f.attitude;
+    Fix {
+        position: Vec3::new(f.position[0], f.position[1], f.position[2]),
+        attitude: Quat { w, x, y, z },
+        stamp_us: f.stamp_us,
+    }
+}
+
 impl Autonomy {
     /// Idle, no payload description.
     pub const fn new() -> Self {
         Self {
-            robots: 0,
-            rail: [0.0; MAX_ROBOTS],
+            mission: Mission::UNLOADED,
             loaded: false,
-            state: MissionState::Idle,
-            started_us: 0,
+        }
+    }
+
+    /// Where the mission stands, for the heartbeat.
+    fn state(&self) -> MissionState {
+        match self.mission.phase() {
+            Phase::Idle => MissionState::Idle,
+            Phase::Disarmed if self.mission.abort_reason().is_none() => MissionState::Completed,
+            Phase::Disarmed | Phase::Aborted => MissionState::Aborted,
+            _ => MissionState::Running,
         }
     }
 
     /// One control step.
     pub fn tick(&mut self, input: &TickInput<'_>) -> TickOutput {
         let mut report = Report::default();
-        let mut ack = None;
-        let mut job = None;
         if let Some(scenario) = input.payload {
-            if self.state == MissionState::Running {
+            if self.mission.phase() == Phase::Idle || self.state().is_over() {
+                self.mission.load(scenario, CONFIG);
+                self.loaded = true;
+            } else {
                 report.text(
                     Severity::Warning,
                     format_args!("payload description ignored: the mission is running"),
                 );
-            } else {
-                self.robots = scenario.robots.count().min(MAX_ROBOTS);
-                self.rail = [0.0; MAX_ROBOTS];
-                self.rail[..self.robots].copy_from_slice(&scenario.robots.initial[..self.robots]);
-                self.loaded = true;
             }
         }
-        if let Some(command) = input.command {
-            let result = match (command, self.state) {
-                (OperatorCommand::Start, MissionState::Running) => {
-                    CommandResult::TemporarilyRejected
-                }
-                (OperatorCommand::Start, _) if !self.loaded => {
+        if let Some(result) = input.job.clone() {
+            // Dropped by the mission when it no longer waits for it (after an abort).
+            self.mission.deliver(result);
+        }
+        let out = self.mission.step(&MissionInput {
+            time_us: input.time_us,
+            imu: ImuSample {
+                gyro: Vec3::new(input.imu.gyro[0], input.imu.gyro[1], input.imu.gyro[2]),
+                accel: Vec3::new(input.imu.accel[0], input.imu.accel[1], input.imu.accel[2]),
+            },
+            mocap: input.mocap.as_ref().map(fix),
+            command: input.command.map(command),
+        });
+        let ack = input.command.zip(out.reply).map(|(given, reply)| {
+            let result = match reply.outcome {
+                Ok(()) => CommandResult::Accepted,
+                Err(why) => {
                     report.text(
                         Severity::Error,
-                        format_args!("start refused: no payload description loaded"),
+                        format_args!("command {:?} refused: {why}", reply.command),
                     );
-                    CommandResult::Denied
+                    match why {
+                        CommandRefusal::AlreadyStarted => CommandResult::TemporarilyRejected,
+                        _ => CommandResult::Denied,
+                    }
                 }
-                (OperatorCommand::Start, _) => {
-                    self.state = MissionState::Running;
-                    self.started_us = input.time_us;
-                    report.text(
-                        Severity::Info,
-                        format_args!(
-                            "phase: running: started with {} robots (placeholder autonomy: zero thrust)",
-                            self.robots
-                        ),
-                    );
-                    job = Some(JobRequest {
-                        deadline_steps: PLACEHOLDER_JOB_DEADLINE,
-                        work: JobWork::Checksum {
-                            iterations: PLACEHOLDER_JOB_ITERATIONS,
-                        },
-                    });
-                    report.value("job_req", Value::Int(input.step as i32));
-                    CommandResult::Accepted
-                }
-                (OperatorCommand::Abort | OperatorCommand::Kill, MissionState::Running) => {
-                    self.state = MissionState::Aborted;
-                    report.text(
-                        Severity::Warning,
-                        format_args!("phase: aborted: operator {:?}", command),
-                    );
-                    CommandResult::Accepted
-                }
-                (OperatorCommand::LandNow, MissionState::Running) => {
-                    self.state = MissionState::Completed;
-                    report.text(
-                        Severity::Info,
-                        format_args!("phase: completed: landed on the operator's command"),
-                    );
-                    CommandResult::Accepted
-                }
-                _ => CommandResult::Denied,
             };
-            ack = Some((command, result));
-        }
-        if let Some(JobResult::Checksum(sum)) = input.job {
+            (given, result)
+        });
+        if let Some(t) = out.transition {
+            let severity = match t.reason {
+                Reason::Abort(AbortReason::Killed | AbortReason::TakeoffFailed { .. }) => {
+                    Severity::Critical
+                }
+                Reason::Abort(_) => Severity::Warning,
+                _ => Severity::Info,
+            };
             report.text(
-                Severity::Info,
-                format_args!("job: checksum {sum:#010x} taken at step {}", input.step),
+                severity,
+                format_args!("phase: {}: {}", t.to.name(), t.reason),
             );
-            report.value("job_sum", Value::Int(sum as i32));
-            report.value("job_step", Value::Int(input.step as i32));
+            match t.reason {
+                Reason::PairChosen { group, .. } => {
+                    report.value("lift_pair", Value::Int(group as i32));
+                }
+                Reason::LiftRead(Measurement::Lifted { thrust }) => {
+                    report.value("lift_N", Value::Float(thrust));
+                }
+                Reason::LiftRead(Measurement::CouldNotLift) => {
+                    report.value("lift_N", Value::Float(-1.0));
+                }
+                Reason::Converged(theta) => {
+                    report.value("est_x", Value::Float(theta[0]));
+                    report.value("est_y", Value::Float(theta[1]));
+                    report.value("est_m", Value::Float(theta[2]));
+                    report.value("lifts", Value::Int(self.mission.measurements() as i32));
+                }
+                Reason::FormationChosen(det) => report.value("det", Value::Float(det)),
+                _ => {}
+            }
         }
-        if self.state == MissionState::Running
-            && input.time_us.saturating_sub(self.started_us) >= PLACEHOLDER_MISSION_US
-        {
-            self.state = MissionState::Completed;
-            report.text(
-                Severity::Info,
-                format_args!("phase: completed: placeholder mission held zero thrust for 2 s"),
-            );
+        let robots = if self.loaded {
+            out.robots.len().min(MAX_ROBOTS)
+        } else {
+            0
+        };
+        let max_thrust = self.mission.robot_max_thrust().max(f32::MIN_POSITIVE);
+        let mut thrust = [0.0; MAX_ROBOTS];
+        let mut rail = [0.0; MAX_ROBOTS];
+        for j in 0..robots {
+            thrust[j] = (out.thrusts[j] / max_thrust).clamp(0.0, 1.0);
+            rail[j] = out.robots[j];
         }
         TickOutput {
-            robots: self.robots,
-            thrust: [0.0; MAX_ROBOTS],
-            rail: self.rail,
-            armed: false,
-            state: self.state,
+            robots,
+            thrust,
+            rail,
+            armed: out.armed,
+            state: self.state(),
             ack,
-            job,
+            job: out.job.map(|work| JobRequest {
+                deadline_steps: work.deadline_ticks(),
+                work,
+            }),
             report,
         }
     }

@@ -21,11 +21,12 @@ use link::hil::{Actuators, ImuSample};
 use link::msg::{AUTOPILOT_VERSION_DATA, MavCmd, MavProtocolCapability, MavResult, MavSeverity};
 use link::status::{MissionState, Text, chunks, heartbeat, named_float, named_int};
 use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
-use shared::scenario_wire::{MAX_ENCODED_LEN, decode_and_check};
+use shared::scenario::Scenario;
+use shared::scenario_wire::{MAX_ENCODED_LEN, MAX_NAME_LEN, decode_and_check};
 use static_cell::StaticCell;
 
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
-use super::{ARMED, COMMANDS, IN_HIL, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD, SENSOR};
+use super::{ARMED, COMMANDS, IN_HIL, MISSION_STATE, MOCAP, OUTBOX, SENSOR, TO_LOAD};
 use crate::board::{Board, Selected};
 
 /// An IMU sample for the control task.
@@ -175,7 +176,7 @@ async fn handle(inbound: Inbound, ftp: &mut Server<FILE_CAPACITY>) {
                 })
                 .await;
             if let FileEvent::Written { .. } = event {
-                OUTBOX.send(check_payload(ftp.file())).await;
+                check_payload(ftp.file()).await;
             }
         }
         Inbound::Invalid(e) => {
@@ -190,28 +191,34 @@ async fn handle(inbound: Inbound, ftp: &mut Server<FILE_CAPACITY>) {
     }
 }
 
+/// A payload description that passed the checks, on its way to the planner.
+pub struct Received {
+    /// Its name.
+    pub name: heapless::String<MAX_NAME_LEN>,
+    /// The checked description.
+    pub scenario: Scenario,
+}
+
 /// Decodes and checks a received payload description with the host's checks; hands it to the
-/// autonomy, or says which key is wrong.
-fn check_payload(file: &[u8]) -> Outbound {
+/// job task to load (which then says it was accepted), or says which key is wrong.
+async fn check_payload(file: &[u8]) {
     match decode_and_check(file) {
         Ok((wire, scenario)) => {
-            let grid = &scenario.estimation;
-            let out = report(
-                Severity::Info,
-                format_args!(
-                    "payload {} accepted: {} robots, {} candidates, grid {}x{}x{}",
-                    wire.name,
-                    scenario.robots.count(),
-                    scenario.payload.candidates.len(),
-                    grid.axis_len(0),
-                    grid.axis_len(1),
-                    grid.axis_len(2)
-                ),
-            );
-            PAYLOAD.signal(scenario);
-            out
+            TO_LOAD
+                .send(Received {
+                    name: wire.name,
+                    scenario,
+                })
+                .await;
         }
-        Err(e) => report(Severity::Error, format_args!("payload refused: {e}")),
+        Err(e) => {
+            OUTBOX
+                .send(report(
+                    Severity::Error,
+                    format_args!("payload refused: {e}"),
+                ))
+                .await
+        }
     }
 }
 

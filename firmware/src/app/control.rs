@@ -96,7 +96,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             out.report
                 .text(Severity::Critical, format_args!("job late at its deadline"));
         }
-        if let Some(request) = out.job {
+        if let Some(request) = out.job.take() {
             let next_id = job_id.wrapping_add(1);
             match deadline.request(step.index, request.deadline_steps) {
                 Ok(_) if JOB_REQUESTS.try_send((next_id, request)).is_ok() => job_id = next_id,

@@ -22,7 +22,7 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
 use shared::scenario::Scenario;
-use static_cell::StaticCell;
+use static_cell::{ConstStaticCell, StaticCell};
 
 use crate::board::{Parts, Selected};
 
@@ -39,7 +39,9 @@ pub static SENSOR: Channel<Cs, comms::SensorSample, 2> = Channel::new();
 pub static MOCAP: Signal<Cs, link::hil::MocapFix> = Signal::new();
 /// Operator commands for the autonomy, with what their acknowledgement needs.
 pub static COMMANDS: Channel<Cs, comms::PendingCommand, 4> = Channel::new();
-/// A payload description received and checked, for the autonomy.
+/// A payload description received and checked, for the job task to load the planner with.
+pub static TO_LOAD: Channel<Cs, comms::Received, 1> = Channel::new();
+/// A payload description loaded into the planner, for the autonomy.
 pub static PAYLOAD: Signal<Cs, Scenario> = Signal::new();
 /// A job for the thread-mode task, numbered by the control task.
 pub static JOB_REQUESTS: Channel<Cs, (u32, autonomy::JobRequest), 1> = Channel::new();
@@ -64,7 +66,8 @@ pub fn thread_woken() {
 }
 
 static THREAD_EXECUTOR: StaticCell<raw::Executor> = StaticCell::new();
-static AUTONOMY: StaticCell<autonomy::Autonomy> = StaticCell::new();
+static AUTONOMY: ConstStaticCell<autonomy::Autonomy> =
+    ConstStaticCell::new(autonomy::Autonomy::new());
 
 /// Starts the application on a board that is up; `board_tasks` spawns the board's own tasks
 /// (status LEDs) in thread mode. Never returns: thread mode then runs the jobs.
@@ -77,7 +80,7 @@ pub fn run(parts: Parts<Selected>, board_tasks: impl FnOnce(Spawner)) -> ! {
     } = parts;
 
     let control = CONTROL_EXECUTOR.start(irqs.control);
-    let autonomy = AUTONOMY.init(autonomy::Autonomy::new());
+    let autonomy = AUTONOMY.take();
     match control::control(autonomy, outputs) {
         Ok(token) => control.spawn(token),
         Err(_) => panic!("control task not spawned"),

@@ -61,12 +61,25 @@ pub struct HilArgs {
     /// Seconds the plant waits for each lockstep reply before it gives up.
     #[arg(long, value_name = "S", default_value_t = 10.0)]
     pub reply_timeout: f64,
+    /// The rotors' command-to-thrust map over-reads by this factor.
+    #[arg(long, value_name = "S", default_value_t = 1.0)]
+    pub map_error: f64,
+    /// Failure injection: motion capture stops this many seconds after take-off.
+    #[arg(long, value_name = "S")]
+    pub mocap_lost_after: Option<f64>,
 }
 
 /// Runs the command.
 pub fn run(args: &HilArgs) -> Result<()> {
     let loaded = scenario_file::load(&args.scenario)?;
-    for (name, v) in [("--speed", args.speed), ("--duration", args.duration)] {
+    if !(args.map_error.is_finite() && args.map_error > 0.0) {
+        bail!("--map-error {}: must be a positive factor", args.map_error);
+    }
+    for (name, v) in [
+        ("--speed", args.speed),
+        ("--duration", args.duration),
+        ("--mocap-lost-after", args.mocap_lost_after),
+    ] {
         if let Some(v) = v
             && !(v.is_finite() && v > 0.0)
         {
@@ -85,6 +98,8 @@ pub fn run(args: &HilArgs) -> Result<()> {
         duration_s: args.duration,
         reply_timeout: Duration::from_secs_f64(args.reply_timeout),
         gcs: args.gcs,
+        map_error: args.map_error as f32,
+        mocap_lost_after_takeoff: args.mocap_lost_after.map(|s| s as f32),
     };
     let json = args.json;
     let on_text: Box<dyn FnMut(&LoggedText) + Send> = Box::new(move |t: &LoggedText| {
@@ -129,12 +144,12 @@ pub fn to_json(scenario: &str, o: &HilOutcome) -> serde_json::Value {
         "scenario": scenario,
         "firmware": o.firmware,
         "ticks": o.ticks,
-        // Mission keys. The firmware's autonomy is a placeholder until the mission is
-        // integrated: no estimate yet, and it never flies.
-        "estimate": serde_json::Value::Null,
-        "measurements": 0,
+        "estimate": o.estimate,
+        "measurements": o.measurements,
         "positions": o.positions,
-        "delivered": false,
+        "delivered": o.delivered,
+        "aborted": o.aborted,
+        "lifts": o.lifts.iter().map(|(g, r, m)| json!({"pair": g, "reading": r, "model": m})).collect::<Vec<_>>(),
         "dropped": o.dropped,
         "final_position_error_m": o.final_position_error_m,
         "phases": o.phases.iter().map(|(name, d)| json!({"name": name, "duration_s": d})).collect::<Vec<_>>(),
@@ -167,10 +182,25 @@ fn print_summary(o: &HilOutcome) {
         };
         println!("worst control step: {v:.0} {unit}");
     }
+    if let Some(e) = o.estimate {
+        println!(
+            "estimate: COM ({:.3}, {:.3}) m, mass {:.2} kg after {} lifts",
+            e[0], e[1], e[2], o.measurements
+        );
+    }
     println!(
-        "mission {:?}; final position error {:.3} m{}",
-        o.state,
+        "{}: final position error {:.3} m{}",
+        if o.delivered {
+            "delivered"
+        } else if o.dropped {
+            "DROPPED"
+        } else {
+            "NOT delivered"
+        },
         o.final_position_error_m,
-        if o.dropped { "; DROPPED" } else { "" }
+        o.aborted
+            .as_deref()
+            .map(|a| format!("; aborted: {a}"))
+            .unwrap_or_default()
     );
 }

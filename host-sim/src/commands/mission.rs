@@ -88,9 +88,9 @@ pub fn run(args: &MissionArgs) -> Result<()> {
         println!("mission on {}", loaded.name);
     }
     let started = Instant::now();
-    let outcome = mission_run::run(&loaded.scenario, &setup, &mut |t, tr| {
+    let (outcome, _) = mission_run::run(&loaded.scenario, &setup, &mut |t, name, reason| {
         if !json {
-            println!("  {t:7.2} s  {:<17} {}", tr.to.name(), tr.reason);
+            println!("  {t:7.2} s  {name:<17} {reason}");
         }
     })?;
     let wall_s = started.elapsed().as_secs_f64();

@@ -1,12 +1,13 @@
-//! The plant loop of `hil`: the physics plant and its sensors (the same `plant` the `mission`
-//! command flies), stepped in lockstep with the firmware (issue 11, section 3).
+//! `hil`: the firmware as the autopilot of the `mission` command's plant loop
+//! ([`crate::mission_run::fly`]), in lockstep (issue 11, section 3).
 //!
-//! Each control step (400 Hz): the motion-capture fixes due (100 Hz, with their latency) and
-//! the IMU sample go out; the plant then waits for the firmware's actuator commands stamped
-//! with that sample's time, applies them (rotor thrust = fraction x the robots' maximum; each
-//! robot moved to its commanded rail position) and advances its physics by one step (five
-//! 2 kHz steps). Nothing advances without the firmware's reply, so a run is the same however
-//! fast QEMU or the link is. `--speed X` only slows the loop down to X times real time.
+//! Before the loop: the firmware says who it is and takes the payload description over
+//! MAVLink FTP. Each control step (400 Hz): the motion-capture fix due and the IMU sample go
+//! out; the plant then waits for the firmware's actuator commands stamped with that sample's
+//! time, applies them (rotor thrust = fraction x the robots' maximum; each robot moved to its
+//! commanded rail position) and advances its physics by one step. Nothing advances without
+//! the firmware's reply, so a run is the same however fast QEMU or the link is. `--speed X`
+//! only slows the loop down to X times real time.
 //!
 //! The run ends when the firmware's heartbeat says its mission is over, when the payload tips
 //! past 45 degrees, or at the time limit.
@@ -17,20 +18,16 @@ use anyhow::{Result, bail};
 use link::hil::{ImuSample, MocapFix};
 use link::msg::{MavCmd, MavResult};
 use link::status::{MissionState, PHASE_PREFIX};
-use shared::control::vector::Vec3;
-use shared::geometry::Vec2;
+use shared::mission::OperatorCommand;
 use shared::scenario_wire::{MAX_ENCODED_LEN, encode_scenario};
 
 use super::gcs::GcsBridge;
 use super::session::{FirmwareLog, LoggedText, Session};
 use super::transport::Link;
-use crate::harness::{CONTROL_HZ, DROP_TILT_DEG};
-use crate::plant::sensors::Sensors;
-use crate::plant::{PHYSICS_DT, Plant, PlantConfig};
+use crate::mission_run::{
+    self, Autopilot, Commanded, DELIVERY_RADIUS, Event, MISSION_TIME_LIMIT, MissionSetup, Sensed,
+};
 use crate::scenario_file::LoadedScenario;
-
-/// Longest run, simulated seconds (as the `mission` command's limit).
-pub const TIME_LIMIT_S: f64 = 900.0;
 
 /// One run's set-up.
 #[derive(Clone, Debug)]
@@ -45,6 +42,10 @@ pub struct HilSetup {
     pub reply_timeout: Duration,
     /// Bridge non-HIL traffic to this ground station.
     pub gcs: Option<std::net::SocketAddr>,
+    /// The rotors' command-to-thrust over-read factor.
+    pub map_error: f32,
+    /// Failure injection: motion capture stops this long after take-off began, s.
+    pub mocap_lost_after_takeoff: Option<f32>,
 }
 
 impl Default for HilSetup {
@@ -55,6 +56,8 @@ impl Default for HilSetup {
             duration_s: None,
             reply_timeout: Duration::from_secs(10),
             gcs: None,
+            map_error: 1.0,
+            mocap_lost_after_takeoff: None,
         }
     }
 }
@@ -64,6 +67,16 @@ impl Default for HilSetup {
 pub struct HilOutcome {
     /// The board the firmware reported.
     pub firmware: String,
+    /// The firmware's estimate [COM x, COM y, mass], if its estimation converged.
+    pub estimate: Option<[f32; 3]>,
+    /// Lifts taken.
+    pub measurements: u32,
+    /// Each lift: group, reading (N, `None` when it could not lift), model lift-off thrust.
+    pub lifts: Vec<(usize, Option<f32>, f32)>,
+    /// Landed at the target, completed, with no abort on the way.
+    pub delivered: bool,
+    /// Why the firmware aborted (or landed in place), as it said it.
+    pub aborted: Option<String>,
     /// Lockstep exchanges (control steps).
     pub ticks: u64,
     /// Simulated time, s.
@@ -79,7 +92,7 @@ pub struct HilOutcome {
     /// Distance of the payload from the flight target's landing point at the end, m (from the
     /// start point when the scenario has no flight target).
     pub final_position_error_m: f64,
-    /// The robots' last commanded rail positions, m.
+    /// The robots' last commanded rail positions, m (the flight formation once flown).
     pub positions: Vec<f32>,
     /// Each phase the firmware reported (`phase: NAME: ...`) and how long it lasted, s.
     pub phases: Vec<(String, f64)>,
@@ -97,8 +110,112 @@ impl HilOutcome {
     }
 }
 
-/// Runs `scenario` against the firmware on `link`; `on_text` sees each text with the simulated
-/// time it arrived at.
+/// The firmware as the plant loop's autopilot: each tick's sensors go out over the link and
+/// the tick waits for the firmware's actuator commands; what it says becomes the loop's
+/// events.
+struct Firmware {
+    session: Session,
+    robots: usize,
+    reply_timeout: Duration,
+    speed: Option<f64>,
+    wall: Instant,
+    texts_seen: usize,
+    values_seen: usize,
+    was_running: bool,
+}
+
+impl Autopilot for Firmware {
+    fn step(&mut self, sensed: &Sensed) -> Result<Commanded> {
+        if let Some(command) = sensed.command {
+            self.session.send_command(command_to_link(command))?;
+        }
+        let fixes: Vec<MocapFix> = sensed
+            .mocap
+            .iter()
+            .map(|f| MocapFix {
+                stamp_us: f.stamp_us,
+                position: [f.position.x, f.position.y, f.position.z],
+                attitude: [f.attitude.w, f.attitude.x, f.attitude.y, f.attitude.z],
+            })
+            .collect();
+        let (g, a) = (sensed.imu.gyro, sensed.imu.accel);
+        let sample = ImuSample {
+            time_us: sensed.time_us,
+            gyro: [g.x, g.y, g.z],
+            accel: [a.x, a.y, a.z],
+        };
+        let reply = self
+            .session
+            .step(&sample, &fixes, self.robots, self.reply_timeout)?;
+        if self.session.steps() == 1 {
+            match self.session.log().ack_of(MavCmd::MAV_CMD_MISSION_START) {
+                Some(MavResult::MAV_RESULT_ACCEPTED) => {}
+                Some(result) => {
+                    let why = last_error(self.session.log()).unwrap_or_default();
+                    bail!("the firmware refused the mission start ({result:?}){why}");
+                }
+                None => bail!(
+                    "the firmware did not acknowledge MAV_CMD_MISSION_START with its first step"
+                ),
+            }
+        }
+        let log = self.session.log();
+        let mut events = Vec::new();
+        for t in &log.texts[self.texts_seen..] {
+            if let Some(rest) = t.text.strip_prefix(PHASE_PREFIX) {
+                let (name, reason) = rest.split_once(':').unwrap_or((rest, ""));
+                events.push(Event::Phase {
+                    name: name.trim().to_string(),
+                    reason: reason.trim().to_string(),
+                });
+            }
+        }
+        for v in &log.values[self.values_seen..] {
+            match v.name.as_str() {
+                "lift_pair" => events.push(Event::PairChosen(v.value as usize)),
+                "lift_N" => {
+                    events.push(Event::LiftRead((v.value >= 0.0).then_some(v.value as f32)));
+                }
+                _ => {}
+            }
+        }
+        self.texts_seen = log.texts.len();
+        self.values_seen = log.values.len();
+        match log.state {
+            Some(MissionState::Running) => self.was_running = true,
+            Some(MissionState::Idle) if self.was_running => {
+                bail!("the firmware's mission went back to idle while running (did it restart?)")
+            }
+            _ => {}
+        }
+        if let Some(speed) = self.speed.filter(|s| *s > 0.0) {
+            let due = Duration::from_secs_f64(sensed.time_us as f64 * 1e-6 / speed);
+            if let Some(wait) = due.checked_sub(self.wall.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
+        Ok(Commanded {
+            thrust: reply.thrust[..self.robots].to_vec(),
+            rail: reply.rail[..self.robots].to_vec(),
+            armed: reply.armed,
+            events,
+            over: log.state.is_some_and(MissionState::is_over),
+        })
+    }
+}
+
+fn command_to_link(c: OperatorCommand) -> link::command::OperatorCommand {
+    use link::command::OperatorCommand as Link;
+    match c {
+        OperatorCommand::Start => Link::Start,
+        OperatorCommand::Abort => Link::Abort,
+        OperatorCommand::LandNow => Link::LandNow,
+        OperatorCommand::Kill => Link::Kill,
+    }
+}
+
+/// Runs `scenario` against the firmware on `link`; `on_text` sees each text with the lockstep
+/// step it arrived at.
 pub fn run(
     scenario: &LoadedScenario,
     link: Link,
@@ -106,9 +223,9 @@ pub fn run(
     on_text: Box<dyn FnMut(&LoggedText) + Send>,
 ) -> Result<HilOutcome> {
     let s = &scenario.scenario;
-    let Some(truth) = s.truth else {
+    if s.truth.is_none() {
         bail!("[truth]: hil needs the scenario's truth to simulate the payload");
-    };
+    }
     let gcs = match setup.gcs {
         Some(addr) => Some(GcsBridge::start(addr, link.writer())?),
         None => None,
@@ -125,123 +242,66 @@ pub fn run(
     })?;
     session.upload_payload(&file[..len], Duration::from_secs(20))?;
 
-    let rail = &s.payload.rail;
-    let robots = s.robots.count();
-    let points =
-        |positions: &[f32]| -> Vec<Vec2> { positions.iter().map(|&p| rail.point_at(p)).collect() };
-    let mut plant = Plant::new(PlantConfig {
-        footprint: s.payload.footprint.to_vec(),
-        com: truth.com,
-        mass: truth.mass,
-        robot_mass: s.robots.mass,
-        rotor_points: points(&s.robots.initial),
-        spin: s.robots.spin.to_vec(),
-        torque_per_thrust: s.robots.torque_per_thrust,
-        max_thrust: s.robots.max_thrust,
-        map_error: 1.0,
-        disturbance_peak: 0.0,
-        disturbance_phase: [0.4 + setup.seed as f32 % 3.0, 1.9],
-    });
-    let mut sensors = Sensors::new(setup.seed);
-    let dt = 1.0 / CONTROL_HZ as f32;
-    let physics_per_tick = (dt / PHYSICS_DT).round() as usize;
-    let limit = setup.duration_s.unwrap_or(TIME_LIMIT_S).min(TIME_LIMIT_S);
-    let mut positions = s.robots.initial.to_vec();
-    let mut commands = vec![0.0f32; robots];
-    let mut dropped = false;
-    let mut was_running = false;
-    let start_point = plant.state().position;
-    let wall = Instant::now();
-
-    session.send_start()?;
-    loop {
-        let t = f64::from(plant.time());
-        if t >= limit {
-            break;
-        }
-        let truth_now = plant.state();
-        let imu = sensors.imu(&truth_now, dt);
-        let now_us = plant.time_us();
-        let fixes: Vec<MocapFix> = sensors
-            .mocap(&truth_now, now_us)
-            .into_iter()
-            .map(|f| MocapFix {
-                stamp_us: f.stamp_us,
-                position: [f.position.x, f.position.y, f.position.z],
-                attitude: [f.attitude.w, f.attitude.x, f.attitude.y, f.attitude.z],
-            })
-            .collect();
-        let sample = ImuSample {
-            time_us: now_us,
-            gyro: [imu.gyro.x, imu.gyro.y, imu.gyro.z],
-            accel: [imu.accel.x, imu.accel.y, imu.accel.z],
-        };
-        let reply = session.step(&sample, &fixes, robots, setup.reply_timeout)?;
-        if session.steps() == 1 {
-            match session.log().ack_of(MavCmd::MAV_CMD_MISSION_START) {
-                Some(MavResult::MAV_RESULT_ACCEPTED) => {}
-                Some(result) => {
-                    let why = last_error(session.log()).unwrap_or_default();
-                    bail!("the firmware refused the mission start ({result:?}){why}");
-                }
-                None => bail!(
-                    "the firmware did not acknowledge MAV_CMD_MISSION_START with its first step"
-                ),
-            }
-        }
-        for (j, c) in commands.iter_mut().enumerate() {
-            let fraction = if reply.armed { reply.thrust[j] } else { 0.0 };
-            *c = fraction.clamp(0.0, 1.0) * s.robots.max_thrust;
-        }
-        let wanted: Vec<f32> = reply.rail[..robots].iter().map(|&p| rail.wrap(p)).collect();
-        if wanted != positions {
-            positions = wanted;
-            plant.set_rotor_points(&points(&positions));
-        }
-        let euler = truth_now.attitude.to_euler();
-        if euler.x.abs().to_degrees() > DROP_TILT_DEG || euler.y.abs().to_degrees() > DROP_TILT_DEG
-        {
-            dropped = true;
-            break;
-        }
-        match session.log().state {
-            Some(MissionState::Running) => was_running = true,
-            Some(state) if state.is_over() => break,
-            _ => {}
-        }
-        if was_running && session.log().state == Some(MissionState::Idle) {
-            bail!("the firmware's mission went back to idle while running (did it restart?)");
-        }
-        for _ in 0..physics_per_tick {
-            plant.step(&commands);
-        }
-        if let Some(speed) = setup.speed.filter(|s| *s > 0.0) {
-            let due = Duration::from_secs_f64(f64::from(plant.time()) / speed);
-            if let Some(wait) = due.checked_sub(wall.elapsed()) {
-                std::thread::sleep(wait);
-            }
-        }
-    }
-    let wall_s = wall.elapsed().as_secs_f64();
-    let simulated_s = f64::from(plant.time());
-    let landing = match s.flight {
-        Some(f) => Vec3::new(f.target[0], f.target[1], start_point.z),
-        None => start_point,
+    let mut autopilot = Firmware {
+        session,
+        robots: s.robots.count(),
+        reply_timeout: setup.reply_timeout,
+        speed: setup.speed,
+        wall: Instant::now(),
+        texts_seen: 0,
+        values_seen: 0,
+        was_running: false,
     };
-    let final_position_error_m = f64::from((plant.state().position - landing).norm());
-    let log = session.log().clone();
-    let phases = phases(&log, session.steps(), dt);
+    autopilot.texts_seen = autopilot.session.log().texts.len();
+    autopilot.values_seen = autopilot.session.log().values.len();
+    let plant_setup = MissionSetup {
+        seed: setup.seed,
+        map_error: setup.map_error,
+        mocap_lost_after_takeoff: setup.mocap_lost_after_takeoff,
+        time_limit: setup.duration_s.map_or(MISSION_TIME_LIMIT, |d| d as f32),
+        ..MissionSetup::default()
+    };
+    let wall = Instant::now();
+    let record = mission_run::fly(s, &plant_setup, &mut autopilot, &mut |_, _, _| {})?;
+    let wall_s = wall.elapsed().as_secs_f64();
+    let log = autopilot.session.log().clone();
+    let state = log.state.unwrap_or(MissionState::Idle);
+    let estimate = match (
+        log.last_value("est_x"),
+        log.last_value("est_y"),
+        log.last_value("est_m"),
+    ) {
+        (Some(x), Some(y), Some(m)) => Some([x as f32, y as f32, m as f32]),
+        _ => None,
+    };
+    let aborted = log
+        .texts
+        .iter()
+        .filter_map(|t| t.text.split_once("ABORT: ").map(|(_, why)| why.to_string()))
+        .next_back();
     Ok(HilOutcome {
         firmware,
-        ticks: session.steps(),
-        simulated_s,
+        ticks: autopilot.session.steps(),
+        simulated_s: f64::from(record.simulated_s),
         wall_s,
-        state: log.state.unwrap_or(MissionState::Idle),
+        state,
         start_ack: log.ack_of(MavCmd::MAV_CMD_MISSION_START),
-        dropped,
-        final_position_error_m,
-        positions,
-        phases,
+        delivered: state == MissionState::Completed
+            && aborted.is_none()
+            && !record.dropped
+            && record.final_position_error_m < DELIVERY_RADIUS,
+        estimate,
+        measurements: record.lifts.len() as u32,
+        aborted,
+        dropped: record.dropped,
+        final_position_error_m: f64::from(record.final_position_error_m),
+        positions: record.final_rail,
+        phases: record
+            .phases
+            .iter()
+            .map(|(n, d)| (n.clone(), f64::from(*d)))
+            .collect(),
+        lifts: record.lifts,
         log,
     })
 }
@@ -253,26 +313,4 @@ fn last_error(log: &FirmwareLog) -> Option<String> {
         .rev()
         .find(|t| (t.severity as u8) <= 3)
         .map(|t| format!(": {}", t.text))
-}
-
-/// Phases from the firmware's `phase: NAME: ...` texts, with durations from the steps at which
-/// they arrived.
-fn phases(log: &FirmwareLog, steps: u64, dt: f32) -> Vec<(String, f64)> {
-    let marks: Vec<(String, u64)> = log
-        .texts
-        .iter()
-        .filter_map(|t| {
-            let rest = t.text.strip_prefix(PHASE_PREFIX)?;
-            let name = rest.split(':').next().unwrap_or(rest).trim().to_string();
-            Some((name, t.step))
-        })
-        .collect();
-    marks
-        .iter()
-        .enumerate()
-        .map(|(i, (name, at))| {
-            let end = marks.get(i + 1).map_or(steps, |(_, next)| *next);
-            (name.clone(), end.saturating_sub(*at) as f64 * f64::from(dt))
-        })
-        .collect()
 }

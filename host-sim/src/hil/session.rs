@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Result, anyhow, bail};
 use link::MessageData;
-use link::command::command_long;
+use link::command::{OperatorCommand, command_long};
 use link::frame::{Frame, Integrity};
 use link::ftp::{FtpMessage, PAYLOAD_PATH, Progress, Upload};
 use link::hil::{Actuators, ImuSample, MocapFix, Reply, ReplyMatcher};
@@ -255,10 +255,9 @@ impl Session {
         }
     }
 
-    /// Sends `MAV_CMD_MISSION_START` (acknowledged with the next step's reply).
-    pub fn send_start(&mut self) -> Result<()> {
-        self.link
-            .send(&command_long(MavCmd::MAV_CMD_MISSION_START, 0.0, 0.0))
+    /// Sends an operator command (acknowledged with the next step's reply).
+    pub fn send_command(&mut self, command: OperatorCommand) -> Result<()> {
+        self.link.send(&command.to_command_long())
     }
 
     /// One lockstep step: sends the motion-capture fixes due and the IMU sample, and waits (at

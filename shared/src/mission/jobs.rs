@@ -108,6 +108,9 @@ pub struct FormationPlan {
 }
 
 /// What a job produced.
+// One at a time crosses from the job task to the control task; without an allocator there is
+// nothing to box the mixer into, and the largest variant (~550 bytes) is small enough to copy.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum JobResult {
     /// Answer to [`JobRequest::SelectPair`].

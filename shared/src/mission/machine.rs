@@ -220,6 +220,11 @@ impl Mission {
         self.abort
     }
 
+    /// Largest thrust of one robot's rotor, N (0 when unloaded).
+    pub fn robot_max_thrust(&self) -> f32 {
+        self.scenario.robots.max_thrust
+    }
+
     /// Ticks stepped so far.
     pub fn ticks(&self) -> u64 {
         self.tick
