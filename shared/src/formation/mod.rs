@@ -14,6 +14,7 @@ pub mod assignment;
 pub mod balance;
 pub mod bound;
 pub mod face;
+mod independent;
 pub mod objective;
 pub mod search;
 pub mod solver;

@@ -519,10 +519,24 @@ mod tests {
             com: Vec2::new(0.95, 0.0), // beyond the centroid any 8 robots can reach
             ..crowded
         };
-        assert!(matches!(
-            solve(&far),
-            Err(FormationError::Unbalanceable { .. })
-        ));
+        let Err(FormationError::Unbalanceable { closest, .. }) = solve(&far) else {
+            panic!("a COM beyond reach must be refused");
+        };
+        // Eight robots packed at min spacing about the middle of the right end are a formation
+        // the rail allows: the closest balance reported is no farther from zero than theirs.
+        let rail = &rect.payload.rail;
+        let packed: [f32; 8] = core::array::from_fn(|j| rail.wrap(2.22 + (j as f32 - 3.5) * 0.25));
+        let theirs = figures(rail, &packed, &spin[..8], far.com, 0.016).balance;
+        let size = |b: [f32; 2]| crate::math::sqrt(b[0] * b[0] + b[1] * b[1]);
+        assert!(
+            size(closest) <= size(theirs) + 1e-4,
+            "{closest:?} vs {theirs:?}"
+        );
+        assert!(size(closest) > far.balance_eps, "{closest:?}");
+        assert!(
+            closest[0] < 0.0,
+            "the centroid stays left of the COM: {closest:?}"
+        );
     }
 
     /// COMs well inside the region every balanced formation can reach (mapped on the L grid
