@@ -3,8 +3,8 @@
 //!
 //! Robots keep their cyclic order, so an assignment is a count of robots per segment (in rail
 //! order, each at most what the segment holds at `min_spacing`) and the robot that comes first.
-//! Two first robots whose spin sequences agree (alternating spins repeat every two robots) give
-//! the same problem, so only the first `period` are tried. On a fixed assignment every robot
+//! Two first robots whose spin sequences agree, or are each other's negative (alternating
+//! spins: every shift), give the same problem, so only the first `period` are tried. On a fixed assignment every robot
 //! moves along one straight segment: its point is affine in its arc length, the balance sums
 //! are linear and `det(S)` is a quartic polynomial (see [`crate::formation::face`]).
 
@@ -40,11 +40,15 @@ pub fn segment_capacity(length: f32, spacing: f32) -> u8 {
     fit.clamp(0, MAX_ROBOTS as i32) as u8
 }
 
-/// The smallest shift `p` (dividing the count) with `spin[j + p] == spin[j]` for every robot.
+/// The smallest shift `p` (dividing the count) that maps the spin sequence onto itself or onto
+/// its negative (`spin[j + p] == spin[j]` for every robot, or `== -spin[j]` for every robot).
+/// `det(B B^T)` does not change when every spin flips (the third row of `B` changes sign), so
+/// formations that differ by such a shift are equally good.
 pub fn spin_period(spin: &[i8]) -> usize {
     let n = spin.len();
+    let maps = |p: usize, sign: i8| (0..n).all(|j| spin[(j + p) % n] == sign * spin[j]);
     (1..=n)
-        .find(|&p| n % p == 0 && (0..n).all(|j| spin[j] == spin[(j + p) % n]))
+        .find(|&p| n % p == 0 && (maps(p, 1) || maps(p, -1)))
         .unwrap_or(n)
 }
 

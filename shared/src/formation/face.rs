@@ -161,13 +161,15 @@ pub struct Face<'a> {
 }
 
 impl<'a> Face<'a> {
-    /// A feasible start on `layout` (midway between the earliest and latest packings), with
-    /// the constraints it touches active; `None` if there is none.
-    pub fn start(layout: &'a Layout) -> Option<Self> {
+    /// A feasible start on `layout`: each robot at fraction `lean` (0: earliest packing, 1:
+    /// latest) of the range it can reach, with the constraints it touches active; `None` if
+    /// that point breaks the wrap-around gap.
+    pub fn start(layout: &'a Layout, lean: f32) -> Option<Self> {
         let n = layout.n;
         let mut x = [0.0f32; N];
         for (i, xi) in x.iter_mut().enumerate().take(n) {
-            *xi = 0.5 * (layout.reach[i].0 + layout.reach[i].1);
+            let (a, b) = layout.reach[i];
+            *xi = a + lean * (b - a);
         }
         let mut face = Self {
             layout,
@@ -176,13 +178,7 @@ impl<'a> Face<'a> {
             pin: [Pin::Free; N],
         };
         if n >= 2 && face.slack(n - 1) < -ACTIVE_TOLERANCE {
-            // The wrap-around gap: try the earliest packing instead.
-            for (i, xi) in face.x.iter_mut().enumerate().take(n) {
-                *xi = layout.reach[i].0;
-            }
-            if face.slack(n - 1) < -ACTIVE_TOLERANCE {
-                return None;
-            }
+            return None;
         }
         face.detect_active();
         Some(face)

@@ -29,6 +29,9 @@ use crate::scenario::{MAX_ROBOTS, Scenario};
 
 /// Most assignments visited in one decision (the paper's rails have a few hundred).
 pub const MAX_ASSIGNMENTS: u32 = 20_000;
+/// Starts on each assignment, as the fraction of each robot's reachable range: the
+/// assignment's problem can have several local maxima (a robot pushed to either end).
+const STARTS: [f32; 3] = [0.5, 0.0, 1.0];
 /// Relative margin an assignment's bound must beat the best `det(S)` by to be solved.
 const PRUNE_MARGIN: f32 = 1e-4;
 
@@ -286,36 +289,39 @@ pub fn solve(problem: &FormationProblem<'_>) -> Result<Formation, FormationError
                 continue;
             }
         }
-        let Some(mut face) = Face::start(&layout) else {
-            continue;
-        };
-        let reached = face.solve(Goal::Balance, tolerance, max_iterations);
-        sweeps += reached.iterations;
-        if reached.balance.x.abs() > tolerance || reached.balance.y.abs() > tolerance {
-            continue;
-        }
-        seeds_balanced += 1;
-        let outcome = face.solve(Goal::Det, tolerance, max_iterations);
-        sweeps += outcome.iterations;
-        if best.as_ref().is_some_and(|(b, _)| outcome.value <= *b) {
-            continue;
-        }
-        let mut positions = positions_of(rail, &layout, &face);
-        // The steps keep the balance sums in exact arithmetic; polish away the rounding.
-        if !project_to_balance(
-            rail,
-            problem.com,
-            problem.min_spacing,
-            tolerance,
-            &mut positions,
-        ) || !satisfies_constraints(problem, &positions)
-        {
-            continue;
-        }
-        let (value, at) = score(problem, &positions);
-        if best.as_ref().is_none_or(|(b, _)| value > *b) {
-            best = Some((value, positions));
-            shape = at;
+        for lean in STARTS {
+            let Some(mut face) = Face::start(&layout, lean) else {
+                continue;
+            };
+            let reached = face.solve(Goal::Balance, tolerance, max_iterations);
+            sweeps += reached.iterations;
+            if reached.balance.x.abs() > tolerance || reached.balance.y.abs() > tolerance {
+                // The balance is a convex problem: no other start does better.
+                break;
+            }
+            seeds_balanced += 1;
+            let outcome = face.solve(Goal::Det, tolerance, max_iterations);
+            sweeps += outcome.iterations;
+            if best.as_ref().is_some_and(|(b, _)| outcome.value <= *b) {
+                continue;
+            }
+            let mut positions = positions_of(rail, &layout, &face);
+            // The steps keep the balance sums in exact arithmetic; polish away the rounding.
+            if !project_to_balance(
+                rail,
+                problem.com,
+                problem.min_spacing,
+                tolerance,
+                &mut positions,
+            ) || !satisfies_constraints(problem, &positions)
+            {
+                continue;
+            }
+            let (value, at) = score(problem, &positions);
+            if best.as_ref().is_none_or(|(b, _)| value > *b) {
+                best = Some((value, positions));
+                shape = at;
+            }
         }
     }
     let Some((_, positions)) = best else {
@@ -358,7 +364,7 @@ fn closest_balance(problem: &FormationProblem<'_>) -> [f32; 2] {
         else {
             continue;
         };
-        let Some(mut face) = Face::start(&layout) else {
+        let Some(mut face) = Face::start(&layout, 0.5) else {
             continue;
         };
         let h = face.solve(Goal::Balance, 0.0, 10 + 8 * n as u32).balance;
