@@ -83,10 +83,12 @@ impl Assignments {
             return false;
         }
         let mut left = remaining;
-        for s in from..self.segments {
-            let later = self.room_from[s + 1];
+        for (count, &later) in counts[from..self.segments]
+            .iter_mut()
+            .zip(&self.room_from[from + 1..])
+        {
             let here = left.saturating_sub(later);
-            counts[s] = here as u8;
+            *count = here as u8;
             left -= here;
         }
         left == 0

@@ -34,7 +34,7 @@ impl BoundShape {
     /// `[[s00, s01], [s01, s11]]` and spin sum `v`: `W = S^-1 sqrt(det S)`, `mu = W v / n`.
     pub fn at(s: [f32; 3], v: Vec2, n: usize) -> Self {
         let det = s[0] * s[2] - s[1] * s[1];
-        if !(det > 0.0) {
+        if det.is_nan() || det <= 0.0 {
             return Self::ROUND;
         }
         let root = math::sqrt(det);

@@ -258,9 +258,9 @@ impl<'a> Face<'a> {
             pinned[blk] |= self.pin[i] != Pin::Free;
         }
         b.start[b.count] = n as u8;
-        for blk in 0..b.count {
-            if !pinned[blk] {
-                b.free_index[blk] = b.free as u8;
+        for (index, &pinned) in b.free_index.iter_mut().zip(&pinned).take(b.count) {
+            if !pinned {
+                *index = b.free as u8;
                 b.free += 1;
             }
         }
@@ -293,13 +293,13 @@ impl<'a> Face<'a> {
             let mut t_b = [Vec2::default(); N];
             let mut ts_b = [Vec2::default(); N];
             let mut d_b = [0.0f32; N];
-            for i in 0..n {
+            for (i, grad_of) in grad_i.iter_mut().enumerate().take(n) {
                 let t = l.tangent[i];
                 match goal {
                     Goal::Det => {
                         let w = st.r[i] - st.v * (l.spin[i] * inv_n);
                         let g = Sym::outer(t, w);
-                        grad_i[i] = st.s.mixed(g);
+                        *grad_of = st.s.mixed(g);
                         let f = blocks.free_index[usize::from(blocks.block_of[i])];
                         if f != u8::MAX {
                             let f = usize::from(f);
@@ -310,7 +310,7 @@ impl<'a> Face<'a> {
                         }
                     }
                     Goal::Balance => {
-                        grad_i[i] = -2.0 * st.h.dot(t);
+                        *grad_of = -2.0 * st.h.dot(t);
                         let f = blocks.free_index[usize::from(blocks.block_of[i])];
                         if f != u8::MAX {
                             t_b[usize::from(f)] = t_b[usize::from(f)] + t;
@@ -345,7 +345,7 @@ impl<'a> Face<'a> {
                 Goal::Det => value.abs().max(1e-12),
                 Goal::Balance => value.abs().max(tolerance * tolerance),
             };
-            if k == 0 || !(gain > 1e-6 * scale) {
+            if k == 0 || gain.is_nan() || gain <= 1e-6 * scale {
                 // Stationary on this face: release the constraint with the most negative
                 // multiplier, or stop.
                 if let Some(c) = last_released.take() {
@@ -373,10 +373,10 @@ impl<'a> Face<'a> {
             }
             // Robot velocities along the step.
             let mut dx = [0.0f32; N];
-            for i in 0..n {
-                let f = blocks.free_index[usize::from(blocks.block_of[i])];
+            for (d, &blk) in dx.iter_mut().zip(&blocks.block_of).take(n) {
+                let f = blocks.free_index[usize::from(blk)];
                 if f != u8::MAX {
-                    dx[i] = step[usize::from(f)];
+                    *d = step[usize::from(f)];
                 }
             }
             let (limit, hit) = self.step_limit(&dx);
@@ -384,8 +384,8 @@ impl<'a> Face<'a> {
                 Goal::Det => quartic_argmax(&st, l, &dx, limit),
                 Goal::Balance => {
                     let mut ha = Vec2::default();
-                    for i in 0..n {
-                        ha = ha + l.tangent[i] * dx[i];
+                    for (&t, &d) in l.tangent.iter().zip(&dx).take(n) {
+                        ha = ha + t * d;
                     }
                     let den = ha.dot(ha);
                     if den > 0.0 {
@@ -396,8 +396,8 @@ impl<'a> Face<'a> {
                 }
             };
             if alpha > 0.0 {
-                for i in 0..n {
-                    self.x[i] += alpha * dx[i];
+                for (x, &d) in self.x.iter_mut().zip(&dx).take(n) {
+                    *x += alpha * d;
                 }
                 futile = [false; 2 * N];
                 last_released = None;
@@ -557,7 +557,7 @@ fn balance_multiplier(k: usize, grad: &[f32; N], t_b: &[Vec2; N]) -> Vec2 {
     let damping = 1e-6 * (a + c) + 1e-20;
     let (a, c) = (a + damping, c + damping);
     let det = a * c - b * b;
-    if !(det > 0.0) {
+    if det.is_nan() || det <= 0.0 {
         return Vec2::default();
     }
     Vec2::new((c * rx - b * ry) / det, (a * ry - b * rx) / det)
@@ -587,14 +587,14 @@ fn newton_step(
             }
             for prev in basis.iter().take(rank) {
                 let d: f32 = (0..k).map(|f| q[f] * prev[f]).sum();
-                for f in 0..k {
-                    q[f] -= d * prev[f];
+                for (qf, &pf) in q.iter_mut().zip(prev).take(k) {
+                    *qf -= d * pf;
                 }
             }
             let norm = math::sqrt((0..k).map(|f| q[f] * q[f]).sum());
             if norm > 1e-4 {
-                for f in 0..k {
-                    q[f] /= norm;
+                for qf in q.iter_mut().take(k) {
+                    *qf /= norm;
                 }
                 basis[rank] = q;
                 rank += 1;
@@ -668,29 +668,20 @@ fn newton_step(
 /// Solves `m x = b` for a symmetric positive definite `m` (overwritten); `None` if it is not.
 fn cholesky_solve(k: usize, m: &mut [[f32; N]; N], b: &[f32; N]) -> Option<[f32; N]> {
     for j in 0..k {
-        let mut d = m[j][j];
-        for p in 0..j {
-            d -= m[j][p] * m[j][p];
-        }
-        if !(d > 1e-12 * (1.0 + m[j][j].abs())) {
+        let d = m[j][j] - m[j][..j].iter().map(|v| v * v).sum::<f32>();
+        if d.is_nan() || d <= 1e-12 * (1.0 + m[j][j].abs()) {
             return None;
         }
         let d = math::sqrt(d);
         m[j][j] = d;
         for i in (j + 1)..k {
-            let mut s = m[i][j];
-            for p in 0..j {
-                s -= m[i][p] * m[j][p];
-            }
+            let s = m[i][j] - (0..j).map(|p| m[i][p] * m[j][p]).sum::<f32>();
             m[i][j] = s / d;
         }
     }
     let mut y = [0.0f32; N];
     for i in 0..k {
-        let mut s = b[i];
-        for p in 0..i {
-            s -= m[i][p] * y[p];
-        }
+        let s = b[i] - (0..i).map(|p| m[i][p] * y[p]).sum::<f32>();
         y[i] = s / m[i][i];
     }
     let mut x = [0.0f32; N];
@@ -712,11 +703,11 @@ fn quartic_argmax(st: &State, l: &Layout, dx: &[f32; N], limit: f32) -> f32 {
     let mut va = Vec2::default();
     let mut s1 = Sym::default();
     let mut s2 = Sym::default();
-    for i in 0..n {
-        if dx[i] == 0.0 {
+    for (i, &d) in dx.iter().enumerate().take(n) {
+        if d == 0.0 {
             continue;
         }
-        let a = l.tangent[i] * dx[i];
+        let a = l.tangent[i] * d;
         va = va + a * l.spin[i];
         s1 = s1.add(Sym::outer(st.r[i], a));
         s2 = s2.add(Sym::square(a));

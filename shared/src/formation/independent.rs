@@ -61,8 +61,11 @@ struct Stated<'a> {
     cq: f64,
     spacing: f64,
     eps: f64,
-    last: RefCell<Option<(Vec<f64>, (f64, [f64; 2]))>>,
+    last: RefCell<Option<Evaluated>>,
 }
+
+/// A point and its `det(B B^T)` and balance sums.
+type Evaluated = (Vec<f64>, (f64, [f64; 2]));
 
 impl Stated<'_> {
     /// `det(B B^T)` as a plain 3 x 3 determinant, and the balance sums (the last answer is
