@@ -91,6 +91,11 @@ fn given_com_is_used_and_bad_input_is_a_clear_error() {
     let path = scenario_path("L-sim1");
     for (args, names) in [
         (vec!["--com=0.05,0.02"], "out of the robots' reach"),
+        // The refusal says how close to balance the rail can get.
+        (
+            vec!["--com=0.05,0.02"],
+            "the closest the rail allows leaves balance sums",
+        ),
         (vec!["--com", "0.6,0.6"], "convex hull"),
         (vec!["--mass", "0"], "--mass"),
     ] {

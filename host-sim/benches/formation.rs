@@ -1,7 +1,7 @@
 //! Speed of the formation decision as the flight controller runs it, on the paper's cases.
 //!
-//! `cargo bench -p host-sim --bench formation`. Host figures; see the issue note for the
-//! Cortex-M7 estimate.
+//! `cargo bench -p host-sim --bench formation`. Host figures; `bash .ci/target-bench` counts
+//! the Cortex-M7's instructions for the same cases.
 
 use std::hint::black_box;
 use std::path::Path;
@@ -20,8 +20,8 @@ fn formation(c: &mut Criterion) {
         let problem = FormationProblem::for_scenario(&s, truth.com, Some(&s.robots.initial));
         let f = solve(&problem).expect("a formation");
         println!(
-            "{name}: det {:.4e}, {} seeds balanced, {} sweeps",
-            f.figures.det, f.seeds_balanced, f.sweeps
+            "{name}: det {:.4e}, {} assignments ({} pruned by the bound, {} starts balanced), {} Newton iterations",
+            f.figures.det, f.assignments, f.pruned, f.seeds_balanced, f.sweeps
         );
         c.bench_function(&format!("formation, {name}"), |b| {
             b.iter(|| black_box(solve(&problem).expect("a formation")))

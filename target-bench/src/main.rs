@@ -115,12 +115,28 @@ fn main() -> ! {
         report("  update", n);
     }
 
-    // Formation decision on the paper's cases.
-    for (name, scenario) in [("rect-sim1", &rect), ("L-sim1", &l_shape)] {
+    // Formation decision on the paper's four cases (rect-ex1 and L-sim2: the built-in rails
+    // and robots with those cases' COMs) and on twelve robots (rect-sim1 with 12 robots).
+    let l_sim2 = with_com(paper::l_sim1(), Vec2::new(0.4, 0.1));
+    let rect_ex1 = with_com(paper::rect_sim1(), Vec2::new(0.21, 0.0));
+    let mut twelve_input = paper::rect_sim1();
+    twelve_input.robots.count = 12;
+    twelve_input.robots.spin = &SPIN_12;
+    let twelve = paper::checked(twelve_input);
+    for (name, scenario) in [
+        ("rect-sim1", &rect),
+        ("L-sim1", &l_shape),
+        ("L-sim2", &l_sim2),
+        ("rect-ex1", &rect_ex1),
+        ("rect-sim1, 12 robots", &twelve),
+    ] {
         let com = scenario.truth.map_or(Vec2::default(), |t| t.com);
         let problem = FormationProblem::for_scenario(scenario, com, Some(&scenario.robots.initial));
         let (n, result) = timer.instructions(|| solve(&problem));
-        hprintln!("formation, {} (solved: {}):", name, result.is_ok());
+        match result {
+            Ok(f) => hprintln!("formation, {} (det {}):", name, f.figures.det),
+            Err(_) => hprintln!("formation, {} (no formation):", name),
+        }
         report("  solve", n);
     }
 
@@ -189,6 +205,20 @@ fn main() -> ! {
         report("    worst", worst);
     }
     finish(true)
+}
+
+/// Alternating spins of twelve robots.
+const SPIN_12: [i64; 12] = [1, -1, 1, -1, 1, -1, 1, -1, 1, -1, 1, -1];
+
+/// A built-in case with its truth's COM moved to `com`.
+fn with_com(
+    mut input: shared::scenario::ScenarioInput<'static>,
+    com: Vec2,
+) -> shared::scenario::Scenario {
+    if let Some(truth) = input.truth.as_mut() {
+        truth.com = com;
+    }
+    paper::checked(input)
 }
 
 /// Ends the emulation with success or failure (QEMU's exit code), never returning.

@@ -2,30 +2,38 @@
 //! maximising `det(B B^T)` with the robots balanced about the estimated COM, in their cyclic
 //! order and at least `min_spacing` apart.
 //!
-//! A single local search lands in poor optima on a polygonal rail (the corners make the
-//! objective piecewise), so the solver starts from structured seeds (the current formation,
-//! even formations at four offsets, bunched and half-spread blocks at sixteen offsets), brings
-//! each onto the balance constraints, climbs with exact line searches
-//! ([`crate::formation::search`]), polishes the balance and checks every constraint exactly
-//! as stated. The best formation that passes wins. Deterministic and bounded: a fixed seed
-//! list, a fixed sweep limit, no allocation.
+//! The rail's corners make the objective piecewise, and a local search from a few seeds lands
+//! in the wrong piece. So the solver goes through every segment assignment (which straight
+//! segment each robot stands on, [`crate::formation::assignment`]): on one assignment the
+//! problem is smooth (linear constraints, a quartic objective) and is solved by an active-set
+//! Newton method ([`crate::formation::face`]), first to balance, then to the best `det`.
+//! An assignment whose robots cannot reach balance, or whose upper bound on `det`
+//! ([`crate::formation::bound`]) is no better than the best formation found so far, is skipped
+//! unsolved. The best formation is polished onto the balance constraints and checked against
+//! every constraint exactly as stated. Deterministic and bounded: a fixed enumeration order,
+//! at most [`MAX_ASSIGNMENTS`] assignments, a capped iteration count per solve, no allocation.
+//!
+//! When no assignment balances, the refusal reports the formation closest to balance (the
+//! global minimum of `|sum r|` over every assignment, a convex problem on each).
 
 use heapless::Vec;
 
+use crate::formation::assignment::{Assignments, Layout, spin_period};
 use crate::formation::balance::project_to_balance;
+use crate::formation::bound::{BoundShape, det_bound, may_balance};
+use crate::formation::face::{Face, Goal};
 use crate::formation::objective::{FormationFigures, Moments, figures};
-use crate::formation::search::{SPACING_MARGIN, SearchSpace, order_and_spacing_hold};
+use crate::formation::search::{SPACING_MARGIN, order_and_spacing_hold};
 use crate::geometry::{Rail, Vec2};
 use crate::scenario::{MAX_ROBOTS, Scenario};
 
-/// Most sweeps of the local search per seed.
-const MAX_SWEEPS: u32 = 40;
-/// Offsets tried for each seed pattern.
-const EVEN_OFFSETS: usize = 4;
-/// Offsets tried for the bunched and half-spread patterns.
-const BLOCK_OFFSETS: usize = 16;
-/// Most seeds.
-const MAX_SEEDS: usize = 1 + EVEN_OFFSETS + 2 * BLOCK_OFFSETS;
+/// Most assignments visited in one decision (the paper's rails have a few hundred).
+pub const MAX_ASSIGNMENTS: u32 = 20_000;
+/// Starts on each assignment, as the fraction of each robot's reachable range: the
+/// assignment's problem can have several local maxima (a robot pushed to either end).
+const STARTS: [f32; 3] = [0.5, 0.0, 1.0];
+/// Relative margin an assignment's bound must beat the best `det(S)` by to be solved.
+const PRUNE_MARGIN: f32 = 1e-4;
 
 /// Arc lengths of a formation, in rail order.
 pub type Positions = Vec<f32, MAX_ROBOTS>;
@@ -45,7 +53,8 @@ pub struct FormationProblem<'a> {
     pub torque_per_thrust: f32,
     /// Bound on `|sum b1|` and `|sum b2|`, m.
     pub balance_eps: f32,
-    /// Where the robots stand now (a seed), if known.
+    /// Where the robots stand now, if known: among formations that are the same up to
+    /// robots of equal spin trading places, the one nearest to it is chosen.
     pub current: Option<&'a [f32]>,
 }
 
@@ -82,6 +91,9 @@ pub enum FormationError {
     Unbalanceable {
         /// The COM asked for.
         com: Vec2,
+        /// The balance sums `[sum b1, sum b2]` (m) of the formation closest to balance: the
+        /// smallest `|sum b|` the rail allows.
+        closest: [f32; 2],
     },
 }
 
@@ -97,11 +109,15 @@ impl core::fmt::Display for FormationError {
                 f,
                 "{count} robots need {needed} m of rail at min_spacing, the rail is {perimeter} m"
             ),
-            Self::Unbalanceable { com } => write!(
-                f,
-                "no formation on the rail balances about the COM ({}, {}): it is out of the robots' reach",
-                com.x, com.y
-            ),
+            Self::Unbalanceable { com, closest } => {
+                let size = crate::math::sqrt(closest[0] * closest[0] + closest[1] * closest[1]);
+                write!(
+                    f,
+                    "no formation on the rail balances about the COM ({}, {}): it is out of the robots' reach; \
+                     the closest the rail allows leaves balance sums ({}, {}) m (|sum b| = {} m)",
+                    com.x, com.y, closest[0], closest[1], size
+                )
+            }
         }
     }
 }
@@ -115,10 +131,16 @@ pub struct Formation {
     pub positions: Positions,
     /// Its figures (det, balance, smallest gap).
     pub figures: FormationFigures,
-    /// Seeds that reached balance.
+    /// Assignments that reached balance (each one a start of the `det` search).
     pub seeds_balanced: u32,
-    /// Sweeps of the local search, over all seeds.
+    /// Newton iterations, over all assignments solved.
     pub sweeps: u32,
+    /// Assignments visited.
+    pub assignments: u32,
+    /// Assignments skipped because their upper bound could not beat the best.
+    pub pruned: u32,
+    /// True when every assignment was visited (none left out by [`MAX_ASSIGNMENTS`]).
+    pub exhaustive: bool,
 }
 
 /// The even formation: robot `j` at `j * perimeter / count`.
@@ -167,32 +189,6 @@ fn check(problem: &FormationProblem<'_>) -> Result<(), FormationError> {
     Ok(())
 }
 
-fn seeds(problem: &FormationProblem<'_>) -> Vec<Positions, MAX_SEEDS> {
-    let rail = problem.rail;
-    let n = problem.spin.len();
-    let p = rail.perimeter();
-    let mut out: Vec<Positions, MAX_SEEDS> = Vec::new();
-    if let Some(current) = problem.current {
-        // Already checked to have n entries.
-        let _ = out.push(current.iter().map(|&s| rail.wrap(s)).collect());
-    }
-    let mut add = |offset: f32, gap: f32| {
-        let seed: Positions = (0..n).map(|j| rail.wrap(offset + j as f32 * gap)).collect();
-        let _ = out.push(seed);
-    };
-    for k in 0..EVEN_OFFSETS {
-        add(k as f32 * p / (n * EVEN_OFFSETS) as f32, p / n as f32);
-    }
-    let tight = problem.min_spacing + 4.0 * SPACING_MARGIN;
-    let half = 0.5 * (tight + p / n as f32);
-    for k in 0..BLOCK_OFFSETS {
-        let offset = k as f32 * p / BLOCK_OFFSETS as f32;
-        add(offset, tight);
-        add(offset, half);
-    }
-    out
-}
-
 /// True when `positions` satisfy every constraint exactly as stated: on the rail, in order,
 /// `min_spacing` apart, both balance sums within `balance_eps`.
 pub fn satisfies_constraints(problem: &FormationProblem<'_>, positions: &[f32]) -> bool {
@@ -213,45 +209,130 @@ pub fn satisfies_constraints(problem: &FormationProblem<'_>, positions: &[f32]) 
         && f.balance[1].abs() <= problem.balance_eps
 }
 
+/// `det(S)` and the pieces of the bound's shape at `positions`.
+fn score(problem: &FormationProblem<'_>, positions: &[f32]) -> (f32, BoundShape) {
+    let mut points = [Vec2::default(); MAX_ROBOTS];
+    for (pt, &s) in points.iter_mut().zip(positions.iter()) {
+        *pt = problem.rail.point_at(s);
+    }
+    let n = positions.len();
+    let m = Moments::of(&points[..n], problem.com, problem.spin);
+    let inv = 1.0 / n as f32;
+    let s = [
+        m.sxx - m.vx * m.vx * inv,
+        m.sxy - m.vx * m.vy * inv,
+        m.syy - m.vy * m.vy * inv,
+    ];
+    (m.schur_det(), BoundShape::at(s, Vec2::new(m.vx, m.vy), n))
+}
+
+/// Positions by robot from a solved face.
+fn positions_of(rail: &Rail, layout: &Layout, face: &Face<'_>) -> Positions {
+    let n = layout.n;
+    let mut out = [0.0f32; MAX_ROBOTS];
+    for i in 0..n {
+        out[usize::from(layout.robot[i])] = rail.wrap(face.x[i]);
+    }
+    out[..n].iter().copied().collect()
+}
+
+/// Among the formations equal to `positions` up to a shift by whole spin periods, the one
+/// whose robots travel least from `current`.
+fn nearest_rotation(rail: &Rail, spin: &[i8], positions: &Positions, current: &[f32]) -> Positions {
+    let n = positions.len();
+    let period = spin_period(spin);
+    let distance = |shift: usize| -> f32 {
+        (0..n)
+            .map(|j| {
+                let d = rail.forward_gap(rail.wrap(current[j]), positions[(j + shift) % n]);
+                d.min(rail.perimeter() - d)
+            })
+            .sum()
+    };
+    let best = (0..n)
+        .step_by(period)
+        .map(|shift| (shift, distance(shift)))
+        .fold((0, f32::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
+        .0;
+    (0..n).map(|j| positions[(j + best) % n]).collect()
+}
+
 /// Finds the formation that maximises `det(B B^T)` under the constraints.
 pub fn solve(problem: &FormationProblem<'_>) -> Result<Formation, FormationError> {
     check(problem)?;
     let rail = problem.rail;
-    let space = SearchSpace {
-        rail,
-        spin: problem.spin,
-        com: problem.com,
-        min_spacing: problem.min_spacing,
-    };
+    let n = problem.spin.len();
+    let spacing = problem.min_spacing + SPACING_MARGIN;
     let tolerance = 0.25 * problem.balance_eps;
+    let max_iterations = 10 + 8 * n as u32;
     let mut best: Option<(f32, Positions)> = None;
-    let (mut seeds_balanced, mut sweeps) = (0, 0);
-    for mut seed in seeds(problem) {
-        if !order_and_spacing_hold(rail, &seed, problem.min_spacing + 0.5 * SPACING_MARGIN) {
+    let mut shape = BoundShape::ROUND;
+    let (mut seeds_balanced, mut sweeps, mut visited, mut pruned) = (0u32, 0u32, 0u32, 0u32);
+    let mut assignments = Assignments::new(rail, problem.spin, spacing);
+    let mut exhaustive = true;
+    for assignment in assignments.by_ref() {
+        if visited >= MAX_ASSIGNMENTS {
+            exhaustive = false;
+            break;
+        }
+        visited += 1;
+        let Some(layout) = Layout::new(rail, problem.spin, problem.com, spacing, &assignment)
+        else {
+            continue;
+        };
+        if !may_balance(&layout, tolerance) {
             continue;
         }
-        if !project_to_balance(rail, problem.com, problem.min_spacing, tolerance, &mut seed) {
-            continue;
+        if let Some((value, _)) = &best {
+            if det_bound(&layout, &shape) <= *value * (1.0 + PRUNE_MARGIN) {
+                pruned += 1;
+                continue;
+            }
         }
-        seeds_balanced += 1;
-        sweeps += space.climb(&mut seed, MAX_SWEEPS);
-        // The moves keep the balance sums in exact arithmetic; polish away the rounding.
-        if !project_to_balance(rail, problem.com, problem.min_spacing, tolerance, &mut seed)
-            || !satisfies_constraints(problem, &seed)
-        {
-            continue;
-        }
-        let mut points = [Vec2::default(); MAX_ROBOTS];
-        for (pt, &s) in points.iter_mut().zip(seed.iter()) {
-            *pt = rail.point_at(s);
-        }
-        let score = Moments::of(&points[..seed.len()], problem.com, problem.spin).schur_det();
-        if best.as_ref().is_none_or(|(b, _)| score > *b) {
-            best = Some((score, seed));
+        for lean in STARTS {
+            let Some(mut face) = Face::start(&layout, lean) else {
+                continue;
+            };
+            let reached = face.solve(Goal::Balance, tolerance, max_iterations);
+            sweeps += reached.iterations;
+            if reached.balance.x.abs() > tolerance || reached.balance.y.abs() > tolerance {
+                // The balance is a convex problem: no other start does better.
+                break;
+            }
+            seeds_balanced += 1;
+            let outcome = face.solve(Goal::Det, tolerance, max_iterations);
+            sweeps += outcome.iterations;
+            if best.as_ref().is_some_and(|(b, _)| outcome.value <= *b) {
+                continue;
+            }
+            let mut positions = positions_of(rail, &layout, &face);
+            // The steps keep the balance sums in exact arithmetic; polish away the rounding.
+            if !project_to_balance(
+                rail,
+                problem.com,
+                problem.min_spacing,
+                tolerance,
+                &mut positions,
+            ) || !satisfies_constraints(problem, &positions)
+            {
+                continue;
+            }
+            let (value, at) = score(problem, &positions);
+            if best.as_ref().is_none_or(|(b, _)| value > *b) {
+                best = Some((value, positions));
+                shape = at;
+            }
         }
     }
     let Some((_, positions)) = best else {
-        return Err(FormationError::Unbalanceable { com: problem.com });
+        return Err(FormationError::Unbalanceable {
+            com: problem.com,
+            closest: closest_balance(problem),
+        });
+    };
+    let positions = match problem.current {
+        Some(current) => nearest_rotation(rail, problem.spin, &positions, current),
+        None => positions,
     };
     let figures = figures(
         rail,
@@ -265,7 +346,35 @@ pub fn solve(problem: &FormationProblem<'_>) -> Result<Formation, FormationError
         figures,
         seeds_balanced,
         sweeps,
+        assignments: visited,
+        pruned,
+        exhaustive,
     })
+}
+
+/// The balance sums of the formation nearest to balance, over every assignment.
+fn closest_balance(problem: &FormationProblem<'_>) -> [f32; 2] {
+    let rail = problem.rail;
+    let n = problem.spin.len();
+    let spacing = problem.min_spacing + SPACING_MARGIN;
+    let mut best = [f32::INFINITY; 2];
+    let mut best_size = f32::INFINITY;
+    for assignment in Assignments::new(rail, problem.spin, spacing).take(MAX_ASSIGNMENTS as usize) {
+        let Some(layout) = Layout::new(rail, problem.spin, problem.com, spacing, &assignment)
+        else {
+            continue;
+        };
+        let Some(mut face) = Face::start(&layout, 0.5) else {
+            continue;
+        };
+        let h = face.solve(Goal::Balance, 0.0, 10 + 8 * n as u32).balance;
+        let size = h.dot(h);
+        if size < best_size {
+            best_size = size;
+            best = [h.x, h.y];
+        }
+    }
+    best
 }
 
 #[cfg(test)]
@@ -416,10 +525,26 @@ mod tests {
             com: Vec2::new(0.95, 0.0), // beyond the centroid any 8 robots can reach
             ..crowded
         };
-        assert!(matches!(
-            solve(&far),
-            Err(FormationError::Unbalanceable { .. })
-        ));
+        let Err(FormationError::Unbalanceable { closest, .. }) = solve(&far) else {
+            panic!("a COM beyond reach must be refused");
+        };
+        // Eight robots packed (just over min spacing, as the solver keeps a small margin) about
+        // the middle of the right end are a formation the rail allows: the closest balance
+        // reported is no farther from zero than theirs.
+        let rail = &rect.payload.rail;
+        let packed: [f32; 8] =
+            core::array::from_fn(|j| rail.wrap(2.22 + (j as f32 - 3.5) * 0.2501));
+        let theirs = figures(rail, &packed, &spin[..8], far.com, 0.016).balance;
+        let size = |b: [f32; 2]| crate::math::sqrt(b[0] * b[0] + b[1] * b[1]);
+        assert!(
+            size(closest) <= size(theirs) + 1e-4,
+            "{closest:?} vs {theirs:?}"
+        );
+        assert!(size(closest) > far.balance_eps, "{closest:?}");
+        assert!(
+            closest[0] < 0.0,
+            "the centroid stays left of the COM: {closest:?}"
+        );
     }
 
     /// COMs well inside the region every balanced formation can reach (mapped on the L grid
@@ -456,7 +581,10 @@ mod tests {
                     prop_assert!(f.figures.det > 0.0);
                 }
                 Err(e) => {
-                    prop_assert_eq!(e, FormationError::Unbalanceable { com });
+                    prop_assert!(
+                        matches!(e, FormationError::Unbalanceable { com: c, .. } if c == com),
+                        "{:?}", e
+                    );
                     prop_assert!(!surely_reachable(use_l, com), "{:?} is reachable", com);
                 }
             }
