@@ -191,7 +191,7 @@ pub fn fly(
     let mut group = 0usize;
     loop {
         let t = plant.time();
-        if t > limit {
+        if t >= limit {
             break;
         }
         let truth_now = plant.state();

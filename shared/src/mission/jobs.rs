@@ -59,13 +59,14 @@ const fn ticks_of_ms(ms: u32) -> u32 {
 
 impl JobRequest {
     /// Ticks after the request at which the tick side takes the result. Worst cases on the
-    /// Cortex-M7 (`.ci/target-bench`, instructions at 480 MHz): pair selection 1.5 M (~3 ms),
-    /// update 1.1 M (~2 ms, plus the grid-edge check), formation 53 M (~110 ms), mixer a few
-    /// thousand; each deadline leaves at least twice that.
+    /// Cortex-M7 (`.ci/target-bench`, instructions at 480 MHz): pair selection 1.5 M
+    /// (~3.2 ms), update with the grid's guard band 2.1 M (~4.5 ms), formation 6.2 M
+    /// (~13 ms, L-sim1), mixer 3.6 k; each deadline leaves about three times that for the
+    /// control loop's share of the processor and the link.
     pub fn deadline_ticks(&self) -> u32 {
         match self {
             Self::SelectPair { .. } | Self::Update { .. } => ticks_of_ms(20),
-            Self::DecideFormation { .. } => ticks_of_ms(300),
+            Self::DecideFormation { .. } => ticks_of_ms(40),
             Self::BuildFlight { .. } => ticks_of_ms(5),
         }
     }
