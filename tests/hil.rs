@@ -103,8 +103,8 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
             .expect("scenario");
         let setup = MissionSetup::default();
         let host_started = Instant::now();
-        let (host, _) = mission_run::run(&loaded.scenario, &setup, &mut |_, _, _| {})
-            .expect("host mission");
+        let (host, _) =
+            mission_run::run(&loaded.scenario, &setup, &mut |_, _, _| {}).expect("host mission");
         let host_wall = host_started.elapsed().as_secs_f64();
         let (qemu, stream) = Qemu::launch(&elf).expect("QEMU starts");
         let link = Link::over_tcp(stream).expect("link");
@@ -112,9 +112,15 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
             seed: setup.seed,
             ..HilSetup::default()
         };
-        let fw = run(&loaded, link, &hil_setup, print_text())
-            .unwrap_or_else(|e| panic!("{name}: hil run failed: {e:#}\nQEMU said: {}", qemu.output()));
-        let (tick_name, worst) = fw.worst_tick().expect("the firmware reports its worst tick");
+        let fw = run(&loaded, link, &hil_setup, print_text()).unwrap_or_else(|e| {
+            panic!(
+                "{name}: hil run failed: {e:#}\nQEMU said: {}",
+                qemu.output()
+            )
+        });
+        let (tick_name, worst) = fw
+            .worst_tick()
+            .expect("the firmware reports its worst tick");
         report(format_args!(
             "hil {name}: {} ticks, {:.1} s simulated in {:.1} s wall ({:.0} ticks/s); host-only mission {:.1} s wall; worst control tick {worst:.0} ({tick_name}, instructions under -icount)",
             fw.ticks,
@@ -138,7 +144,8 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
             fw.final_position_error_m
         );
         // The same lifts, in the same order, read the same.
-        let pairs = |lifts: &[(usize, Option<f32>, f32)]| lifts.iter().map(|l| l.0).collect::<Vec<_>>();
+        let pairs =
+            |lifts: &[(usize, Option<f32>, f32)]| lifts.iter().map(|l| l.0).collect::<Vec<_>>();
         assert_eq!(pairs(&fw.lifts), pairs(&host.lifts), "{name}: lift pairs");
         for (f, h) in fw.lifts.iter().zip(&host.lifts) {
             match (f.1, h.1) {
@@ -146,17 +153,30 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
                 (a, b) => assert_eq!(a, b, "{name}: could-not-lift readings"),
             }
         }
-        let (fe, he) = (fw.estimate.expect("firmware estimate"), host.estimate.expect("host estimate"));
+        let (fe, he) = (
+            fw.estimate.expect("firmware estimate"),
+            host.estimate.expect("host estimate"),
+        );
         for a in 0..3 {
-            assert!(relative(fe[a], he[a]) < 1e-4, "{name}: estimate {fe:?} vs {he:?}");
+            assert!(
+                relative(fe[a], he[a]) < 1e-4,
+                "{name}: estimate {fe:?} vs {he:?}"
+            );
         }
         let formation = host.positions.expect("host formation");
         assert_eq!(fw.positions.len(), formation.len());
         for (f, h) in fw.positions.iter().zip(&formation) {
-            assert!((f - h).abs() < 1e-4 * 4.88, "{name}: formation {:?} vs {formation:?}", fw.positions);
+            assert!(
+                (f - h).abs() < 1e-4 * 4.88,
+                "{name}: formation {:?} vs {formation:?}",
+                fw.positions
+            );
         }
         assert_eq!(tick_name, "tick_insn");
-        assert!(worst < 20_000.0, "{name}: worst control tick {worst} instructions");
+        assert!(
+            worst < 20_000.0,
+            "{name}: worst control tick {worst} instructions"
+        );
     }
 }
 

@@ -254,8 +254,7 @@ fn a_payload_beyond_the_grid_and_the_rotors_aborts_on_the_ground() {
             map_error,
             ..MissionSetup::default()
         };
-        let (outcome, autopilot) =
-            mission_run::run(&s, &setup, &mut |_, _, _| {}).expect("runs");
+        let (outcome, autopilot) = mission_run::run(&s, &setup, &mut |_, _, _| {}).expect("runs");
         let reasons = autopilot.reasons;
         eprintln!(
             "{label}: aborted {:?}, lifts {:?}",

@@ -25,8 +25,8 @@ use shared::control::navigator::{ImuSample, MocapFix as Fix};
 use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
 use shared::mission::{
-    AbortReason, CommandRefusal, Mission, MissionConfig, MissionPlanner, OperatorCommand as Command,
-    Phase, Reason, TickInput as MissionInput,
+    AbortReason, CommandRefusal, Mission, MissionConfig, MissionPlanner,
+    OperatorCommand as Command, Phase, Reason, TickInput as MissionInput,
 };
 use shared::scenario::Scenario;
 
