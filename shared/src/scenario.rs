@@ -415,7 +415,7 @@ pub enum Problem {
 }
 
 /// A number for a message: plain when ordinary, in exponent form when huge or tiny, and
-/// `f32::MAX` (what the host makes of a value beyond `f32`) as "3.4028235e38 or more".
+/// `f32::MAX` (what the host makes of a value beyond `f32`) as "over 3.4028235e38".
 struct Number(f32);
 
 impl core::fmt::Display for Number {
@@ -423,8 +423,8 @@ impl core::fmt::Display for Number {
         let v = self.0;
         let magnitude = crate::math::abs(v);
         if magnitude == f32::MAX {
-            let more = if v > 0.0 { "or more" } else { "or less" };
-            write!(f, "{v:e} {more}")
+            let beyond = if v > 0.0 { "over" } else { "under" };
+            write!(f, "{beyond} {v:e}")
         } else if magnitude >= 1e6 || (magnitude < 1e-4 && v != 0.0) {
             write!(f, "{v:e}")
         } else {
@@ -625,10 +625,8 @@ fn at_most(key: &'static str, v: f32, max: f32, unit: &'static str) -> Result<f3
     }
 }
 
-/// Checks a payload mass, kg: finite, above zero, at most [`MAX_PAYLOAD_MASS`]. For
-/// `truth.mass` and for payload masses given elsewhere (the simulator's `--mass`); `key` names
-/// the value in the error.
-pub fn check_payload_mass(key: &'static str, mass: f32) -> Result<f32, ScenarioError> {
+/// Checks a payload mass, kg: finite, above zero, at most [`MAX_PAYLOAD_MASS`].
+fn check_payload_mass(key: &'static str, mass: f32) -> Result<f32, ScenarioError> {
     at_most(key, positive(key, mass)?, MAX_PAYLOAD_MASS, "kg")
 }
 
@@ -1292,7 +1290,8 @@ mod tests {
 
     #[test]
     fn absurd_magnitudes_name_their_key() {
-        let cases: [(fn(&mut ScenarioInput<'static>), &str); 10] = [
+        type Edit = fn(&mut ScenarioInput<'static>);
+        let cases: [(Edit, &str); 10] = [
             (
                 |s| s.robots.torque_per_thrust = 1e6,
                 "robots.torque_per_thrust",
@@ -1377,6 +1376,7 @@ mod tests {
     fn numbers_in_messages_stay_readable() {
         assert_eq!(Number(0.2).to_string(), "0.2");
         assert_eq!(Number(1e20).to_string(), "1e20");
-        assert_eq!(Number(f32::MAX).to_string(), "3.4028235e38 or more");
+        assert_eq!(Number(f32::MAX).to_string(), "over 3.4028235e38");
+        assert_eq!(Number(-f32::MAX).to_string(), "under -3.4028235e38");
     }
 }
