@@ -57,6 +57,16 @@ impl MissionState {
             .find(|s| *s as u32 == code)
     }
 
+    /// The state's name for people and reports: `idle`, `running`, `completed`, `aborted`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Idle => "idle",
+            Self::Running => "running",
+            Self::Completed => "completed",
+            Self::Aborted => "aborted",
+        }
+    }
+
     /// Whether the mission is over.
     pub fn is_over(self) -> bool {
         matches!(self, Self::Completed | Self::Aborted)

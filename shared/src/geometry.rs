@@ -262,6 +262,106 @@ fn segments_touch(a: Vec2, b: Vec2, p: Vec2, q: Vec2) -> bool {
         || (s4 == 0 && on_segment(p, q, b))
 }
 
+/// True when `p` lies inside the closed polygon `vertices` (crossing number). A point on the
+/// boundary may count either way; callers that need a clear answer check for touching first.
+pub fn polygon_contains(vertices: &[Vec2], p: Vec2) -> bool {
+    let n = vertices.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (vertices[i], vertices[(i + 1) % n]);
+        if (a.y > p.y) != (b.y > p.y) {
+            let x = a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y);
+            if p.x < x {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+/// Distance from `p` to the segment `a-b`.
+pub fn distance_to_segment(p: Vec2, a: Vec2, b: Vec2) -> f32 {
+    let d = b - a;
+    let length2 = d.dot(d);
+    let t = if length2 > 0.0 {
+        ((p - a).dot(d) / length2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + d * t)).norm()
+}
+
+/// Distance from `p` to the outline of the closed polygon `vertices` (its edges).
+pub fn distance_to_outline(vertices: &[Vec2], p: Vec2) -> f32 {
+    let n = vertices.len();
+    (0..n)
+        .map(|i| distance_to_segment(p, vertices[i], vertices[(i + 1) % n]))
+        .fold(f32::INFINITY, f32::min)
+}
+
+/// The first pair of edges (edge `i` of `a`, edge `j` of `b`; edge `i` runs from vertex `i` to
+/// the next) that share a point, if the closed polygons `a` and `b` touch or cross at all.
+pub fn first_touching_edges(a: &[Vec2], b: &[Vec2]) -> Option<(usize, usize)> {
+    let (n, m) = (a.len(), b.len());
+    for i in 0..n {
+        for j in 0..m {
+            if segments_touch(a[i], a[(i + 1) % n], b[j], b[(j + 1) % m]) {
+                return Some((i, j));
+            }
+        }
+    }
+    None
+}
+
+/// A point of the closed path `path` that lies farther than `max` from the outline of the
+/// closed polygon `outline`, with its distance; `None` when every point of the path (not only
+/// its vertices) is within `max + tolerance`.
+///
+/// Branch and bound along each segment: the distance to the outline changes at most as fast as
+/// one moves, so on a piece of length `L` whose ends are `d0` and `d1` from the outline, no
+/// point is farther than `(d0 + d1 + L) / 2`. Pieces whose bound exceeds `max + tolerance`
+/// are halved until a point beyond `max` is found or the bound clears. `tolerance` must be
+/// positive; the work grows with `perimeter / tolerance` only where the path runs near `max`.
+pub fn farthest_beyond(
+    path: &[Vec2],
+    outline: &[Vec2],
+    max: f32,
+    tolerance: f32,
+) -> Option<(Vec2, f32)> {
+    let tolerance = tolerance.max(1e-6);
+    let n = path.len();
+    for i in 0..n {
+        let (a, b) = (path[i], path[(i + 1) % n]);
+        let da = distance_to_outline(outline, a);
+        if da > max {
+            return Some((a, da));
+        }
+        let db = distance_to_outline(outline, b);
+        // Pieces still to examine, as (start, end, distance at start, distance at end).
+        let mut pending: Vec<(Vec2, Vec2, f32, f32), 64> = Vec::new();
+        let _ = pending.push((a, b, da, db));
+        while let Some((p, q, dp, dq)) = pending.pop() {
+            let length = (q - p).norm();
+            if 0.5 * (dp + dq + length) <= max + tolerance {
+                continue;
+            }
+            let mid = (p + q) * 0.5;
+            let dm = distance_to_outline(outline, mid);
+            if dm > max {
+                return Some((mid, dm));
+            }
+            // Halving 64 times takes any finite length below any positive tolerance; a full
+            // stack means the piece is already that short.
+            if pending.len() + 2 > pending.capacity() || length <= tolerance {
+                continue;
+            }
+            let _ = pending.push((mid, q, dm, dq));
+            let _ = pending.push((p, mid, dp, dm));
+        }
+    }
+    None
+}
+
 /// The convex hull of a point set, counter-clockwise, without collinear vertices.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConvexHull {
@@ -525,6 +625,59 @@ mod tests {
         assert_eq!(
             hull.exit_distance(Vec2::new(1.0, 0.0), Vec2::new(1.0, 0.0)),
             None
+        );
+    }
+
+    #[test]
+    fn crossing_number_sees_the_l_notch_as_outside() {
+        let l = pts(&L_SHAPE);
+        assert!(polygon_contains(&l, Vec2::new(0.1, 0.1)));
+        assert!(polygon_contains(&l, Vec2::new(0.5, 0.1)));
+        assert!(!polygon_contains(&l, Vec2::new(0.4, 0.4)), "the notch");
+        assert!(!polygon_contains(&l, Vec2::new(-0.1, 0.1)));
+    }
+
+    #[test]
+    fn touching_edges_are_found_between_two_outlines() {
+        let rect = pts(&[[-0.88, -0.1], [0.88, -0.1], [0.88, 0.1], [-0.88, 0.1]]);
+        let around = pts(&[[-1.0, -0.22], [1.0, -0.22], [1.0, 0.22], [-1.0, 0.22]]);
+        assert_eq!(first_touching_edges(&around, &rect), None);
+        // A rail shorter than the payload crosses the payload's long edges.
+        let crossing = pts(&[[-0.5, -0.22], [0.5, -0.22], [0.5, 0.22], [-0.5, 0.22]]);
+        assert_eq!(first_touching_edges(&crossing, &rect), Some((1, 0)));
+    }
+
+    #[test]
+    fn clearance_finds_a_far_point_between_two_near_vertices() {
+        // A U-shaped payload; the rail spans the U's opening, whose middle is about 1.005 m
+        // from the outline although every rail vertex is 0.14 m from it.
+        let u = pts(&[
+            [0.0, 0.0],
+            [4.0, 0.0],
+            [4.0, 3.0],
+            [3.0, 3.0],
+            [3.0, 1.0],
+            [1.0, 1.0],
+            [1.0, 3.0],
+            [0.0, 3.0],
+        ]);
+        let rail = pts(&[[-0.1, -0.1], [4.1, -0.1], [4.1, 3.1], [-0.1, 3.1]]);
+        for &v in rail.iter() {
+            assert!(distance_to_outline(&u, v) < 0.15);
+        }
+        let (at, d) = farthest_beyond(&rail, &u, 1.0, 0.001).expect("the opening is far");
+        assert!(d > 1.0 && d < 1.006, "{d}");
+        assert!(
+            (at.y - 3.1).abs() < 1e-6 && (at.x - 2.0).abs() < 0.1,
+            "{at:?}"
+        );
+        assert_eq!(farthest_beyond(&rail, &u, 1.01, 0.001), None);
+        let rect = pts(&[[-0.88, -0.1], [0.88, -0.1], [0.88, 0.1], [-0.88, 0.1]]);
+        let around = pts(&[[-1.0, -0.22], [1.0, -0.22], [1.0, 0.22], [-1.0, 0.22]]);
+        assert_eq!(farthest_beyond(&around, &rect, 0.17, 0.001), None);
+        assert!(
+            farthest_beyond(&around, &rect, 0.16, 0.001).is_some(),
+            "corner is 0.169 m off"
         );
     }
 

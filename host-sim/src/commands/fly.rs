@@ -11,10 +11,15 @@ use serde_json::json;
 use shared::control::allocation::MixerKind;
 use shared::geometry::Vec2;
 
-use crate::cli::{Common, pair};
-use crate::harness::{self, FlightSetup, FormationChoice};
-use crate::report;
+use crate::cli::{Common, Outcome, check_map_error, check_mass, pair, show};
+use crate::harness::{self, FlightOutcome, FlightSetup, FormationChoice};
+use crate::report::{self, print_json};
+use crate::say;
 use crate::scenario_file;
+
+/// Farthest from its landing point a flight may end and count as delivered, m (as the
+/// mission's `delivered`).
+pub const DELIVERY_RADIUS_M: f32 = 0.25;
 
 /// Formation on the command line.
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -58,16 +63,17 @@ pub struct FlyArgs {
     /// COM the controller believes, X,Y (default: the truth).
     #[arg(long, value_name = "X,Y", value_parser = pair, allow_hyphen_values = true)]
     com: Option<[f64; 2]>,
-    /// Payload mass the controller believes, kg (default: the truth).
-    #[arg(long, value_name = "M")]
+    /// Payload mass the controller believes, kg (default: the truth; above 0, at most 1000).
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
     mass: Option<f64>,
     /// Seed of sensor noise and disturbance.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// The rotors' command-to-thrust map over-reads by this factor.
+    /// The rotors' command-to-thrust map over-reads by this factor (0.5 to 2).
     #[arg(long, value_name = "S", default_value_t = 1.0)]
     map_error: f64,
-    /// Write the time series (CSV) and figures (PNG) into this folder.
+    /// Write the time series (CSV) and figures (PNG) into this folder (file names from the
+    /// scenario's name, made plain: nothing is written outside the folder).
     #[arg(long, value_name = "DIR")]
     output: Option<PathBuf>,
     /// Also fly the other formation and draw both heights in one figure (needs --output).
@@ -75,8 +81,25 @@ pub struct FlyArgs {
     compare: bool,
 }
 
+/// The mixer's name as on the command line.
+fn mixer_name(mixer: MixerKind) -> &'static str {
+    match mixer {
+        MixerKind::EqualSplit => "equal-split",
+        MixerKind::Allocation => "allocation",
+    }
+}
+
+/// How a flight came out, for the exit code: dropped, delivered (landed within
+/// [`DELIVERY_RADIUS_M`] of the landing point), or not.
+pub fn outcome_of(flight: &FlightOutcome) -> Outcome {
+    let delivered = flight.landed && flight.final_position_error_m < DELIVERY_RADIUS_M;
+    Outcome::of_run(flight.dropped, false, delivered)
+}
+
 /// Runs the command.
-pub fn run(args: &FlyArgs) -> Result<()> {
+pub fn run(args: &FlyArgs) -> Result<Outcome> {
+    let given_mass = args.mass.map(|m| check_mass("--mass", m)).transpose()?;
+    let map_error = check_map_error(args.map_error)?;
     let loaded = scenario_file::load(&args.common.scenario)?;
     let s = &loaded.scenario;
     let Some(truth) = s.truth else {
@@ -85,23 +108,27 @@ pub fn run(args: &FlyArgs) -> Result<()> {
             loaded.path.display()
         );
     };
-    let com = args
-        .com
-        .map_or(truth.com, |c| Vec2::new(c[0] as f32, c[1] as f32));
-    if !s.payload.hull.contains(com, 0.0) {
+    if s.flight.is_none() {
         bail!(
-            "--com {},{}: lies outside the footprint's convex hull",
-            com.x,
-            com.y
+            "{}: [flight]: fly needs the scenario's flight target",
+            loaded.path.display()
         );
     }
-    let mass = args.mass.map_or(truth.mass, |m| m as f32);
-    if !(mass.is_finite() && mass > 0.0) {
-        bail!("--mass {mass}: must be a positive number of kg");
-    }
-    if !(args.map_error.is_finite() && args.map_error > 0.0) {
-        bail!("--map-error {}: must be a positive factor", args.map_error);
-    }
+    let com = match args.com {
+        Some([x, y]) => {
+            let com = Vec2::new(x as f32, y as f32);
+            if !s.payload.hull.contains(com, 0.0) {
+                bail!(
+                    "--com {},{}: lies outside the footprint's convex hull",
+                    show(x),
+                    show(y)
+                );
+            }
+            com
+        }
+        None => truth.com,
+    };
+    let mass = given_mass.unwrap_or(truth.mass);
     let setup = FlightSetup {
         formation: match args.formation {
             FormationArg::Even => FormationChoice::Even,
@@ -111,7 +138,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
         believed_com: com,
         believed_mass: mass,
         seed: args.seed,
-        map_error: args.map_error as f32,
+        map_error,
     };
     let started = Instant::now();
     let outcome = harness::fly(s, &setup)?;
@@ -141,17 +168,18 @@ pub fn run(args: &FlyArgs) -> Result<()> {
             ];
             match report::write_comparison(dir, &loaded.name, &flights) {
                 Ok(path) => written.push(path),
-                Err(e) => eprintln!("warning: figure skipped: {e:#}"),
+                Err(e) => report::warn(&format!("figure skipped: {e:#}")),
             }
         }
     }
     let realtime = f64::from(outcome.simulated_s) / wall_s.max(1e-9);
     if args.common.json {
-        let v = json!({
+        print_json(json!({
             "scenario": loaded.name,
             "formation": format!("{:?}", setup.formation).to_lowercase(),
-            "mixer": match setup.mixer { MixerKind::EqualSplit => "equal-split", MixerKind::Allocation => "allocation" },
+            "mixer": mixer_name(setup.mixer),
             "dropped": outcome.dropped,
+            "delivered": outcome_of(&outcome) == Outcome::Done,
             "max_tilt_deg": outcome.max_tilt_deg,
             "rms_tracking_error_m": outcome.rms_tracking_error_m,
             "final_position_error_m": outcome.final_position_error_m,
@@ -163,33 +191,36 @@ pub fn run(args: &FlyArgs) -> Result<()> {
             "wall_s": wall_s,
             "realtime_factor": realtime,
             "files": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-        });
-        println!("{v}");
+        }))?;
     } else {
-        println!(
-            "{}: {:?} formation, {:?} mixer: {}; max tilt {:.1} deg, rms tracking {:.3} m, final error {:.3} m, max thrust {:.0} %",
+        say!(
+            "{}: {} formation, {} mixer: {}; max tilt {:.1} deg, rms tracking {:.3} m, final error {:.3} m, max thrust {:.0} %",
             loaded.name,
-            setup.formation,
-            setup.mixer,
-            if outcome.dropped {
-                "DROPPED"
-            } else if outcome.landed {
-                "delivered"
-            } else {
-                "flew, not landed"
+            match setup.formation {
+                FormationChoice::Even => "even",
+                FormationChoice::Optimized => "optimised",
+            },
+            mixer_name(setup.mixer),
+            match outcome_of(&outcome) {
+                Outcome::Dropped => "DROPPED",
+                Outcome::Done => "delivered",
+                _ if outcome.landed => "NOT delivered (landed away from the target)",
+                _ => "NOT delivered (did not land)",
             },
             outcome.max_tilt_deg,
             outcome.rms_tracking_error_m,
             outcome.final_position_error_m,
             100.0 * outcome.max_thrust_fraction
-        );
-        println!(
+        )?;
+        say!(
             "  {:.1} s simulated in {:.2} s ({:.0}x real time)",
-            outcome.simulated_s, wall_s, realtime
-        );
+            outcome.simulated_s,
+            wall_s,
+            realtime
+        )?;
         for p in &written {
-            println!("  wrote {}", p.display());
+            say!("  wrote {}", p.display())?;
         }
     }
-    Ok(())
+    Ok(outcome_of(&outcome))
 }

@@ -10,7 +10,9 @@ use shared::formation::{Formation, FormationFigures, FormationProblem, figures, 
 use shared::geometry::{Rail, Vec2};
 use shared::scenario::GRAVITY;
 
-use crate::cli::{Common, pair};
+use crate::cli::{Common, Outcome, check_mass, pair, show};
+use crate::report::print_json;
+use crate::say;
 use crate::scenario_file;
 
 /// Arguments of `formation`.
@@ -21,39 +23,52 @@ pub struct FormationArgs {
     /// Estimated centre of mass X,Y, m (default: the scenario's truth).
     #[arg(long, value_name = "X,Y", value_parser = pair, allow_hyphen_values = true)]
     com: Option<[f64; 2]>,
-    /// Estimated payload mass, kg (default: the scenario's truth).
-    #[arg(long, value_name = "M")]
+    /// Estimated payload mass, kg (default: the scenario's truth; above 0, at most 1000).
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
     mass: Option<f64>,
 }
 
 /// Runs the command.
-pub fn run(args: &FormationArgs) -> Result<()> {
+pub fn run(args: &FormationArgs) -> Result<Outcome> {
+    let given_mass = args.mass.map(|m| check_mass("--mass", m)).transpose()?;
     let loaded = scenario_file::load(&args.common.scenario)?;
     let s = &loaded.scenario;
+    // The scenario's truth passed its checks when the file was read; only a given --com can
+    // lie outside the hull here.
     let com = match (args.com, s.truth) {
-        (Some(c), _) => Vec2::new(c[0] as f32, c[1] as f32),
+        (Some([x, y]), _) => {
+            let com = Vec2::new(x as f32, y as f32);
+            if !s.payload.hull.contains(com, 0.0) {
+                bail!(
+                    "--com {},{}: lies outside the footprint's convex hull",
+                    show(x),
+                    show(y)
+                );
+            }
+            com
+        }
         (None, Some(t)) => t.com,
-        (None, None) => bail!("--com: the scenario has no [truth]; give the COM"),
+        (None, None) => bail!(
+            "{}: the scenario has no [truth]; give the COM with --com",
+            loaded.path.display()
+        ),
     };
-    if !s.payload.hull.contains(com, 0.0) {
-        bail!(
-            "--com {},{}: lies outside the footprint's convex hull",
-            com.x,
-            com.y
-        );
-    }
-    let mass = match (args.mass, s.truth) {
-        (Some(m), _) => m as f32,
+    let mass = match (given_mass, s.truth) {
+        (Some(m), _) => m,
         (None, Some(t)) => t.mass,
-        (None, None) => bail!("--mass: the scenario has no [truth]; give the mass"),
+        (None, None) => bail!(
+            "{}: the scenario has no [truth]; give the mass with --mass",
+            loaded.path.display()
+        ),
     };
-    if !(mass.is_finite() && mass > 0.0) {
-        bail!("--mass {mass}: must be a positive number of kg");
-    }
     let problem = FormationProblem::for_scenario(s, com, Some(&s.robots.initial));
     let started = Instant::now();
-    let formation =
-        solve(&problem).map_err(|e| anyhow!("{}: formation: {e}", loaded.path.display()))?;
+    let source = if args.com.is_some() {
+        format!("--com {},{}", com.x, com.y)
+    } else {
+        format!("{}: truth.com", loaded.path.display())
+    };
+    let formation = solve(&problem).map_err(|e| anyhow!("{source}: no formation: {e}"))?;
     let solve_ms = started.elapsed().as_secs_f64() * 1e3;
     let even = figures(
         &s.payload.rail,
@@ -65,7 +80,7 @@ pub fn run(args: &FormationArgs) -> Result<()> {
     let count = s.robots.count() as f32;
     let hover_fraction = (mass + count * s.robots.mass) * GRAVITY / (count * s.robots.max_thrust);
     if args.common.json {
-        let report = json!({
+        print_json(json!({
             "positions": formation.positions.as_slice(),
             "points": points(&s.payload.rail, &formation.positions),
             "det": formation.figures.det,
@@ -84,8 +99,7 @@ pub fn run(args: &FormationArgs) -> Result<()> {
                 "balance": even.balance,
                 "min_gap": even.min_gap,
             },
-        });
-        println!("{report}");
+        }))?;
     } else {
         print_human(
             &loaded.name,
@@ -94,9 +108,9 @@ pub fn run(args: &FormationArgs) -> Result<()> {
             &even,
             solve_ms,
             hover_fraction,
-        );
+        )?;
     }
-    Ok(())
+    Ok(Outcome::Done)
 }
 
 fn points(rail: &Rail, positions: &[f32]) -> Vec<[f32; 2]> {
@@ -116,23 +130,30 @@ fn print_human(
     even: &FormationFigures,
     solve_ms: f64,
     hover_fraction: f32,
-) {
-    println!(
+) -> Result<()> {
+    say!(
         "{name}: formation for COM ({:.3}, {:.3}), solved in {solve_ms:.2} ms",
-        com.x, com.y
-    );
+        com.x,
+        com.y
+    )?;
     let list: Vec<String> = f.positions.iter().map(|p| format!("{p:.3}")).collect();
-    println!("  positions (m along the rail): {}", list.join(", "));
-    println!(
+    say!("  positions (m along the rail): {}", list.join(", "))?;
+    say!(
         "  optimised: det(BB^T) {:.4e}, balance [{:.1e}, {:.1e}] m, smallest gap {:.3} m",
-        f.figures.det, f.figures.balance[0], f.figures.balance[1], f.figures.min_gap
-    );
-    println!(
+        f.figures.det,
+        f.figures.balance[0],
+        f.figures.balance[1],
+        f.figures.min_gap
+    )?;
+    say!(
         "  even:      det(BB^T) {:.4e}, balance [{:.3}, {:.3}] m, smallest gap {:.3} m",
-        even.det, even.balance[0], even.balance[1], even.min_gap
-    );
-    println!(
+        even.det,
+        even.balance[0],
+        even.balance[1],
+        even.min_gap
+    )?;
+    say!(
         "  hover thrust: {:.0} % of the rotors' maximum",
         100.0 * hover_fraction
-    );
+    )
 }

@@ -4,9 +4,10 @@
 //! or behind any TCP socket (`--connect tcp:HOST:PORT`).
 //!
 //! Prints what the firmware says as it says it; `--json` prints one object with the keys of
-//! `mission` plus `firmware` (the board it reported) and `ticks` (lockstep exchanges). Exits
-//! non-zero when the firmware refuses the payload or the start, the lockstep breaks, the
-//! mission aborts or the payload drops.
+//! `mission` plus `firmware` (the board it reported) and `ticks` (lockstep exchanges). Exit
+//! codes as `mission` (README "Exit codes"): 1 when the firmware refuses the payload or the
+//! start or the lockstep breaks, 3 when the mission aborts, 4 when it ends undelivered, 5 when
+//! the payload drops.
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -16,11 +17,15 @@ use clap::{ArgGroup, Args};
 use link::status::MissionState;
 use serde_json::json;
 
+use crate::cli::{Outcome, check_map_error, check_range};
 use crate::hil::gcs::GcsBridge;
 use crate::hil::qemu::Qemu;
 use crate::hil::run::{HilOutcome, HilSetup, run as run_hil};
 use crate::hil::session::LoggedText;
 use crate::hil::transport::{Endpoint, Link};
+use crate::mission_run::MISSION_TIME_LIMIT;
+use crate::report::print_json;
+use crate::say;
 use crate::scenario_file;
 
 /// Arguments of `hil`.
@@ -70,41 +75,50 @@ pub struct HilArgs {
 }
 
 /// Runs the command.
-pub fn run(args: &HilArgs) -> Result<()> {
+pub fn run(args: &HilArgs) -> Result<Outcome> {
+    // Every flag is checked before the firmware is started.
+    let map_error = check_map_error(args.map_error)?;
+    let positive = |flag: &str, v: Option<f64>, high: f64| {
+        v.map(|v| check_range(flag, v, (0.0, true), high, ""))
+            .transpose()
+    };
+    let speed = positive("--speed", args.speed, 1000.0)?;
+    let duration = positive("--duration", args.duration, f64::from(MISSION_TIME_LIMIT))?;
+    let mocap_lost_after = args
+        .mocap_lost_after
+        .map(|s| {
+            check_range(
+                "--mocap-lost-after",
+                s,
+                (0.0, false),
+                f64::from(MISSION_TIME_LIMIT),
+                "s",
+            )
+        })
+        .transpose()?;
+    let reply_timeout = check_range(
+        "--reply-timeout",
+        args.reply_timeout,
+        (0.0, true),
+        3600.0,
+        "s",
+    )?;
     let loaded = scenario_file::load(&args.scenario)?;
-    if !(args.map_error.is_finite() && args.map_error > 0.0) {
-        bail!("--map-error {}: must be a positive factor", args.map_error);
-    }
-    for (name, v) in [
-        ("--speed", args.speed),
-        ("--duration", args.duration),
-        ("--mocap-lost-after", args.mocap_lost_after),
-    ] {
-        if let Some(v) = v
-            && !(v.is_finite() && v > 0.0)
-        {
-            bail!("{name} {v}: must be a positive number");
-        }
-    }
-    if !(args.reply_timeout.is_finite() && args.reply_timeout > 0.0) {
-        bail!(
-            "--reply-timeout {}: must be a positive number of seconds",
-            args.reply_timeout
-        );
-    }
     let setup = HilSetup {
         seed: args.seed,
-        speed: args.speed,
-        duration_s: args.duration,
-        reply_timeout: Duration::from_secs_f64(args.reply_timeout),
+        speed: speed.map(f64::from),
+        duration_s: duration.map(f64::from),
+        reply_timeout: Duration::from_secs_f64(f64::from(reply_timeout)),
         gcs: args.gcs,
-        map_error: args.map_error as f32,
-        mocap_lost_after_takeoff: args.mocap_lost_after.map(|s| s as f32),
+        map_error,
+        mocap_lost_after_takeoff: mocap_lost_after,
     };
     let json = args.json;
     let on_text: Box<dyn FnMut(&LoggedText) + Send> = Box::new(move |t: &LoggedText| {
         if !json {
-            println!("  step {:6}  firmware: {}", t.step, t.text);
+            // A progress line that cannot be written is not worth stopping the flight for; a
+            // reader that went away ends the process in `say`.
+            let _ = say!("  step {:6}  firmware: {}", t.step, t.text);
         }
     });
     let (_qemu, link) = if let Some(elf) = &args.qemu {
@@ -122,19 +136,19 @@ pub fn run(args: &HilArgs) -> Result<()> {
         bail!("give the firmware: --qemu ELF, --serial DEV or --connect tcp:HOST:PORT");
     };
     if !json {
-        println!("hil on {}", loaded.name);
+        say!("hil on {}", loaded.name)?;
     }
     let outcome = run_hil(&loaded, link, &setup, on_text)?;
     if json {
-        println!("{}", to_json(&loaded.name, &outcome));
+        print_json(to_json(&loaded.name, &outcome))?;
     } else {
-        print_summary(&outcome);
+        print_summary(&outcome)?;
     }
-    match outcome.state {
-        _ if outcome.dropped => bail!("the payload dropped (tilt past 45 degrees)"),
-        MissionState::Aborted => bail!("the firmware aborted the mission"),
-        _ => Ok(()),
-    }
+    Ok(Outcome::of_run(
+        outcome.dropped,
+        outcome.aborted.is_some() || outcome.state == MissionState::Aborted,
+        outcome.delivered,
+    ))
 }
 
 /// The JSON report: the keys of `mission`, plus `firmware` and `ticks`.
@@ -153,7 +167,7 @@ pub fn to_json(scenario: &str, o: &HilOutcome) -> serde_json::Value {
         "dropped": o.dropped,
         "final_position_error_m": o.final_position_error_m,
         "phases": o.phases.iter().map(|(name, d)| json!({"name": name, "duration_s": d})).collect::<Vec<_>>(),
-        "mission_state": format!("{:?}", o.state).to_lowercase(),
+        "mission_state": o.state.name(),
         "start_ack": o.start_ack.map(|r| format!("{r:?}")),
         "simulated_s": o.simulated_s,
         "wall_s": o.wall_s,
@@ -165,30 +179,33 @@ pub fn to_json(scenario: &str, o: &HilOutcome) -> serde_json::Value {
     })
 }
 
-fn print_summary(o: &HilOutcome) {
-    println!(
+fn print_summary(o: &HilOutcome) -> Result<()> {
+    say!(
         "{} ticks in lockstep with the firmware on {}: {:.2} s simulated in {:.2} s ({:.0} ticks/s)",
         o.ticks,
         o.firmware,
         o.simulated_s,
         o.wall_s,
         o.ticks as f64 / o.wall_s.max(1e-9)
-    );
+    )?;
     if let Some((name, v)) = o.worst_tick() {
         let unit = if name == "tick_insn" {
             "instructions"
         } else {
             "cycles"
         };
-        println!("worst control step: {v:.0} {unit}");
+        say!("worst control step: {v:.0} {unit}")?;
     }
     if let Some(e) = o.estimate {
-        println!(
+        say!(
             "estimate: COM ({:.3}, {:.3}) m, mass {:.2} kg after {} lifts",
-            e[0], e[1], e[2], o.measurements
-        );
+            e[0],
+            e[1],
+            e[2],
+            o.measurements
+        )?;
     }
-    println!(
+    say!(
         "{}: final position error {:.3} m{}",
         if o.delivered {
             "delivered"
@@ -202,5 +219,5 @@ fn print_summary(o: &HilOutcome) {
             .as_deref()
             .map(|a| format!("; aborted: {a}"))
             .unwrap_or_default()
-    );
+    )
 }

@@ -8,7 +8,9 @@ use shared::estimation::groups::{group_count, lift_group};
 use shared::geometry::Vec2;
 use shared::statics::lift_off_thrust;
 
-use crate::cli::{Common, pair};
+use crate::cli::{Common, Outcome, check_mass, pair};
+use crate::report::print_json;
+use crate::say;
 use crate::scenario_file;
 
 /// Arguments of `lift`.
@@ -19,16 +21,17 @@ pub struct LiftArgs {
     /// Index of the pair: candidates I and I+1 (wrapping).
     #[arg(long = "pair", value_name = "I")]
     pair_index: usize,
-    /// Centre of mass X,Y in the body frame, m (negative: --com=-0.2,0.1).
+    /// Centre of mass X,Y in the body frame, m (negative: --com -0.2,0.1).
     #[arg(long, value_name = "X,Y", value_parser = pair, allow_hyphen_values = true)]
     com: [f64; 2],
-    /// Payload mass, kg.
-    #[arg(long, value_name = "M")]
+    /// Payload mass, kg (above 0, at most 1000).
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
     mass: f64,
 }
 
 /// Runs the command.
-pub fn run(args: &LiftArgs) -> Result<()> {
+pub fn run(args: &LiftArgs) -> Result<Outcome> {
+    let mass = check_mass("--mass", args.mass)?;
     let loaded = scenario_file::load(&args.common.scenario)?;
     let s = &loaded.scenario;
     let count = group_count(s);
@@ -39,14 +42,11 @@ pub fn run(args: &LiftArgs) -> Result<()> {
             count.saturating_sub(1)
         );
     };
-    if !(args.mass.is_finite() && args.mass > 0.0) {
-        bail!("--mass {}: must be a positive number of kg", args.mass);
-    }
     let com = Vec2::new(args.com[0] as f32, args.com[1] as f32);
     let Some(thrust) = lift_off_thrust(
         &s.payload.hull,
         com,
-        args.mass as f32,
+        mass,
         &group.rotor_points,
         s.robots.mass,
     ) else {
@@ -56,9 +56,17 @@ pub fn run(args: &LiftArgs) -> Result<()> {
             args.com[1]
         );
     };
+    if !thrust.is_finite() {
+        bail!(
+            "--com {},{} --mass {}: the model's lift-off thrust is not a finite number",
+            args.com[0],
+            args.com[1],
+            args.mass
+        );
+    }
     let feasible = thrust <= s.robots.max_thrust;
     if args.common.json {
-        let report = json!({
+        print_json(json!({
             "pair": args.pair_index,
             "candidates": group.candidates.iter().map(|&c| s.payload.candidates[c]).collect::<Vec<_>>(),
             "rotor_points": group.rotor_points.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>(),
@@ -66,10 +74,9 @@ pub fn run(args: &LiftArgs) -> Result<()> {
             "feasible": feasible,
             "max_thrust": s.robots.max_thrust,
             "reachable": group.reachable,
-        });
-        println!("{report}");
+        }))?;
     } else {
-        println!(
+        say!(
             "pair {} (candidates {:?}): lift-off at {thrust:.3} N per robot ({} at max {} N){}",
             args.pair_index,
             group
@@ -84,7 +91,7 @@ pub fn run(args: &LiftArgs) -> Result<()> {
             } else {
                 "; robots cannot stand there (min_spacing)"
             }
-        );
+        )?;
     }
-    Ok(())
+    Ok(Outcome::Done)
 }

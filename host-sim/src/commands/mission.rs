@@ -12,8 +12,11 @@ use serde_json::json;
 use shared::estimation::{EstimatorOptions, ThrustScaleAxis};
 use shared::mission::MissionConfig;
 
+use crate::cli::{Outcome, check_map_error, check_range};
 use crate::commands::fly::MixerArg;
-use crate::mission_run::{self, MissionSetup};
+use crate::mission_run::{self, MISSION_TIME_LIMIT, MissionOutcome, MissionSetup};
+use crate::report::print_json;
+use crate::say;
 use crate::scenario_file;
 
 /// The paper's experiment case, built in.
@@ -31,36 +34,68 @@ pub struct MissionArgs {
     /// Seed of sensor noise and disturbance.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// The rotors' command-to-thrust map over-reads by this factor.
+    /// The rotors' command-to-thrust map over-reads by this factor (0.5 to 2).
     #[arg(long, value_name = "S", default_value_t = 1.0)]
     map_error: f64,
     /// Estimate the thrust-scale factor alongside theta (axis 0.9..1.2 step 0.05).
     #[arg(long)]
     bias_term: bool,
     /// Standard deviation of the lift detector's readings, N: the estimator's noise model for
-    /// the lifts (default 0.5, the detector's characterised bound).
-    #[arg(long, value_name = "N", conflicts_with = "scenario_sigma")]
+    /// the lifts (default 0.5, the detector's characterised bound; above 0, at most the
+    /// rotors' maximum thrust).
+    #[arg(
+        long,
+        value_name = "N",
+        conflicts_with = "scenario_sigma",
+        allow_negative_numbers = true
+    )]
     lift_sigma: Option<f64>,
     /// Use the scenario's noise_sigma (the paper's simulated noise) as the lifts' noise model.
     #[arg(long)]
     scenario_sigma: bool,
-    /// Failure injection: motion capture stops this many seconds after take-off.
-    #[arg(long, value_name = "S")]
+    /// Failure injection: motion capture stops this many seconds after take-off (0 to 900).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
     mocap_lost_after: Option<f64>,
     /// Mixer for the flight.
     #[arg(long, value_enum, default_value = "equal-split")]
     mixer: MixerArg,
 }
 
+/// How a mission came out, for the exit code: dropped, aborted, delivered or not.
+pub fn outcome_of(mission: &MissionOutcome) -> Outcome {
+    Outcome::of_run(
+        mission.dropped,
+        mission.aborted.is_some(),
+        mission.delivered,
+    )
+}
+
 /// Runs the command.
-pub fn run(args: &MissionArgs) -> Result<()> {
+pub fn run(args: &MissionArgs) -> Result<Outcome> {
+    // Every flag is checked before the mission is built.
+    let map_error = check_map_error(args.map_error)?;
+    let mocap_lost_after = args
+        .mocap_lost_after
+        .map(|s| {
+            check_range(
+                "--mocap-lost-after",
+                s,
+                (0.0, false),
+                f64::from(MISSION_TIME_LIMIT),
+                "s",
+            )
+        })
+        .transpose()?;
     let loaded = match &args.scenario {
         Some(path) => scenario_file::load(path)?,
         None => scenario_file::parse(RECT_EX1, std::path::Path::new("rect-ex1 (built in)"))?,
     };
-    if !(args.map_error.is_finite() && args.map_error > 0.0) {
-        anyhow::bail!("--map-error {}: must be a positive factor", args.map_error);
-    }
+    // A reading's noise beyond the rotors' whole range would carry no information.
+    let max_thrust = f64::from(loaded.scenario.robots.max_thrust);
+    let lift_sigma = args
+        .lift_sigma
+        .map(|s| check_range("--lift-sigma", s, (0.0, true), max_thrust, "N"))
+        .transpose()?;
     let config = MissionConfig {
         estimator: EstimatorOptions {
             thrust_scale: args.bias_term.then_some(ThrustScaleAxis::DEFAULT),
@@ -69,33 +104,34 @@ pub fn run(args: &MissionArgs) -> Result<()> {
         lift_noise_sigma: if args.scenario_sigma {
             None
         } else {
-            Some(
-                args.lift_sigma
-                    .map_or(shared::mission::DETECTOR_SIGMA, |s| s as f32),
-            )
+            Some(lift_sigma.unwrap_or(shared::mission::DETECTOR_SIGMA))
         },
         ..MissionConfig::default()
     };
     let setup = MissionSetup {
         seed: args.seed,
-        map_error: args.map_error as f32,
+        map_error,
         config,
-        mocap_lost_after_takeoff: args.mocap_lost_after.map(|s| s as f32),
+        mocap_lost_after_takeoff: mocap_lost_after,
         ..MissionSetup::default()
     };
     let json = args.json;
     if !json {
-        println!("mission on {}", loaded.name);
+        say!("mission on {}", loaded.name)?;
     }
     let started = Instant::now();
+    // The progress lines are written as the mission runs; a failure to write stops them and
+    // is reported after the run (a reader that went away ends the process in `say`).
+    let mut progress: Result<()> = Ok(());
     let (outcome, _) = mission_run::run(&loaded.scenario, &setup, &mut |t, name, reason| {
-        if !json {
-            println!("  {t:7.2} s  {name:<17} {reason}");
+        if !json && progress.is_ok() {
+            progress = say!("  {t:7.2} s  {name:<17} {reason}");
         }
     })?;
+    progress?;
     let wall_s = started.elapsed().as_secs_f64();
     if json {
-        let v = json!({
+        print_json(json!({
             "scenario": loaded.name,
             "estimate": outcome.estimate,
             "measurements": outcome.measurements,
@@ -108,38 +144,39 @@ pub fn run(args: &MissionArgs) -> Result<()> {
             "aborted": outcome.aborted.map(|r| r.to_string()),
             "simulated_s": outcome.simulated_s,
             "wall_s": wall_s,
-        });
-        println!("{v}");
+        }))?;
     } else {
         for (g, r, m) in &outcome.lifts {
             match r {
-                Some(r) => println!("lift with pair {g}: read {r:.3} N, the model says {m:.3} N"),
-                None => println!("lift with pair {g}: could not lift, the model says {m:.3} N"),
+                Some(r) => say!("lift with pair {g}: read {r:.3} N, the model says {m:.3} N")?,
+                None => say!("lift with pair {g}: could not lift, the model says {m:.3} N")?,
             }
         }
         match outcome.estimate {
-            Some(e) => println!(
+            Some(e) => say!(
                 "estimate: COM ({:.3}, {:.3}) m, mass {:.2} kg after {} lifts",
-                e[0], e[1], e[2], outcome.measurements
-            ),
-            None => println!("no estimate ({} lifts)", outcome.measurements),
+                e[0],
+                e[1],
+                e[2],
+                outcome.measurements
+            )?,
+            None => say!("no estimate ({} lifts)", outcome.measurements)?,
         }
-        println!(
+        say!(
             "{}: final position error {:.3} m; {:.1} s simulated in {:.1} s",
-            if outcome.delivered {
-                "delivered"
-            } else if outcome.dropped {
-                "DROPPED"
-            } else {
-                "NOT delivered"
+            match outcome_of(&outcome) {
+                Outcome::Done => "delivered",
+                Outcome::Dropped => "DROPPED",
+                Outcome::Aborted => "ABORTED",
+                Outcome::NotDelivered => "NOT delivered",
             },
             outcome.final_position_error_m,
             outcome.simulated_s,
             wall_s
-        );
+        )?;
         if let Some(why) = &outcome.aborted {
-            println!("aborted: {why}");
+            say!("aborted: {why}")?;
         }
     }
-    Ok(())
+    Ok(outcome_of(&outcome))
 }

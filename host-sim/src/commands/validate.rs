@@ -3,30 +3,32 @@
 use anyhow::Result;
 use serde_json::json;
 
-use crate::cli::Common;
+use crate::cli::{Common, Outcome};
+use crate::report::print_json;
+use crate::say;
 use crate::scenario_file::{self, LoadedScenario};
 
 /// Runs the command.
-pub fn run(common: &Common) -> Result<()> {
+pub fn run(common: &Common) -> Result<Outcome> {
     let loaded = scenario_file::load(&common.scenario)?;
     if common.json {
-        println!("{}", report(&loaded));
-        return Ok(());
+        print_json(report(&loaded))?;
+        return Ok(Outcome::Done);
     }
     let s = &loaded.scenario;
-    println!(
+    say!(
         "scenario {} ({}): valid",
         loaded.name,
         loaded.path.display()
-    );
-    println!(
+    )?;
+    say!(
         "  footprint {} vertices, hull {} vertices; rail {:.3} m; {} candidates",
         s.payload.footprint.len(),
         s.payload.hull.vertices().len(),
         s.payload.rail.perimeter(),
         s.payload.candidates.len()
-    );
-    println!(
+    )?;
+    say!(
         "  {} robots, lifting {} at a time; grid {} x {} x {} = {} points",
         s.robots.count(),
         s.robots.pair_size,
@@ -34,8 +36,8 @@ pub fn run(common: &Common) -> Result<()> {
         s.estimation.axis_len(1),
         s.estimation.axis_len(2),
         s.estimation.grid_points()
-    );
-    Ok(())
+    )?;
+    Ok(Outcome::Done)
 }
 
 fn report(loaded: &LoadedScenario) -> serde_json::Value {
