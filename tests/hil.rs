@@ -389,7 +389,14 @@ fn the_hil_command_prints_the_mission_keys_as_json() {
         .output()
         .expect("host-sim runs");
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "host-sim hil failed: {stderr}");
+    // Stopped by --duration three seconds in: the report is printed, and the exit code says
+    // the payload was not delivered (README "Exit codes").
+    assert_eq!(
+        out.status.code(),
+        Some(4),
+        "host-sim hil: {:?}, {stderr}",
+        out.status
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     for key in [
         "estimate",
@@ -406,6 +413,7 @@ fn the_hil_command_prints_the_mission_keys_as_json() {
     }
     assert_eq!(v["firmware"], "qemu-mps2-an500");
     assert!(v["ticks"].as_u64().is_some_and(|t| t >= 1200));
+    assert_eq!(v["delivered"], false);
 }
 
 #[test]

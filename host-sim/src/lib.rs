@@ -12,6 +12,8 @@ pub mod commands;
 pub mod figures;
 pub mod harness;
 pub mod hil;
+pub mod inject;
+pub mod mission_figures;
 pub mod mission_run;
 pub mod monte_carlo;
 pub mod plant;

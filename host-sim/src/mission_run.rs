@@ -13,6 +13,7 @@ use anyhow::{Result, anyhow};
 use shared::control::navigator::{ImuSample, MocapFix};
 use shared::control::vector::Vec3;
 use shared::estimation::Measurement;
+use shared::flight::AdaptEvent;
 use shared::geometry::Vec2;
 use shared::mission::{
     AbortReason, JobRequest, Mission, MissionConfig, MissionPlanner, OperatorCommand, Phase,
@@ -45,6 +46,55 @@ pub struct MissionSetup {
     pub commands: Vec<(f32, OperatorCommand)>,
     /// Stop after this much simulated time, s (at most [`MISSION_TIME_LIMIT`]).
     pub time_limit: f32,
+    /// Failure injection: the payload's COM moves in flight.
+    pub load_shift: Option<LoadShift>,
+}
+
+/// A load that shifts in flight: the payload's true COM moves by `offset` over
+/// [`LOAD_SHIFT_TIME`], starting `after` seconds after take-off began (a mass sliding along
+/// the plate).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoadShift {
+    /// How far the COM moves, body frame, m.
+    pub offset: Vec2,
+    /// When it starts, s after take-off began.
+    pub after: f32,
+}
+
+/// Time a load shift takes, s.
+pub const LOAD_SHIFT_TIME: f32 = 0.5;
+
+/// One sample of the flight for reports and figures, every [`SERIES_EVERY`] ticks.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FlightSample {
+    /// Simulated time, s.
+    pub t: f32,
+    /// Each robot's rail position, m.
+    pub rail: Vec<f32>,
+    /// Each rotor's thrust, N.
+    pub thrust: Vec<f32>,
+    /// Roll and pitch, degrees.
+    pub roll_pitch_deg: [f32; 2],
+    /// Height above the start, m.
+    pub height: f32,
+}
+
+/// Ticks between two [`FlightSample`]s (100 Hz).
+pub const SERIES_EVERY: u64 = 4;
+
+/// An in-flight re-formation, as the plant saw it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Adaptation {
+    /// When the shift was measured, s.
+    pub t: f32,
+    /// The COM measured, m.
+    pub com: [f32; 2],
+    /// The mass measured, kg.
+    pub mass: f32,
+    /// Where the robots went (empty if no formation could be had).
+    pub positions: Vec<f32>,
+    /// When they arrived, s (`None`: gave up or still moving).
+    pub rebalanced_at: Option<f32>,
 }
 
 impl Default for MissionSetup {
@@ -58,6 +108,7 @@ impl Default for MissionSetup {
             mocap_lost_after_takeoff: None,
             commands: Vec::new(),
             time_limit: MISSION_TIME_LIMIT,
+            load_shift: None,
         }
     }
 }
@@ -89,6 +140,8 @@ pub enum Event {
     PairChosen(usize),
     /// A lift's reading, N per robot (`None`: could not lift).
     LiftRead(Option<f32>),
+    /// The in-flight adaptation did something.
+    Adapted(AdaptEvent),
 }
 
 /// What the autopilot commands each tick.
@@ -138,6 +191,16 @@ pub struct PlantRecord {
     pub ticks: u64,
     /// Simulated time, s.
     pub simulated_s: f32,
+    /// Largest roll or pitch while airborne (from take-off to the mission's end), degrees.
+    pub max_tilt_deg: f32,
+    /// Largest rotor command as a fraction of its maximum, from take-off to the end.
+    pub max_thrust_fraction: f32,
+    /// When the load shift began, s, if one was injected and happened.
+    pub shift_at: Option<f32>,
+    /// Each in-flight re-formation.
+    pub adaptations: Vec<Adaptation>,
+    /// The flight, sampled at 100 Hz from take-off.
+    pub series: Vec<FlightSample>,
 }
 
 /// Flies `autopilot` in the plant of `scenario`'s truth until its mission is over, the
@@ -189,10 +252,22 @@ pub fn fly(
     let mut next_command = 0usize;
     let mut command = Some(OperatorCommand::Start);
     let mut group = 0usize;
+    let mut shift_from = truth.com;
     loop {
         let t = plant.time();
         if t >= limit {
             break;
+        }
+        if let Some(shift) = &setup.load_shift {
+            let begin = takeoff_at + shift.after;
+            if t >= begin && record.shift_at.is_none() {
+                record.shift_at = Some(t);
+                shift_from = plant.com();
+            }
+            let progress = ((t - begin) / LOAD_SHIFT_TIME).clamp(0.0, 1.0);
+            if t >= begin && t <= begin + LOAD_SHIFT_TIME + dt {
+                plant.set_com(shift_from + shift.offset * progress);
+            }
         }
         let truth_now = plant.state();
         let imu = sensors.imu(&truth_now, dt);
@@ -247,6 +322,22 @@ pub fn fly(
                         .unwrap_or(f32::NAN);
                     record.lifts.push((group, *reading, model));
                 }
+                Event::Adapted(AdaptEvent::Shifted { com, mass }) => {
+                    record.adaptations.push(Adaptation {
+                        t,
+                        com: [com.x, com.y],
+                        mass: *mass,
+                        positions: Vec::new(),
+                        rebalanced_at: None,
+                    });
+                }
+                Event::Adapted(AdaptEvent::Rebalanced) => {
+                    if let Some(a) = record.adaptations.last_mut() {
+                        a.positions = out.rail.iter().take(n).map(|&p| rail.wrap(p)).collect();
+                        a.rebalanced_at = Some(t);
+                    }
+                }
+                Event::Adapted(_) => {}
             }
         }
         let wanted: Vec<f32> = out.rail.iter().take(n).map(|&p| rail.wrap(p)).collect();
@@ -263,6 +354,23 @@ pub fn fly(
             *c = fraction.clamp(0.0, 1.0) * robots.max_thrust;
         }
         let euler = truth_now.attitude.to_euler();
+        if t >= takeoff_at {
+            let tilt = euler.x.abs().max(euler.y.abs()).to_degrees();
+            record.max_tilt_deg = record.max_tilt_deg.max(tilt);
+            let top = record.final_thrusts.iter().fold(0.0f32, |m, &c| m.max(c));
+            record.max_thrust_fraction = record
+                .max_thrust_fraction
+                .max(top / robots.max_thrust.max(f32::MIN_POSITIVE));
+            if record.ticks.is_multiple_of(SERIES_EVERY) {
+                record.series.push(FlightSample {
+                    t,
+                    rail: record.final_rail.clone(),
+                    thrust: record.final_thrusts.clone(),
+                    roll_pitch_deg: [euler.x.to_degrees(), euler.y.to_degrees()],
+                    height: start.z - truth_now.position.z,
+                });
+            }
+        }
         if euler.x.abs().to_degrees() > DROP_TILT_DEG || euler.y.abs().to_degrees() > DROP_TILT_DEG
         {
             record.dropped = true;
@@ -347,6 +455,9 @@ impl Autopilot for InProcess {
                 _ => {}
             }
         }
+        if let Some(a) = out.adaptation {
+            events.push(Event::Adapted(a));
+        }
         let n = out.robots.len();
         Ok(Commanded {
             // As the firmware sends them: fractions of the rotors' maximum.
@@ -394,6 +505,16 @@ pub struct MissionOutcome {
     pub simulated_s: f32,
     /// Control ticks.
     pub ticks: u64,
+    /// Largest roll or pitch in flight, degrees.
+    pub max_tilt_deg: f32,
+    /// Largest rotor command in flight, fraction of the maximum.
+    pub max_thrust_fraction: f32,
+    /// When the injected load shift began, s.
+    pub shift_at: Option<f32>,
+    /// Each in-flight re-formation.
+    pub adaptations: Vec<Adaptation>,
+    /// The flight sampled at 100 Hz.
+    pub series: Vec<FlightSample>,
 }
 
 /// A flight counts as delivered within this distance of the target, m.
@@ -428,6 +549,11 @@ pub fn run(
         final_thrusts: record.final_thrusts,
         simulated_s: record.simulated_s,
         ticks: record.ticks,
+        max_tilt_deg: record.max_tilt_deg,
+        max_thrust_fraction: record.max_thrust_fraction,
+        shift_at: record.shift_at,
+        adaptations: record.adaptations,
+        series: record.series,
     };
     Ok((outcome, autopilot))
 }

@@ -12,7 +12,8 @@
 //! What goes to the ground: each transition as `STATUSTEXT` `phase: NAME: reason`, and as
 //! `NAMED_VALUE_*` the chosen pair (`lift_pair`), each reading (`lift_N`, -1 when the pair
 //! could not lift), the estimate (`est_x`, `est_y` in m, `est_m` in kg, `lifts`) and the
-//! formation's `det`.
+//! formation's `det`; each step of the in-flight adaptation to a load that shifts as
+//! `STATUSTEXT` `adapt: ...`.
 
 use core::fmt::Write as _;
 
@@ -302,6 +303,9 @@ impl Autonomy {
                 Reason::FormationChosen(det) => report.value("det", Value::Float(det)),
                 _ => {}
             }
+        }
+        if let Some(event) = out.adaptation {
+            report.text(Severity::Notice, format_args!("adapt: {event}"));
         }
         let robots = if self.loaded {
             out.robots.len().min(MAX_ROBOTS)

@@ -10,11 +10,14 @@ use anyhow::Result;
 use clap::Args;
 use serde_json::json;
 use shared::estimation::{EstimatorOptions, ThrustScaleAxis};
+use shared::flight::AdaptConfig;
 use shared::mission::MissionConfig;
 
 use crate::cli::{Outcome, check_map_error, check_range};
 use crate::commands::fly::MixerArg;
-use crate::mission_run::{self, MISSION_TIME_LIMIT, MissionOutcome, MissionSetup};
+use crate::inject::{Fault, Injection};
+use crate::mission_figures;
+use crate::mission_run::{self, LoadShift, MISSION_TIME_LIMIT, MissionOutcome, MissionSetup};
 use crate::report::print_json;
 use crate::say;
 use crate::scenario_file;
@@ -59,6 +62,18 @@ pub struct MissionArgs {
     /// Mixer for the flight.
     #[arg(long, value_enum, default_value = "equal-split")]
     mixer: MixerArg,
+    /// Failure injection, seconds after take-off began: `load-shift:DX,DY@T` moves the
+    /// payload's COM by (DX, DY) m over half a second (repeatable: the last one of a kind
+    /// counts).
+    #[arg(long, value_name = "KIND@SECONDS", value_parser = Injection::parse)]
+    inject: Vec<Injection>,
+    /// Switch off the formation's in-flight adaptation to a load that shifts.
+    #[arg(long)]
+    no_adapt: bool,
+    /// Write the flight's time series (CSV) and a figure (rail positions, rotor thrusts, roll
+    /// and pitch, with the shift marked) into this folder.
+    #[arg(long, value_name = "DIR")]
+    output: Option<PathBuf>,
 }
 
 /// How a mission came out, for the exit code: dropped, aborted, delivered or not.
@@ -106,6 +121,10 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
         } else {
             Some(lift_sigma.unwrap_or(shared::mission::DETECTOR_SIGMA))
         },
+        adapt: AdaptConfig {
+            enabled: !args.no_adapt,
+            ..AdaptConfig::DEFAULT
+        },
         ..MissionConfig::default()
     };
     let setup = MissionSetup {
@@ -113,6 +132,16 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
         map_error,
         config,
         mocap_lost_after_takeoff: mocap_lost_after,
+        load_shift: args
+            .inject
+            .iter()
+            .map(|i| match i.fault {
+                Fault::LoadShift(offset) => LoadShift {
+                    offset,
+                    after: i.after,
+                },
+            })
+            .next_back(),
         ..MissionSetup::default()
     };
     let json = args.json;
@@ -130,6 +159,10 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
     })?;
     progress?;
     let wall_s = started.elapsed().as_secs_f64();
+    let written = match &args.output {
+        Some(dir) => mission_figures::write(dir, &loaded.name, &outcome)?,
+        None => Vec::new(),
+    };
     if json {
         print_json(json!({
             "scenario": loaded.name,
@@ -144,6 +177,16 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
             "aborted": outcome.aborted.map(|r| r.to_string()),
             "simulated_s": outcome.simulated_s,
             "wall_s": wall_s,
+            "max_tilt_deg": outcome.max_tilt_deg,
+            "max_thrust_fraction": outcome.max_thrust_fraction,
+            "adaptations": outcome.adaptations.iter().map(|a| json!({
+                "time_s": a.t,
+                "com": a.com,
+                "mass": a.mass,
+                "positions": a.positions,
+                "rebalanced_s": a.rebalanced_at,
+            })).collect::<Vec<_>>(),
+            "written": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         }))?;
     } else {
         for (g, r, m) in &outcome.lifts {
@@ -176,6 +219,28 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
         )?;
         if let Some(why) = &outcome.aborted {
             say!("aborted: {why}")?;
+        }
+        say!(
+            "in flight: largest tilt {:.1} deg, largest rotor command {:.0} % of its maximum",
+            outcome.max_tilt_deg,
+            100.0 * outcome.max_thrust_fraction
+        )?;
+        for a in &outcome.adaptations {
+            let rebalanced = a
+                .rebalanced_at
+                .map_or("the robots did not get there".to_string(), |r| {
+                    format!("rebalanced at {r:.2} s")
+                });
+            say!(
+                "  {:7.2} s  the load shifted: COM ({:.3}, {:.3}) m, mass {:.2} kg; {rebalanced}",
+                a.t,
+                a.com[0],
+                a.com[1],
+                a.mass
+            )?;
+        }
+        for path in &written {
+            say!("wrote {}", path.display())?;
         }
     }
     Ok(outcome_of(&outcome))

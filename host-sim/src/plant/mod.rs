@@ -182,6 +182,21 @@ impl Plant {
         }
     }
 
+    /// Moves the payload's true COM to `com` (body frame, m): a load that shifts. The mass
+    /// properties follow.
+    pub fn set_com(&mut self, com: Vec2) {
+        self.config.com = com;
+        let mass = mass_properties(&self.config);
+        if let Some(rb) = self.world.bodies.get_mut(self.body) {
+            rb.set_additional_mass_properties(mass, true);
+        }
+    }
+
+    /// The payload's true COM, body frame, m.
+    pub fn com(&self) -> Vec2 {
+        self.config.com
+    }
+
     /// Sets the peak of the body-torque disturbance, N m (the mission turns it on in flight:
     /// it is the paper's flight disturbance, not a load on the ground lifts).
     pub fn set_disturbance_peak(&mut self, peak: f32) {

@@ -7,11 +7,14 @@
 //! - [`stack`]: the 400 Hz flight: cascade, mixer, plan walked on the vehicle's state,
 //!   take-off check, land detector, failsafes and the operator's land and kill commands.
 //! - [`trim`]: the payload's COM and mass from the wrench that holds it in a hover.
+//! - [`adapt`]: the formation re-solved and the robots moved in flight when the load shifts.
 
+pub mod adapt;
 pub mod model;
 pub mod stack;
 pub mod trim;
 
+pub use adapt::{AdaptConfig, AdaptEvent, Adapter};
 pub use model::FlightModel;
 pub use stack::{
     FlightCommand, FlightConfig, FlightEvent, FlightOutput, FlightStack, FlightStop, LandingCause,

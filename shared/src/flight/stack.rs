@@ -163,6 +163,8 @@ pub struct FlightStack {
     failsafe_until: Option<f32>,
     landing: Option<LandingCause>,
     stopped: Option<FlightStop>,
+    /// Hold the hover past its planned time (an in-flight adaptation is under way).
+    hold_hover: bool,
 }
 
 impl FlightStack {
@@ -189,7 +191,28 @@ impl FlightStack {
             failsafe_until: None,
             landing: None,
             stopped: None,
+            hold_hover: false,
         }
+    }
+
+    /// The mixer flown.
+    pub fn mixer(&self) -> &Mixer {
+        &self.mixer
+    }
+
+    /// Flies on with `model` (the robots moved, or the payload is believed otherwise): the
+    /// mixer and the controller's vehicle model change, the controller's integrators and the
+    /// plan carry on.
+    pub fn set_model(&mut self, model: FlightModel) {
+        self.weight = model.vehicle.hover_thrust();
+        self.controller.set_model(model.vehicle);
+        self.mixer = model.mixer;
+    }
+
+    /// Holds the hover past its planned time while `hold` is set (the plan then goes on from
+    /// where it was).
+    pub fn hold_hover(&mut self, hold: bool) {
+        self.hold_hover = hold;
     }
 
     /// The plan's phase.
@@ -370,6 +393,10 @@ impl FlightStack {
             };
         };
         self.segment_time += dt;
+        if self.hold_hover && segment.phase == FlightPhase::Hover && self.landing.is_none() {
+            self.segment_time = math::min(self.segment_time, segment.duration);
+            return None;
+        }
         if self.segment_time < segment.duration {
             return None;
         }

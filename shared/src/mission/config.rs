@@ -3,7 +3,7 @@
 
 use crate::control::allocation::MixerKind;
 use crate::estimation::EstimatorOptions;
-use crate::flight::FlightConfig;
+use crate::flight::{AdaptConfig, FlightConfig};
 use crate::liftoff::LiftoffConfig;
 use crate::rail::stepper::MotionLimits;
 
@@ -29,6 +29,8 @@ pub struct MissionConfig {
     pub flight: FlightConfig,
     /// Mixer for the flight.
     pub mixer: MixerKind,
+    /// The formation's adaptation in flight to a load that shifts.
+    pub adapt: AdaptConfig,
     /// Largest share of the rotors' total thrust the heaviest plausible payload (the
     /// posterior's 95 % upper bound on the mass) may need to hover; above it the mission
     /// refuses to take off.
@@ -54,6 +56,7 @@ impl MissionConfig {
         rail_limits: MotionLimits::DEFAULT,
         flight: FlightConfig::DEFAULT,
         mixer: MixerKind::EqualSplit,
+        adapt: AdaptConfig::DEFAULT,
         max_hover_fraction: 0.7,
         checks_time: 5.0,
         relax_time: 2.0,

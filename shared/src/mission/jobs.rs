@@ -50,6 +50,13 @@ pub enum JobRequest {
         /// Where the robots are.
         robots: Positions,
     },
+    /// In flight, the load has shifted: the formation about the COM measured in the hover.
+    Reform {
+        /// Where the robots are.
+        robots: Positions,
+        /// The measured COM, m.
+        com: Vec2,
+    },
 }
 
 /// Ticks at 400 Hz.
@@ -66,7 +73,7 @@ impl JobRequest {
     pub fn deadline_ticks(&self) -> u32 {
         match self {
             Self::SelectPair { .. } | Self::Update { .. } => ticks_of_ms(20),
-            Self::DecideFormation { .. } => ticks_of_ms(40),
+            Self::DecideFormation { .. } | Self::Reform { .. } => ticks_of_ms(40),
             Self::BuildFlight { .. } => ticks_of_ms(5),
         }
     }
@@ -78,6 +85,7 @@ impl JobRequest {
             Self::Update { .. } => "update",
             Self::DecideFormation { .. } => "decide-formation",
             Self::BuildFlight { .. } => "build-flight",
+            Self::Reform { .. } => "reform",
         }
     }
 }
@@ -122,6 +130,8 @@ pub enum JobResult {
     Formation(Result<FormationPlan, AbortReason>),
     /// Answer to [`JobRequest::BuildFlight`].
     Flight(Result<FlightModel, AbortReason>),
+    /// Answer to [`JobRequest::Reform`]: the new formation's positions and `det(B B^T)`.
+    Reformed(Result<(Positions, f32), AbortReason>),
 }
 
 /// The job side: the estimator (with its grid-sized buffers) and the decisions made on it.
@@ -215,6 +225,7 @@ impl MissionPlanner {
                 JobResult::Formation(self.decide_formation(robots))
             }
             JobRequest::BuildFlight { robots } => JobResult::Flight(self.build_flight(robots)),
+            JobRequest::Reform { robots, com } => JobResult::Reformed(self.reform(robots, *com)),
         }
     }
 
@@ -275,6 +286,15 @@ impl MissionPlanner {
             det: formation.figures.det,
             rail_move,
         })
+    }
+
+    fn reform(&self, robots: &[f32], com: Vec2) -> Result<(Positions, f32), AbortReason> {
+        let problem = FormationProblem::for_scenario(&self.scenario, com, Some(robots));
+        let formation = solve(&problem).map_err(AbortReason::NoBalancedFormation)?;
+        Ok((
+            formation.positions.iter().copied().collect(),
+            formation.figures.det,
+        ))
     }
 
     fn build_flight(&self, robots: &[f32]) -> Result<FlightModel, AbortReason> {

@@ -15,7 +15,11 @@
 use crate::control::navigator::{ImuSample, MocapFix, NavState, Navigator};
 use crate::control::trajectory::FlightPhase;
 use crate::estimation::{Estimate, Status};
-use crate::flight::{FlightCommand, FlightEvent, FlightStack, FlightStop, LandingCause};
+use crate::flight::{
+    AdaptEvent, Adapter, FlightCommand, FlightEvent, FlightModel, FlightStack, FlightStop,
+    LandingCause,
+};
+use crate::geometry::Vec2;
 use crate::liftoff::{LiftState, LiftoffDetector};
 use crate::math;
 use crate::mission::config::MissionConfig;
@@ -98,6 +102,8 @@ pub struct TickOutput {
     pub phase: Phase,
     /// The transition this tick made, if any.
     pub transition: Option<Transition>,
+    /// What the in-flight adaptation did this tick, if anything.
+    pub adaptation: Option<AdaptEvent>,
     /// A computation to run off the tick, if this tick asked for one.
     pub job: Option<JobRequest>,
     /// The answer to this tick's operator command, if one came.
@@ -134,6 +140,8 @@ pub struct Mission {
     estimate: Option<Estimate>,
     formation: Option<Positions>,
     flight: Option<FlightStack>,
+    adapter: Option<Adapter>,
+    adaptation: Option<AdaptEvent>,
     abort: Option<AbortReason>,
 }
 
@@ -166,6 +174,8 @@ impl Mission {
         estimate: None,
         formation: None,
         flight: None,
+        adapter: None,
+        adaptation: None,
         abort: None,
     };
 
@@ -187,6 +197,8 @@ impl Mission {
         self.estimate = None;
         self.formation = None;
         self.flight = None;
+        self.adapter = None;
+        self.adaptation = None;
         self.abort = None;
     }
 
@@ -343,6 +355,7 @@ impl Mission {
             armed,
             phase: self.phase,
             transition,
+            adaptation: self.adaptation.take(),
             job: self.outgoing.take(),
             reply,
             nav,
@@ -571,6 +584,15 @@ impl Mission {
         };
         let start = nav.position.position;
         self.flight = Some(FlightStack::new(self.config.flight, model, start, target));
+        self.adapter = self.estimate.map(|e| {
+            let r = &self.scenario.robots;
+            Adapter::new(
+                self.config.adapt,
+                Vec2::new(e.theta[0], e.theta[1]),
+                e.theta[2],
+                r.mass * r.count() as f32,
+            )
+        });
         Ok(Some(self.enter(Phase::Arming, Reason::FlightReady)))
     }
 
@@ -585,6 +607,7 @@ impl Mission {
         let out = flight.step(nav, command, dt);
         let n = self.scenario.robots.count();
         thrusts[..n].copy_from_slice(&out.thrusts[..n]);
+        self.adapt(nav, &out.thrusts[..n], dt);
         let event = out.event?;
         let (to, reason) = match event {
             FlightEvent::Advanced(phase) => (Phase::Flying(phase), Reason::PlanAdvanced),
@@ -617,5 +640,75 @@ impl Mission {
             }
         };
         Some(self.enter(to, reason))
+    }
+
+    /// The in-flight adaptation after this tick's flight step: measure in the hover, ask for a
+    /// new formation when the load has shifted, take it at its deadline, move the robots and
+    /// fly every tick with the mixer of where they are.
+    fn adapt(&mut self, nav: &NavState, thrusts: &[f32], dt: f32) {
+        let (Some(flight), Some(adapter)) = (self.flight.as_mut(), self.adapter.as_mut()) else {
+            return;
+        };
+        let rail = &self.scenario.payload.rail;
+        let mut event = None;
+        if let Some((positions, arrived)) = adapter.move_step(rail, dt) {
+            self.robots = positions;
+            event = arrived;
+            let (com, mass) = adapter.belief();
+            // A layout the mixer cannot fly (it cannot happen between two balanced formations
+            // of the same rail, but never on trust): keep the last mixer and stop adapting.
+            match FlightModel::build(&self.scenario, &self.robots, com, mass, self.config.mixer) {
+                Ok(model) => flight.set_model(model),
+                Err(_) => {
+                    adapter.give_up();
+                    event = Some(AdaptEvent::GaveUp);
+                }
+            }
+        } else if self.pending.is_some() {
+            let taken = match &mut self.pending {
+                Some(p) if self.tick >= p.due => {
+                    let result = p.result.take();
+                    self.pending = None;
+                    Some(result)
+                }
+                _ => None,
+            };
+            if let Some(result) = taken {
+                let solved = match result {
+                    Some(JobResult::Reformed(Ok((positions, _det)))) => Some(positions),
+                    _ => None,
+                };
+                event = Some(adapter.formation(
+                    solved.as_ref(),
+                    rail,
+                    &self.robots,
+                    self.scenario.robots.min_spacing,
+                ));
+            }
+        } else if flight.airborne() && flight.landing_cause().is_none() {
+            let phase = flight.phase();
+            let cruising = matches!(phase, FlightPhase::Transit | FlightPhase::Hover);
+            if cruising {
+                let delivered = flight.mixer().wrench_of(thrusts);
+                let hovering = phase == FlightPhase::Hover;
+                if let Some(shifted) = adapter.observe(&delivered, nav, hovering, dt) {
+                    if let AdaptEvent::Shifted { com, .. } = shifted {
+                        let job = JobRequest::Reform {
+                            robots: self.robots.clone(),
+                            com,
+                        };
+                        self.pending = Some(PendingJob {
+                            due: self.tick + u64::from(job.deadline_ticks()),
+                            result: None,
+                        });
+                        self.outgoing = Some(job);
+                    }
+                    event = Some(shifted);
+                }
+            }
+        }
+        let holding = flight.landing_cause().is_none() && adapter.holds_hover();
+        flight.hold_hover(holding);
+        self.adaptation = event;
     }
 }

@@ -1,0 +1,112 @@
+//! Failure injection on the command line: `--inject KIND@SECONDS` (seconds after take-off
+//! began; repeatable). Each kind is parsed and range-checked here, with an error that names
+//! the flag and what is wrong; the plant loop ([`crate::mission_run`]) applies it.
+//!
+//! Kinds: `load-shift:DX,DY` (the payload's COM moves by (DX, DY) m over half a second, a
+//! load sliding on the plate: the in-flight adaptation's test).
+
+use std::fmt;
+
+use shared::geometry::Vec2;
+
+/// Largest load shift, m: beyond the paper's payloads (1.76 m long at most).
+pub const MAX_LOAD_SHIFT: f32 = 1.0;
+/// Latest injection, s after take-off: the mission's own time limit.
+pub const MAX_INJECT_TIME: f32 = crate::mission_run::MISSION_TIME_LIMIT;
+
+/// What to inject.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Fault {
+    /// The payload's COM moves by this much, body frame, m.
+    LoadShift(Vec2),
+}
+
+/// One injection: a fault at a time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Injection {
+    /// The fault.
+    pub fault: Fault,
+    /// When, s after take-off began.
+    pub after: f32,
+}
+
+impl fmt::Display for Injection {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.fault {
+            Fault::LoadShift(d) => write!(f, "load-shift:{},{}@{}", d.x, d.y, self.after),
+        }
+    }
+}
+
+fn number(text: &str, what: &str) -> Result<f32, String> {
+    let v: f32 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("{what} `{text}` is not a number"))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{what} `{text}` is not a finite number"))
+    }
+}
+
+impl Injection {
+    /// Parses `KIND@SECONDS` (clap's value parser for `--inject`).
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let (kind, at) = text
+            .rsplit_once('@')
+            .ok_or_else(|| format!("`{text}`: expected KIND@SECONDS, e.g. load-shift:0.15,0@11"))?;
+        let after = number(at, "time")?;
+        if !(0.0..=MAX_INJECT_TIME).contains(&after) {
+            return Err(format!(
+                "`{text}`: time {after} s must be from 0 to {MAX_INJECT_TIME} s after take-off"
+            ));
+        }
+        let (name, arg) = kind.split_once(':').unwrap_or((kind, ""));
+        let fault = match name {
+            "load-shift" => {
+                let (x, y) = arg.split_once(',').ok_or_else(|| {
+                    format!("`{text}`: load-shift takes DX,DY in metres, e.g. load-shift:0.15,0")
+                })?;
+                let d = Vec2::new(number(x, "DX")?, number(y, "DY")?);
+                if d.norm() > MAX_LOAD_SHIFT {
+                    return Err(format!(
+                        "`{text}`: a load shift of {:.3} m is beyond {MAX_LOAD_SHIFT} m",
+                        d.norm()
+                    ));
+                }
+                Fault::LoadShift(d)
+            }
+            other => {
+                return Err(format!(
+                    "`{text}`: unknown fault `{other}` (known: load-shift:DX,DY)"
+                ));
+            }
+        };
+        Ok(Self { fault, after })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_load_shift_parses_and_bad_ones_say_why() {
+        let i = Injection::parse("load-shift:0.15,-0.05@11").expect("valid");
+        assert_eq!(i.fault, Fault::LoadShift(Vec2::new(0.15, -0.05)));
+        assert_eq!(i.after, 11.0);
+        assert_eq!(i.to_string(), "load-shift:0.15,-0.05@11");
+        for (bad, says) in [
+            ("load-shift:0.15,0", "KIND@SECONDS"),
+            ("load-shift:0.15@3", "DX,DY"),
+            ("load-shift:nan,0@3", "finite"),
+            ("load-shift:5,0@3", "beyond"),
+            ("load-shift:0.1,0@-1", "from 0"),
+            ("rotor-gone@3", "unknown fault"),
+        ] {
+            let err = Injection::parse(bad).expect_err(bad);
+            assert!(err.contains(says), "{bad}: {err}");
+        }
+    }
+}

@@ -1,0 +1,262 @@
+//! What `mission --output DIR` writes about the flight: the robots' rail positions, each
+//! rotor's thrust and the payload's roll and pitch over time, as one PNG of three panels
+//! (plotters) with the injected load shift and each in-flight re-formation marked, and the
+//! same samples as CSV (the adaptation issue: a load that shifts in flight).
+
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use crate::mission_run::{FlightSample, MissionOutcome};
+use crate::report::file_stem;
+
+fn draw_error<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow!("drawing failed: {e:?}")
+}
+
+/// A colour per robot (up to 16, then repeating).
+fn colour(j: usize) -> RGBColor {
+    const C: [RGBColor; 8] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+    ];
+    C[j % C.len()]
+}
+
+/// Writes `<name>-mission-flight.csv` and `.png` into `dir`; returns the paths written. The
+/// figure is skipped with a warning (the CSV stays) where it cannot be drawn (no font, or a
+/// mission that never flew).
+pub fn write(dir: &Path, name: &str, outcome: &MissionOutcome) -> Result<Vec<PathBuf>> {
+    fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let stem = format!("{}-mission-flight", file_stem(name));
+    let csv = dir.join(format!("{stem}.csv"));
+    write_csv(&csv, &outcome.series)?;
+    let mut written = vec![csv];
+    let png = dir.join(format!("{stem}.png"));
+    match draw(&png, name, outcome) {
+        Ok(()) => written.push(png),
+        Err(e) => crate::report::warn(&format!("figure skipped: {e:#}")),
+    }
+    Ok(written)
+}
+
+fn write_csv(path: &Path, series: &[FlightSample]) -> Result<()> {
+    let mut f =
+        fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
+    let n = series.first().map_or(0, |s| s.rail.len());
+    let mut header = String::from("t_s,height_m,roll_deg,pitch_deg");
+    for j in 0..n {
+        header.push_str(&format!(",rail_{j}_m"));
+    }
+    for j in 0..n {
+        header.push_str(&format!(",thrust_{j}_n"));
+    }
+    writeln!(f, "{header}")?;
+    for s in series {
+        let mut line = format!(
+            "{:.3},{:.4},{:.3},{:.3}",
+            s.t, s.height, s.roll_pitch_deg[0], s.roll_pitch_deg[1]
+        );
+        for v in s.rail.iter().chain(&s.thrust) {
+            line.push_str(&format!(",{v:.4}"));
+        }
+        writeln!(f, "{line}")?;
+    }
+    Ok(())
+}
+
+/// One curve: its label, colour and (time, value) points.
+type Curve = (String, RGBColor, Vec<(f32, f32)>);
+
+/// Vertical dashed marks: (time, label, colour).
+type Mark = (f32, String, RGBColor);
+
+fn marks(outcome: &MissionOutcome) -> Vec<Mark> {
+    let mut marks = Vec::new();
+    if let Some(t) = outcome.shift_at {
+        marks.push((t, "load shift".to_string(), RED));
+    }
+    for a in &outcome.adaptations {
+        marks.push((a.t, "shift measured".to_string(), RGBColor(255, 127, 14)));
+        if let Some(r) = a.rebalanced_at {
+            marks.push((r, "rebalanced".to_string(), RGBColor(44, 160, 44)));
+        }
+    }
+    marks
+}
+
+/// One panel: each series `(label, points)` against time, with the marks; the legend in a
+/// column of its own right of the plot, so it covers no curve.
+fn panel(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    title: &str,
+    y_desc: &str,
+    t: (f32, f32),
+    series: &[Curve],
+    marks: &[Mark],
+) -> Result<()> {
+    const LEGEND_WIDTH: u32 = 150;
+    let width = area.dim_in_pixel().0;
+    let (plot, legend) = area.split_horizontally(width.saturating_sub(LEGEND_WIDTH));
+    let (lo, hi) = series
+        .iter()
+        .flat_map(|(_, _, p)| p.iter().map(|&(_, v)| v))
+        .fold((f32::MAX, f32::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let (lo, hi) = if lo <= hi { (lo, hi) } else { (0.0, 1.0) };
+    let pad = ((hi - lo) * 0.08).max(0.05);
+    let mut chart = ChartBuilder::on(&plot)
+        .caption(title, ("sans-serif", 20))
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(55)
+        .build_cartesian_2d(t.0..t.1, (lo - pad)..(hi + pad))
+        .map_err(draw_error)?;
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .y_desc(y_desc)
+        .draw()
+        .map_err(draw_error)?;
+    for (time, _, c) in marks {
+        chart
+            .draw_series(DashedLineSeries::new(
+                [(*time, lo - pad), (*time, hi + pad)],
+                5,
+                4,
+                c.stroke_width(2),
+            ))
+            .map_err(draw_error)?;
+    }
+    for (_, c, points) in series {
+        chart
+            .draw_series(LineSeries::new(points.iter().copied(), c.stroke_width(2)))
+            .map_err(draw_error)?;
+    }
+    let entries = series
+        .iter()
+        .map(|(label, c, _)| (label.as_str(), *c, false))
+        .chain(marks.iter().map(|(_, label, c)| (label.as_str(), *c, true)));
+    for (k, (label, c, dashed)) in entries.enumerate() {
+        let y = 40 + 20 * k as i32;
+        let line = if dashed {
+            PathElement::new(vec![(4, y), (10, y), (14, y), (20, y)], c.stroke_width(2))
+        } else {
+            PathElement::new(vec![(4, y), (24, y)], c.stroke_width(3))
+        };
+        legend.draw(&line).map_err(draw_error)?;
+        if dashed {
+            // A gap in the middle marks the dashed ones.
+            legend
+                .draw(&PathElement::new(
+                    vec![(11, y), (13, y)],
+                    WHITE.stroke_width(3),
+                ))
+                .map_err(draw_error)?;
+        }
+        legend
+            .draw(&Text::new(
+                label.to_string(),
+                (30, y - 7),
+                ("sans-serif", 14).into_font(),
+            ))
+            .map_err(draw_error)?;
+    }
+    Ok(())
+}
+
+/// Mean of each value over a centred window of `half` samples each side: the rotors'
+/// commands carry the rate loop's answer to sensor noise, which hides their level.
+fn smoothed(points: &[(f32, f32)], half: usize) -> Vec<(f32, f32)> {
+    (0..points.len())
+        .map(|i| {
+            let lo = i.saturating_sub(half);
+            let hi = (i + half + 1).min(points.len());
+            let mean = points[lo..hi].iter().map(|p| p.1).sum::<f32>() / (hi - lo) as f32;
+            (points[i].0, mean)
+        })
+        .collect()
+}
+
+fn draw(path: &Path, name: &str, outcome: &MissionOutcome) -> Result<()> {
+    let s = &outcome.series;
+    let (Some(first), Some(last)) = (s.first(), s.last()) else {
+        return Err(anyhow!("the mission never flew: no flight to draw"));
+    };
+    let t = (first.t, last.t.max(first.t + 1.0));
+    let n = first.rail.len();
+    let root = BitMapBackend::new(path, (1100, 1200)).into_drawing_area();
+    root.fill(&WHITE).map_err(draw_error)?;
+    let (title, body) = root.split_vertically(40);
+    title
+        .titled(
+            &format!("{name}: the flight, load shift and re-formation"),
+            ("sans-serif", 24),
+        )
+        .map_err(draw_error)?;
+    let panels = body.split_evenly((3, 1));
+    let marks = marks(outcome);
+    let per_robot = |value: fn(&FlightSample, usize) -> f32, unit: &str| {
+        (0..n)
+            .map(|j| {
+                (
+                    format!("robot {j}{unit}"),
+                    colour(j),
+                    s.iter().map(|p| (p.t, value(p, j))).collect::<Vec<_>>(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    panel(
+        &panels[0],
+        "robots' rail positions",
+        "arc length (m)",
+        t,
+        &per_robot(|p, j| p.rail.get(j).copied().unwrap_or(0.0), ""),
+        &marks,
+    )?;
+    // 100 Hz samples: 12 each side is a quarter-second mean.
+    let thrusts: Vec<_> = per_robot(|p, j| p.thrust.get(j).copied().unwrap_or(0.0), "")
+        .into_iter()
+        .map(|(label, c, points)| (label, c, smoothed(&points, 12)))
+        .collect();
+    panel(
+        &panels[1],
+        "rotor thrusts (quarter-second means)",
+        "thrust (N)",
+        t,
+        &thrusts,
+        &marks,
+    )?;
+    let attitude = vec![
+        (
+            "roll".to_string(),
+            colour(0),
+            s.iter().map(|p| (p.t, p.roll_pitch_deg[0])).collect(),
+        ),
+        (
+            "pitch".to_string(),
+            colour(3),
+            s.iter().map(|p| (p.t, p.roll_pitch_deg[1])).collect(),
+        ),
+    ];
+    panel(
+        &panels[2],
+        "payload attitude",
+        "angle (deg)",
+        t,
+        &attitude,
+        &marks,
+    )?;
+    root.present().map_err(draw_error)?;
+    Ok(())
+}
