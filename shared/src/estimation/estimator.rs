@@ -66,6 +66,19 @@ impl core::fmt::Display for EstimationError {
 
 impl core::error::Error for EstimationError {}
 
+/// Whether the readings have put the payload outside the grid. Tagged explicitly with the
+/// inside case as tag 0 (an `Option<OutsideGrid>` would code `None` in a spare value of its
+/// payload): the unloaded estimator is then all zero bytes, and the flight controller's static
+/// of it costs no flash initialiser.
+#[repr(u8)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum GridVerdict {
+    /// Nothing says otherwise.
+    Inside,
+    /// Outside, and why.
+    Outside(OutsideGrid),
+}
+
 /// Why the estimator concluded that the payload lies outside its grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum OutsideGrid {
@@ -199,7 +212,7 @@ pub struct Estimator {
     measurements: u32,
     /// Readings that lifted (censored ones alone bound the payload, they never locate it).
     lifted: u32,
-    outside: Option<OutsideGrid>,
+    outside: GridVerdict,
     summary: Concentration,
     /// The posterior is piled up against an edge of the grid (see [`Self::status`]).
     piled_up: bool,
@@ -235,7 +248,7 @@ impl Estimator {
         guard: GuardBand::EMPTY,
         measurements: 0,
         lifted: 0,
-        outside: None,
+        outside: GridVerdict::Inside,
         summary: Concentration {
             map_indices: [0; 3],
             map: [0.0; 3],
@@ -304,7 +317,7 @@ impl Estimator {
         self.max_measurements = scenario.estimation.max_measurements;
         self.measurements = 0;
         self.lifted = 0;
-        self.outside = None;
+        self.outside = GridVerdict::Inside;
         self.summarise();
         Ok(())
     }
@@ -428,7 +441,7 @@ impl Estimator {
             self.lifted += 1;
         }
         if !self.likelihood.explains(measurement, update.ln_best) {
-            self.outside = Some(OutsideGrid::Unexplained {
+            self.outside = GridVerdict::Outside(OutsideGrid::Unexplained {
                 group,
                 reading: measurement,
             });
@@ -449,8 +462,11 @@ impl Estimator {
             let edge = if face.above { shape[face.axis] - 1 } else { 0 };
             self.piled_up |=
                 ln_ratio > PILED_UP_LN_RATIO && self.summary.map_indices[face.axis] == edge;
-            if ln_ratio > BEYOND_EDGE_LN_RATIO && self.measurements > 0 && self.outside.is_none() {
-                self.outside = Some(OutsideGrid::BeyondEdge {
+            if ln_ratio > BEYOND_EDGE_LN_RATIO
+                && self.measurements > 0
+                && self.outside == GridVerdict::Inside
+            {
+                self.outside = GridVerdict::Outside(OutsideGrid::BeyondEdge {
                     axis: face.axis,
                     above: face.above,
                 });
@@ -484,7 +500,7 @@ impl Estimator {
     /// ([`PILED_UP_LN_RATIO`]); not converged once
     /// `max_measurements` lifts were taken without it.
     pub fn status(&self) -> Status {
-        if let Some(why) = self.outside {
+        if let GridVerdict::Outside(why) = self.outside {
             Status::OutsideGrid(why)
         } else if self.lifted > 0 && !self.piled_up && self.summary.mass_near_map > self.threshold {
             Status::Converged

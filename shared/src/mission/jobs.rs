@@ -18,7 +18,9 @@ use crate::flight::FlightModel;
 use crate::formation::{FormationProblem, solve};
 use crate::geometry::{ConvexHull, Rail, Vec2};
 use crate::math;
+use crate::control::allocation::MixerKind;
 use crate::mission::config::MissionConfig;
+use crate::rail::stepper::MotionLimits;
 use crate::mission::phases::AbortReason;
 use crate::rail::moves::{Positions, RailMove, lift_targets};
 use crate::scenario::{
@@ -134,11 +136,43 @@ pub enum JobResult {
     Reformed(Result<(Positions, f32), AbortReason>),
 }
 
+/// What of the mission's configuration the job side uses.
+///
+/// Kept apart from [`MissionConfig`] so that the unloaded planner is all zero bytes: the
+/// flight controller's static of it (with the estimator's ~70 KB of buffers) then costs RAM
+/// only (`.bss`), not the same again in flash as an initialiser (`.data`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PlannerConfig {
+    rail_limits: MotionLimits,
+    max_hover_fraction: f32,
+    mixer: MixerKind,
+}
+
+impl PlannerConfig {
+    /// Nothing loaded: zeros (no move, no margin; `load` sets the real values first).
+    const UNLOADED: Self = Self {
+        rail_limits: MotionLimits {
+            max_speed: 0.0,
+            max_acceleration: 0.0,
+        },
+        max_hover_fraction: 0.0,
+        mixer: MixerKind::EqualSplit,
+    };
+
+    fn of(config: &MissionConfig) -> Self {
+        Self {
+            rail_limits: config.rail_limits,
+            max_hover_fraction: config.max_hover_fraction,
+            mixer: config.mixer,
+        }
+    }
+}
+
 /// The job side: the estimator (with its grid-sized buffers) and the decisions made on it.
 #[derive(Clone, Debug)]
 pub struct MissionPlanner {
     scenario: Scenario,
-    config: MissionConfig,
+    config: PlannerConfig,
     estimator: Estimator,
 }
 
@@ -184,14 +218,14 @@ impl MissionPlanner {
     /// it (with the estimator's grid-sized buffers) in a static; [`Self::load`] fills it.
     pub const UNLOADED: Self = Self {
         scenario: NO_SCENARIO,
-        config: MissionConfig::DEFAULT,
+        config: PlannerConfig::UNLOADED,
         estimator: Estimator::UNLOADED,
     };
 
     /// In place: the planner of `scenario`, as [`Self::new`] builds it.
     pub fn load(&mut self, scenario: &Scenario, config: MissionConfig) -> Result<(), AbortReason> {
         self.scenario.clone_from(scenario);
-        self.config = config;
+        self.config = PlannerConfig::of(&config);
         if let Some(sigma) = config.lift_noise_sigma {
             if !(sigma.is_finite() && sigma > 0.0) {
                 return Err(AbortReason::EstimationFailed(
