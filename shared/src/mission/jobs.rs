@@ -12,17 +12,17 @@
 
 use heapless::Vec;
 
+use crate::control::allocation::MixerKind;
 use crate::estimation::groups::lift_group;
 use crate::estimation::{Estimate, Estimator, Measurement};
 use crate::flight::FlightModel;
 use crate::formation::{FormationProblem, solve};
 use crate::geometry::{ConvexHull, Rail, Vec2};
 use crate::math;
-use crate::control::allocation::MixerKind;
 use crate::mission::config::MissionConfig;
-use crate::rail::stepper::MotionLimits;
 use crate::mission::phases::AbortReason;
 use crate::rail::moves::{Positions, RailMove, lift_targets};
+use crate::rail::stepper::MotionLimits;
 use crate::scenario::{
     EstimationSetup, FormationSetup, GRAVITY, MAX_ROBOTS, Payload, Robots, Scenario,
 };
