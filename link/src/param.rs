@@ -206,7 +206,7 @@ mod tests {
     fn list_and_reads_answer_with_consistent_indices() {
         let mut s = ParamService::default();
         assert_eq!(s.handle(&ParamRequest::List, true).values, Values::All);
-        for i in 0..COUNT {
+        for (i, spec) in TABLE.iter().enumerate() {
             let m = s.value_message(i).expect("in table");
             assert_eq!((m.param_index as usize, m.param_count as usize), (i, COUNT));
             let by_name = s.handle(&ParamRequest::ReadName(*m.param_id), true);
@@ -214,7 +214,7 @@ mod tests {
             let by_index = s.handle(&ParamRequest::ReadIndex(i as u16), true);
             assert_eq!(by_index.values, Values::One(i));
             assert_eq!(m.param_type, MavParamType::MAV_PARAM_TYPE_REAL32);
-            assert_eq!(m.param_value, TABLE[i].default_value());
+            assert_eq!(m.param_value, spec.default_value());
         }
         assert!(s.value_message(COUNT).is_none());
         let past = s.handle(&ParamRequest::ReadIndex(COUNT as u16), true);

@@ -311,14 +311,14 @@ mod tests {
         let loaded = block_on(store.load(&mut after));
         assert_eq!(loaded.error, None, "budget {budget}: {loaded:?}");
         assert_eq!(loaded.refused, 0);
-        for i in 0..COUNT {
+        for (i, spec) in TABLE.iter().enumerate() {
             let got = after.get(i);
             let old = saved.get(i);
             let ok = got == old || in_flight.is_some_and(|(j, v)| j == i && got == Some(v));
             assert!(
                 ok,
                 "budget {budget} partial {partial}: {} read {got:?}, saved {old:?}, in flight {in_flight:?}",
-                TABLE[i].name
+                spec.name
             );
         }
         // The store still works after the cut.
