@@ -278,7 +278,6 @@ mod tests {
         let missions = MISSION_REQUEST_LIST_DATA {
             target_system: 1,
             target_component: 1,
-            ..Default::default()
         };
         assert!(matches!(
             through_the_wire(&missions),
