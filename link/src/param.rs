@@ -167,10 +167,10 @@ impl ParamService {
                     }
                     Err(e) => {
                         answer.text = text(format_args!(
-                            "param {} = {value} refused: {e} {}, kept {}",
+                            "param {} = {value} refused ({e}); kept {} {}",
                             spec.name,
-                            spec.unit,
-                            old.unwrap_or(f32::NAN)
+                            old.unwrap_or(f32::NAN),
+                            spec.unit
                         ));
                     }
                 }
@@ -181,15 +181,20 @@ impl ParamService {
 
     /// The `PARAM_VALUE` of parameter `index` (`None` past the table).
     pub fn value_message(&self, index: usize) -> Option<PARAM_VALUE_DATA> {
-        let value = self.values.get(index)?;
-        Some(PARAM_VALUE_DATA {
-            param_value: value,
-            param_count: COUNT as u16,
-            param_index: index as u16,
-            param_id: TABLE[index].name.into(),
-            param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
-        })
+        value_message(&self.values, index)
     }
+}
+
+/// The `PARAM_VALUE` of parameter `index` of `values` (`None` past the table).
+pub fn value_message(values: &ParamValues, index: usize) -> Option<PARAM_VALUE_DATA> {
+    let value = values.get(index)?;
+    Some(PARAM_VALUE_DATA {
+        param_value: value,
+        param_count: COUNT as u16,
+        param_index: index as u16,
+        param_id: TABLE[index].name.into(),
+        param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
+    })
 }
 
 #[cfg(test)]

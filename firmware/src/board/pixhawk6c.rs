@@ -61,6 +61,11 @@ impl Board for Pixhawk6c {
     type LinkTx = BufferedUartTx<'static>;
     type Outputs = Outputs;
     type Irq = Interrupt;
+    // TODO(issue 14): the 32 KiB FRAM (SPI2, CS PD4); until its driver lands, parameters set
+    // on the board last until the next power cycle and the firmware says so at start.
+    type ParamFlash = super::ram_flash::RamFlash;
+    const PARAM_RANGE: core::ops::Range<u32> = 0..super::ram_flash::CAPACITY as u32;
+    const PARAM_FLASH_PERSISTENT: bool = false;
 
     fn cycle_count() -> u32 {
         cortex_m::peripheral::DWT::cycle_count()
@@ -153,6 +158,7 @@ pub fn init() -> (Parts<Pixhawk6c>, Leds) {
         link_rx,
         link_tx,
         outputs: Outputs,
+        param_flash: super::ram_flash::RamFlash::new(),
         irqs: ExecutorIrqs {
             control: Interrupt::SPDIF_RX,
             link: Interrupt::CEC,
