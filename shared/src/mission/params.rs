@@ -29,7 +29,9 @@ pub struct ParamSpec {
     pub max: f32,
     /// Only whole numbers are accepted (counts, choices).
     pub integer: bool,
-    /// What it does, one line.
+    /// What it does, one line (with the `docs` feature: the host's tables and README; the
+    /// firmware does without the text).
+    #[cfg(feature = "docs")]
     pub doc: &'static str,
     /// Reads it from a configuration.
     pub get: fn(&MissionConfig) -> f32,
@@ -63,6 +65,7 @@ macro_rules! param {
             min: $min,
             max: $max,
             integer: $int,
+            #[cfg(feature = "docs")]
             doc: $doc,
             get: |$c: &MissionConfig| $field,
             set: |$c: &mut MissionConfig, v: f32| $field = v,
@@ -82,6 +85,7 @@ pub static TABLE: [ParamSpec; COUNT] = [
         min: 0.0,
         max: 5.0,
         integer: false,
+        #[cfg(feature = "docs")]
         doc: "standard deviation of a lift reading (estimator noise model); 0: the scenario's noise_sigma",
         get: |c| c.lift_noise_sigma.unwrap_or(0.0),
         set: |c, v| c.lift_noise_sigma = (v > 0.0).then_some(v),
@@ -132,6 +136,7 @@ pub static TABLE: [ParamSpec; COUNT] = [
         min: 1.0,
         max: 5.0,
         integer: true,
+        #[cfg(feature = "docs")]
         doc: "consecutive lifts the stopping rule must hold for (1: the paper's rule)",
         get: |c| c.confirmations as f32,
         set: |c, v| c.confirmations = v as u32,
@@ -192,6 +197,7 @@ pub static TABLE: [ParamSpec; COUNT] = [
         min: 0.0,
         max: 1.0,
         integer: true,
+        #[cfg(feature = "docs")]
         doc: "flight mixer: 0 the paper's equal split, 1 full allocation",
         get: |c| match c.mixer {
             MixerKind::EqualSplit => 0.0,
@@ -718,6 +724,28 @@ impl ParamValues {
     }
 }
 
+/// The parameter table in Markdown (name, unit, range, default, what it does), as the README
+/// lists it.
+#[cfg(feature = "docs")]
+pub fn markdown_table(out: &mut impl core::fmt::Write) -> core::fmt::Result {
+    writeln!(out, "| index | name | unit | min | max | default | what |")?;
+    writeln!(out, "|---|---|---|---|---|---|---|")?;
+    for (i, p) in TABLE.iter().enumerate() {
+        let kind = if p.integer { " (whole)" } else { "" };
+        writeln!(
+            out,
+            "| {i} | `{}` | {} | {} | {} | {} | {}{kind} |",
+            p.name,
+            p.unit,
+            p.min,
+            p.max,
+            p.default_value(),
+            p.doc
+        )?;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -734,7 +762,9 @@ mod tests {
                 p.name
             );
             assert_eq!(find(p.name.as_bytes()), Some(i), "{} not unique", p.name);
-            assert!(!p.doc.is_empty() && !p.unit.is_empty());
+            assert!(!p.unit.is_empty());
+            #[cfg(feature = "docs")]
+            assert!(!p.doc.is_empty());
         }
     }
 
