@@ -22,7 +22,7 @@ fn control_step(c: &mut Criterion) {
             b.iter(|| {
                 now_us += 2500;
                 let dt = 0.0025;
-                if now_us % 10_000 == 0 {
+                if now_us.is_multiple_of(10_000) {
                     // Motion capture at 100 Hz keeps the position valid: hovering, not
                     // failing safe.
                     navigator.motion_capture(&MocapFix {
