@@ -313,3 +313,31 @@ fn a_delivered_flight_exits_zero() {
     assert_eq!(v["delivered"], true, "{stdout}");
     assert_eq!(code, Some(0), "{stderr}");
 }
+
+#[test]
+fn the_readme_lists_the_parameters_the_firmware_serves() {
+    let (code, table, stderr) = run(&["params"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let readme_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md");
+    let readme = std::fs::read_to_string(&readme_path).expect("README.md");
+    let listed = readme
+        .split_once("<!-- params:begin -->\n")
+        .and_then(|(_, rest)| rest.split_once("<!-- params:end -->"))
+        .map(|(block, _)| block)
+        .expect("README.md has the parameter list between its markers");
+    assert_eq!(
+        listed.trim(),
+        table.trim(),
+        "README.md's parameter list is out of date: put the output of \
+         `cargo run -p host-sim -- params` between its markers"
+    );
+    // The table's rows (after its two header lines) and the JSON's count agree.
+    let rows = table.lines().filter(|l| l.starts_with("| ")).count() - 1;
+    assert!(rows > 60, "{table}");
+    let (code, json, _) = run(&["params", "--json"]);
+    assert_eq!(code, Some(0));
+    assert!(
+        json.contains(&format!("\"count\":{rows},")),
+        "{rows} rows: {json}"
+    );
+}

@@ -42,6 +42,8 @@ pub enum Command {
     /// The mission with the firmware in the loop (PX4's HIL MAVLink messages, in lockstep):
     /// under QEMU, on a board over serial, or behind a TCP socket.
     Hil(commands::hil::HilArgs),
+    /// The vehicle's parameters (MAVLink parameter protocol): name, unit, range, default.
+    Params(commands::params::ParamsArgs),
 }
 
 /// Options every command takes.
@@ -131,6 +133,7 @@ where
         Command::Fly(args) => commands::fly::run(&args),
         Command::Mission(args) => commands::mission::run(&args),
         Command::Hil(args) => commands::hil::run(&args),
+        Command::Params(args) => commands::params::run(&args),
     }
     .map_err(CliError::Failed)
 }

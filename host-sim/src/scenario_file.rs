@@ -102,7 +102,7 @@ struct FlightToml {
 }
 
 /// `v` as `f32`; a finite value beyond `f32`'s range becomes `f32::MAX` with its sign (which
-/// `shared`'s range checks then report as "over 3.4028235e38"), never infinity.
+/// `shared`'s range checks then report as "over 3.40282e38"), never infinity.
 pub fn to_f32(v: f64) -> f32 {
     if v.is_finite() {
         v.clamp(-f64::from(f32::MAX), f64::from(f32::MAX)) as f32
@@ -337,7 +337,7 @@ mod tests {
         assert!(to_f32(f64::NAN).is_nan());
         let err = error_of(&PAPER.replace("torque_per_thrust = 0.016", "torque_per_thrust = 1e40"));
         assert!(err.contains("robots.torque_per_thrust"), "{err}");
-        assert!(err.contains("over 3.4028235e38"), "{err}");
+        assert!(err.contains("over 3.40282e38"), "{err}");
     }
 
     #[test]

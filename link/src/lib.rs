@@ -9,6 +9,8 @@
 //! - [`command`]: `COMMAND_LONG` to the operator's commands, and their `COMMAND_ACK`s.
 //! - [`ftp`]: MAVLink FTP: the vehicle's minimal server (one writable file, the payload
 //!   description) and the ground side's upload.
+//! - [`param`]: MAVLink's parameter protocol over the mission's parameter table.
+//! - [`store`]: the parameters' storage (`sequential-storage` on NOR flash), power-cut safe.
 //! - [`status`]: `STATUSTEXT` (long texts in chunks, and their reassembly) and named values.
 //! - [`vehicle`]: the vehicle's dispatch of received frames.
 //!
@@ -29,7 +31,9 @@ pub mod command;
 pub mod frame;
 pub mod ftp;
 pub mod hil;
+pub mod param;
 pub mod status;
+pub mod store;
 pub mod vehicle;
 
 /// The trait of every message type (its id, `CRC_EXTRA`, encoding).

@@ -11,8 +11,11 @@ use crate::hil::{HilError, ImuSample, MocapFix};
 use crate::msg::{
     ACTUATOR_OUTPUT_STATUS_DATA, ATT_POS_MOCAP_DATA, AUTOPILOT_VERSION_DATA, COMMAND_ACK_DATA,
     COMMAND_LONG_DATA, FILE_TRANSFER_PROTOCOL_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA,
-    HIL_SENSOR_DATA, MavCmd, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA, STATUSTEXT_DATA,
+    HIL_SENSOR_DATA, MISSION_COUNT_DATA, MISSION_REQUEST_LIST_DATA, MavCmd, NAMED_VALUE_FLOAT_DATA,
+    NAMED_VALUE_INT_DATA, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA,
+    PARAM_VALUE_DATA, STATUSTEXT_DATA,
 };
+use crate::param::ParamRequest;
 
 macro_rules! crc_extras {
     ($($m:ty),* $(,)?) => {
@@ -39,6 +42,12 @@ crc_extras!(
     ACTUATOR_OUTPUT_STATUS_DATA,
     FILE_TRANSFER_PROTOCOL_DATA,
     AUTOPILOT_VERSION_DATA,
+    PARAM_REQUEST_LIST_DATA,
+    PARAM_REQUEST_READ_DATA,
+    PARAM_SET_DATA,
+    PARAM_VALUE_DATA,
+    MISSION_REQUEST_LIST_DATA,
+    MISSION_COUNT_DATA,
 );
 
 /// Who sent a frame.
@@ -76,6 +85,16 @@ pub enum Inbound {
         /// Its sender.
         from: Sender,
     },
+    /// A parameter request addressed to the vehicle.
+    Param {
+        /// What it asks.
+        request: ParamRequest,
+        /// Its sender.
+        from: Sender,
+    },
+    /// `MISSION_REQUEST_LIST` addressed to the vehicle (it has no mission items: the answer
+    /// is `MISSION_COUNT` 0).
+    MissionList(Sender),
     /// A ground station's `HEARTBEAT`.
     Heartbeat(Sender),
     /// A HIL message that does not hold (the text says why).
@@ -140,6 +159,31 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
             }
             _ => ignored,
         },
+        PARAM_REQUEST_LIST_DATA::ID => match frame.decode::<PARAM_REQUEST_LIST_DATA>() {
+            Some(m) if for_us(m.target_system, m.target_component) => Inbound::Param {
+                request: ParamRequest::from_list(&m),
+                from,
+            },
+            _ => ignored,
+        },
+        PARAM_REQUEST_READ_DATA::ID => match frame.decode::<PARAM_REQUEST_READ_DATA>() {
+            Some(m) if for_us(m.target_system, m.target_component) => Inbound::Param {
+                request: ParamRequest::from_read(&m),
+                from,
+            },
+            _ => ignored,
+        },
+        PARAM_SET_DATA::ID => match frame.decode::<PARAM_SET_DATA>() {
+            Some(m) if for_us(m.target_system, m.target_component) => Inbound::Param {
+                request: ParamRequest::from_set(&m),
+                from,
+            },
+            _ => ignored,
+        },
+        MISSION_REQUEST_LIST_DATA::ID => match frame.decode::<MISSION_REQUEST_LIST_DATA>() {
+            Some(m) if for_us(m.target_system, m.target_component) => Inbound::MissionList(from),
+            _ => ignored,
+        },
         HEARTBEAT_DATA::ID => Inbound::Heartbeat(from),
         _ => ignored,
     }
@@ -188,6 +232,57 @@ mod tests {
         ));
         let ftp = FtpMessage::command(3, Opcode::ResetSessions).to_message(1, 1);
         assert!(matches!(through_the_wire(&ftp), Inbound::Ftp { message, .. } if message.seq == 3));
+        let list = PARAM_REQUEST_LIST_DATA {
+            target_system: 1,
+            target_component: 1,
+        };
+        assert!(matches!(
+            through_the_wire(&list),
+            Inbound::Param {
+                request: ParamRequest::List,
+                ..
+            }
+        ));
+        let read = PARAM_REQUEST_READ_DATA {
+            param_index: -1,
+            target_system: 1,
+            target_component: 0,
+            param_id: "MAX_TILT".into(),
+        };
+        let mut name = [0u8; 16];
+        name[..8].copy_from_slice(b"MAX_TILT");
+        assert_eq!(
+            through_the_wire(&read),
+            Inbound::Param {
+                request: ParamRequest::ReadName(name),
+                from: Sender {
+                    system: 255,
+                    component: 190
+                }
+            }
+        );
+        let set = PARAM_SET_DATA {
+            param_value: 0.25,
+            target_system: 1,
+            target_component: 1,
+            param_id: "MAX_TILT".into(),
+            param_type: crate::msg::MavParamType::MAV_PARAM_TYPE_REAL32,
+        };
+        assert!(matches!(
+            through_the_wire(&set),
+            Inbound::Param {
+                request: ParamRequest::Set { value, .. },
+                ..
+            } if value == 0.25
+        ));
+        let missions = MISSION_REQUEST_LIST_DATA {
+            target_system: 1,
+            target_component: 1,
+        };
+        assert!(matches!(
+            through_the_wire(&missions),
+            Inbound::MissionList(_)
+        ));
     }
 
     #[test]

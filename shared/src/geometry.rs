@@ -284,7 +284,7 @@ pub fn distance_to_segment(p: Vec2, a: Vec2, b: Vec2) -> f32 {
     let d = b - a;
     let length2 = d.dot(d);
     let t = if length2 > 0.0 {
-        ((p - a).dot(d) / length2).clamp(0.0, 1.0)
+        math::clamp((p - a).dot(d) / length2, 0.0, 1.0)
     } else {
         0.0
     };
@@ -381,7 +381,9 @@ impl ConvexHull {
         if sorted.len() < 3 {
             return None;
         }
-        sorted.sort_unstable_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+        math::sort_small_by(&mut sorted, |a, b| {
+            a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)).is_lt()
+        });
         // Lower hull then upper hull; each point pops the ones that would make a right turn.
         let mut hull: Vec<Vec2, { 2 * MAX_VERTICES }> = Vec::new();
         for pass in 0..2 {

@@ -22,6 +22,7 @@ pub mod geometry;
 pub mod liftoff;
 pub mod math;
 pub mod mission;
+pub mod numbers;
 pub mod paper;
 pub mod rail;
 pub mod scenario;

@@ -180,7 +180,7 @@ impl LiftoffDetector {
                 }
             }
             LiftState::Ramping | LiftState::HoldingMaximum => {
-                let cos = axis.normalized().dot(self.reference_axis).clamp(-1.0, 1.0);
+                let cos = math::clamp(axis.normalized().dot(self.reference_axis), -1.0, 1.0);
                 let tilt = crate::math::acos(cos);
                 self.clock += dt;
                 if self.history.is_full() {

@@ -71,16 +71,30 @@ pub fn cos(x: f32) -> f32 {
     libm::cosf(x)
 }
 
+/// `x` limited to `[lo, hi]` (NaN stays NaN). Unlike `f32::clamp` it never panics: a limit
+/// that came out NaN or inverted (`lo > hi`, then `lo` wins) must not stop a flight
+/// controller, and the panic's message would pull `core`'s float formatting into the image.
+#[inline]
+pub fn clamp(x: f32, lo: f32, hi: f32) -> f32 {
+    if x < lo {
+        lo
+    } else if x > hi {
+        hi
+    } else {
+        x
+    }
+}
+
 /// Arc sine (radians), argument clamped to `[-1, 1]`.
 #[inline]
 pub fn asin(x: f32) -> f32 {
-    libm::asinf(x.clamp(-1.0, 1.0))
+    libm::asinf(clamp(x, -1.0, 1.0))
 }
 
 /// Arc cosine (radians), argument clamped to `[-1, 1]`.
 #[inline]
 pub fn acos(x: f32) -> f32 {
-    libm::acosf(x.clamp(-1.0, 1.0))
+    libm::acosf(clamp(x, -1.0, 1.0))
 }
 
 /// Four-quadrant arc tangent of `y / x` (radians).
@@ -138,9 +152,46 @@ pub fn ln_sum_exp(terms: &[f32]) -> f32 {
     top + ln(sum)
 }
 
+/// Sorts a short slice by `less` (insertion sort, stable). The hull's points and a face's
+/// cuts are a few dozen values at most; `core`'s pattern-defeating quicksort would cost the
+/// firmware about 9 KB of flash for them.
+pub fn sort_small_by<T: Copy>(items: &mut [T], less: impl Fn(&T, &T) -> bool) {
+    for i in 1..items.len() {
+        let item = items[i];
+        let mut j = i;
+        while j > 0 && less(&item, &items[j - 1]) {
+            items[j] = items[j - 1];
+            j -= 1;
+        }
+        items[j] = item;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn clamp_limits_keeps_nan_and_survives_bad_limits() {
+        assert_eq!(clamp(2.0, -1.0, 1.0), 1.0);
+        assert_eq!(clamp(-3.0, -1.0, 1.0), -1.0);
+        assert_eq!(clamp(0.25, -1.0, 1.0), 0.25);
+        assert!(clamp(f32::NAN, -1.0, 1.0).is_nan());
+        assert_eq!(clamp(0.0, 1.0, -1.0), 1.0);
+        assert_eq!(clamp(0.5, f32::NAN, 1.0), 0.5);
+    }
+
+    #[test]
+    fn short_slices_sort_in_order_and_keep_equal_items_in_place() {
+        let mut v = [3.0_f32, -1.0, 2.5, -1.0, 0.0, 7.0, 2.5];
+        sort_small_by(&mut v, |a, b| a < b);
+        assert_eq!(v, [-1.0, -1.0, 0.0, 2.5, 2.5, 3.0, 7.0]);
+        let mut pairs = [(1, 'a'), (0, 'b'), (1, 'c'), (0, 'd')];
+        sort_small_by(&mut pairs, |a, b| a.0 < b.0);
+        assert_eq!(pairs, [(0, 'b'), (0, 'd'), (1, 'a'), (1, 'c')]);
+        let mut empty: [f32; 0] = [];
+        sort_small_by(&mut empty, |a, b| a < b);
+    }
 
     #[test]
     fn normal_tail_is_continuous_across_the_switch_and_exact_below_it() {

@@ -20,6 +20,7 @@ use crate::geometry::{
     ConvexHull, MAX_VERTICES, PolygonError, Rail, Vec2, check_simple_polygon, farthest_beyond,
     first_touching_edges, polygon_contains,
 };
+use crate::numbers::Num;
 
 /// Most robots on one rail.
 pub const MAX_ROBOTS: usize = 16;
@@ -415,20 +416,18 @@ pub enum Problem {
 }
 
 /// A number for a message: plain when ordinary, in exponent form when huge or tiny, and
-/// `f32::MAX` (what the host makes of a value beyond `f32`) as "over 3.4028235e38".
+/// `f32::MAX` (what the host makes of a value beyond `f32`) as "over 3.40282e38" (six
+/// significant digits, see [`Num`]).
 struct Number(f32);
 
 impl core::fmt::Display for Number {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         let v = self.0;
-        let magnitude = crate::math::abs(v);
-        if magnitude == f32::MAX {
+        if crate::math::abs(v) == f32::MAX {
             let beyond = if v > 0.0 { "over" } else { "under" };
-            write!(f, "{beyond} {v:e}")
-        } else if magnitude >= 1e6 || (magnitude < 1e-4 && v != 0.0) {
-            write!(f, "{v:e}")
+            write!(f, "{beyond} {}", Num(v))
         } else {
-            write!(f, "{v}")
+            write!(f, "{}", Num(v))
         }
     }
 }
@@ -438,9 +437,9 @@ impl core::fmt::Display for Problem {
         match *self {
             Self::Polygon(e) => write!(f, "polygon {e}"),
             Self::NotFinite => write!(f, "must be a finite number"),
-            Self::NotPositive(v) => write!(f, "must be greater than zero (got {v})"),
-            Self::Negative(v) => write!(f, "must not be negative (got {v})"),
-            Self::NotAFraction(v) => write!(f, "must lie in (0, 1] (got {v})"),
+            Self::NotPositive(v) => write!(f, "must be greater than zero (got {v})", v = Num(v)),
+            Self::Negative(v) => write!(f, "must not be negative (got {v})", v = Num(v)),
+            Self::NotAFraction(v) => write!(f, "must lie in (0, 1] (got {v})", v = Num(v)),
             Self::Length { expected, found } => {
                 write!(f, "needs {expected} entries (got {found})")
             }
@@ -452,7 +451,9 @@ impl core::fmt::Display for Problem {
                 perimeter,
             } => write!(
                 f,
-                "entry {index} = {arc_length} m is unreachable: the rail runs from 0 to {perimeter} m"
+                "entry {index} = {arc_length} m is unreachable: the rail runs from 0 to {perimeter} m",
+                arc_length = Num(arc_length),
+                perimeter = Num(perimeter)
             ),
             Self::NotIncreasing { index } => {
                 write!(f, "entry {index} does not increase along the rail")
@@ -466,7 +467,9 @@ impl core::fmt::Display for Problem {
                 min_spacing,
             } => write!(
                 f,
-                "robots {index} and the next are {gap} m apart, closer than min_spacing {min_spacing} m"
+                "robots {index} and the next are {gap} m apart, closer than min_spacing {min_spacing} m",
+                gap = Num(gap),
+                min_spacing = Num(min_spacing)
             ),
             Self::RailTooShort {
                 count,
@@ -474,7 +477,9 @@ impl core::fmt::Display for Problem {
                 perimeter,
             } => write!(
                 f,
-                "{count} robots at min_spacing need {needed} m of rail, the rail is {perimeter} m"
+                "{count} robots at min_spacing need {needed} m of rail, the rail is {perimeter} m",
+                needed = Num(needed),
+                perimeter = Num(perimeter)
             ),
             Self::FewerRobotsThanPair { count, pair_size } => {
                 write!(
@@ -484,18 +489,25 @@ impl core::fmt::Display for Problem {
             }
             Self::EmptyAxis { axis } => write!(f, "axis {axis} has grid_max below grid_min"),
             Self::NonPositiveMass { lowest } => {
-                write!(f, "mass axis must stay above zero (lowest {lowest} kg)")
+                write!(
+                    f,
+                    "mass axis must stay above zero (lowest {} kg)",
+                    Num(lowest)
+                )
             }
             Self::OutsideHull => write!(f, "lies outside the footprint's convex hull"),
             Self::CannotHoldOwnWeight { max_thrust, weight } => write!(
                 f,
-                "{max_thrust} N cannot hold the robot's own weight of {weight} N"
+                "{max_thrust} N cannot hold the robot's own weight of {weight} N",
+                max_thrust = Num(max_thrust),
+                weight = Num(weight)
             ),
             Self::TooLarge { value, max, unit } => {
                 write!(
                     f,
                     "must be at most {max} {unit} (got {} {unit})",
-                    Number(value)
+                    Number(value),
+                    max = Num(max)
                 )
             }
             Self::OutOfRange {
@@ -506,7 +518,9 @@ impl core::fmt::Display for Problem {
             } => write!(
                 f,
                 "must lie between {min} and {max} {unit} (got {} {unit})",
-                Number(value)
+                Number(value),
+                max = Num(max),
+                min = Num(min)
             ),
             Self::Coordinates { index, found } => write!(
                 f,
@@ -515,7 +529,8 @@ impl core::fmt::Display for Problem {
             Self::FarCoordinate { index, value } => write!(
                 f,
                 "point {index} has coordinate {} m, beyond the {MAX_COORDINATE} m a payload of this kind spans",
-                Number(value)
+                Number(value),
+                MAX_COORDINATE = Num(MAX_COORDINATE)
             ),
             Self::RailCrossesFootprint {
                 rail_edge,
@@ -533,7 +548,8 @@ impl core::fmt::Display for Problem {
                 "rail point ({}, {}) is {} m from the footprint, more than the {MAX_RAIL_CLEARANCE} m a rotor arm reaches",
                 Number(at.x),
                 Number(at.y),
-                Number(distance)
+                Number(distance),
+                MAX_RAIL_CLEARANCE = Num(MAX_RAIL_CLEARANCE)
             ),
             Self::GroupLargerThanCandidates {
                 pair_size,
@@ -547,7 +563,8 @@ impl core::fmt::Display for Problem {
                 min_spacing,
             } => write!(
                 f,
-                "no {pair_size} adjacent candidates can hold robots: they are closer than robots.min_spacing {min_spacing} m or leave no room for the other robots"
+                "no {pair_size} adjacent candidates can hold robots: they are closer than robots.min_spacing {min_spacing} m or leave no room for the other robots",
+                min_spacing = Num(min_spacing)
             ),
             Self::OneSpinDirection { sign } => write!(
                 f,
@@ -1376,7 +1393,7 @@ mod tests {
     fn numbers_in_messages_stay_readable() {
         assert_eq!(Number(0.2).to_string(), "0.2");
         assert_eq!(Number(1e20).to_string(), "1e20");
-        assert_eq!(Number(f32::MAX).to_string(), "over 3.4028235e38");
-        assert_eq!(Number(-f32::MAX).to_string(), "under -3.4028235e38");
+        assert_eq!(Number(f32::MAX).to_string(), "over 3.40282e38");
+        assert_eq!(Number(-f32::MAX).to_string(), "under -3.40282e38");
     }
 }

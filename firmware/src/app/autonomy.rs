@@ -53,8 +53,9 @@ pub struct TickInput<'a> {
     pub mocap: Option<MocapFix>,
     /// An operator command received since the last step.
     pub command: Option<OperatorCommand>,
-    /// A payload description received (and checked) since the last step.
-    pub payload: Option<&'a Scenario>,
+    /// A payload description received (and checked) since the last step, with the
+    /// configuration (from the parameters) the planner was loaded with.
+    pub payload: Option<(&'a Scenario, MissionConfig)>,
     /// The result of the job asked for `deadline_steps` ago, in exactly that step.
     pub job: Option<JobResult>,
 }
@@ -154,9 +155,6 @@ pub fn run_job(planner: &mut MissionPlanner, work: &shared::mission::JobRequest)
     planner.run(work)
 }
 
-/// The mission's tuning on this vehicle (parameters come with the ground link).
-pub const CONFIG: MissionConfig = MissionConfig::DEFAULT;
-
 /// What one control step commands and reports.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TickOutput {
@@ -232,9 +230,9 @@ impl Autonomy {
     /// One control step.
     pub fn tick(&mut self, input: &TickInput<'_>) -> TickOutput {
         let mut report = Report::default();
-        if let Some(scenario) = input.payload {
+        if let Some((scenario, config)) = input.payload {
             if self.mission.phase() == Phase::Idle || self.state().is_over() {
-                self.mission.load(scenario, CONFIG);
+                self.mission.load(scenario, config);
                 self.loaded = true;
             } else {
                 report.text(

@@ -1,5 +1,6 @@
 //! The MAVLink link's two tasks, on the link executor (issue 11, section 3): receiving
-//! (framing, dispatch to the services, the FTP server, the payload's checks) and sending (each
+//! (framing, dispatch to the services, the FTP server, the payload's checks, the parameter
+//! service and its store) and sending (each
 //! control step's messages in order, replies, heartbeat). The protocol logic is the `link`
 //! crate's, host-tested; this is the glue to the board's byte stream and the other tasks.
 //!
@@ -18,15 +19,23 @@ use link::command::{Request, ack};
 use link::frame::{Encoder, Frame, Parser};
 use link::ftp::{FileEvent, FtpMessage, Server};
 use link::hil::{Actuators, ImuSample};
-use link::msg::{AUTOPILOT_VERSION_DATA, MavCmd, MavProtocolCapability, MavResult, MavSeverity};
+use link::msg::{
+    AUTOPILOT_VERSION_DATA, MISSION_COUNT_DATA, MavCmd, MavProtocolCapability, MavResult,
+    MavSeverity,
+};
+use link::param::{ParamRequest, ParamService, Values, value_message};
 use link::status::{MissionState, Text, chunks, heartbeat, named_float, named_int};
+use link::store::ParamStore;
 use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
+use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, TABLE};
 use shared::scenario::Scenario;
 use shared::scenario_wire::{MAX_ENCODED_LEN, MAX_NAME_LEN, decode_and_check};
 use static_cell::StaticCell;
 
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
-use super::{ARMED, COMMANDS, IN_HIL, MISSION_STATE, MOCAP, OUTBOX, SENSOR, TO_LOAD};
+use super::{
+    ARMED, COMMANDS, IN_HIL, MISSION_CONFIG, MISSION_STATE, MOCAP, OUTBOX, RELOAD, SENSOR, TO_LOAD,
+};
 use crate::board::{Board, Selected};
 
 /// An IMU sample for the control task.
@@ -93,7 +102,22 @@ pub enum Outbound {
     },
     /// `AUTOPILOT_VERSION` and the board's name, on request.
     Identity,
+    /// `PARAM_VALUE`s of these values.
+    Params {
+        /// The values in force.
+        values: ParamValues,
+        /// Which to send.
+        which: Values,
+    },
+    /// `MISSION_COUNT` 0 (the vehicle plans its own mission: no items).
+    MissionCount {
+        /// To whom.
+        to: Sender,
+    },
 }
+
+/// The parameters' store on this board.
+type Store = ParamStore<<Selected as Board>::ParamFlash>;
 
 /// Largest payload description file the vehicle takes.
 const FILE_CAPACITY: usize = MAX_ENCODED_LEN;
@@ -106,11 +130,63 @@ fn report(severity: Severity, args: core::fmt::Arguments<'_>) -> Outbound {
     Outbound::Report(r)
 }
 
+/// Opens the parameters' store, reads the stored values and puts them in force; says what
+/// it found.
+async fn open_params(flash: <Selected as Board>::ParamFlash) -> (ParamService, Option<Store>) {
+    let mut values = ParamValues::DEFAULT;
+    let store = match ParamStore::new(flash, <Selected as Board>::PARAM_RANGE) {
+        Ok(mut store) => {
+            let loaded = store.load(&mut values).await;
+            let mut r = Report::default();
+            r.text(
+                Severity::Info,
+                format_args!(
+                    "params: {} of {PARAM_COUNT} restored from storage",
+                    loaded.restored
+                ),
+            );
+            if loaded.refused > 0 {
+                r.text(
+                    Severity::Warning,
+                    format_args!(
+                        "params: {} stored values out of today's ranges, defaults used",
+                        loaded.refused
+                    ),
+                );
+            }
+            if let Some(e) = loaded.error {
+                r.text(Severity::Error, format_args!("params: {e}"));
+            }
+            if !<Selected as Board>::PARAM_FLASH_PERSISTENT {
+                r.text(
+                    Severity::Warning,
+                    format_args!("params: kept in RAM on this board, lost at power-off"),
+                );
+            }
+            OUTBOX.send(Outbound::Report(r)).await;
+            Some(store)
+        }
+        Err(e) => {
+            OUTBOX
+                .send(report(Severity::Error, format_args!("params: {e}")))
+                .await;
+            None
+        }
+    };
+    let service = ParamService::new(values);
+    MISSION_CONFIG.lock(|c| c.set(service.values().config()));
+    (service, store)
+}
+
 /// Reads the link, forever: every frame to its service.
 #[embassy_executor::task]
-pub async fn receive(mut rx: <Selected as Board>::LinkRx) {
+pub async fn receive(
+    mut rx: <Selected as Board>::LinkRx,
+    param_flash: <Selected as Board>::ParamFlash,
+) {
     let mut parser = Parser::new(crc_extra);
     let ftp = FTP.init(Server::new());
+    let (mut params, mut store) = open_params(param_flash).await;
     let mut buf = [0u8; 64];
     loop {
         // A board's read error (a UART framing error) loses bytes the parser resyncs over.
@@ -120,12 +196,65 @@ pub async fn receive(mut rx: <Selected as Board>::LinkRx) {
                 continue;
             };
             let inbound = dispatch(frame, integrity);
-            handle(inbound, ftp).await;
+            handle(inbound, ftp, &mut params, &mut store).await;
         }
     }
 }
 
-async fn handle(inbound: Inbound, ftp: &mut Server<FILE_CAPACITY>) {
+/// Answers a parameter request, puts a changed value in force and stores it. The value is
+/// stored before its `PARAM_VALUE` goes out, so a ground station that saw the answer may cut
+/// the power.
+async fn handle_param(request: ParamRequest, params: &mut ParamService, store: &mut Option<Store>) {
+    let running = MISSION_STATE.load(Ordering::Relaxed) == MissionState::Running as u8;
+    let answer = params.handle(&request, !running);
+    if let Some((index, value)) = answer.changed {
+        let stored = match store {
+            Some(store) => store.save(index, value).await,
+            None => Err(link::store::StoreError::Other),
+        };
+        if let Err(e) = stored {
+            OUTBOX
+                .send(report(
+                    Severity::Error,
+                    format_args!("param {} in force but not stored: {e}", TABLE[index].name),
+                ))
+                .await;
+        }
+        // In force now for the loaded payload (the mission is not running) and the next.
+        MISSION_CONFIG.lock(|c| c.set(params.values().config()));
+        RELOAD.signal(());
+    }
+    if answer.values != Values::None {
+        OUTBOX
+            .send(Outbound::Params {
+                values: params.values().clone(),
+                which: answer.values,
+            })
+            .await;
+    }
+    if let Some(text) = &answer.text {
+        OUTBOX
+            .send(report(Severity::Warning, format_args!("{text}")))
+            .await;
+    }
+}
+
+async fn refuse(command: MavCmd, result: MavResult, why: &str) {
+    OUTBOX.send(Outbound::Ack { command, result }).await;
+    OUTBOX
+        .send(report(
+            Severity::Warning,
+            format_args!("command {} refused: {why}", command as u32),
+        ))
+        .await;
+}
+
+async fn handle(
+    inbound: Inbound,
+    ftp: &mut Server<FILE_CAPACITY>,
+    params: &mut ParamService,
+    store: &mut Option<Store>,
+) {
     match inbound {
         Inbound::Sensor(imu) => {
             if SENSOR.try_send(SensorSample { imu, hil: true }).is_err() {
@@ -161,12 +290,19 @@ async fn handle(inbound: Inbound, ftp: &mut Server<FILE_CAPACITY>) {
             }
             Request::Message(_) => {
                 let result = MavResult::MAV_RESULT_UNSUPPORTED;
-                OUTBOX.send(Outbound::Ack { command, result }).await;
+                refuse(command, result, "that message is not sent on request").await;
             }
             Request::Refused(result) => {
-                OUTBOX.send(Outbound::Ack { command, result }).await;
+                let why = if command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM {
+                    "the mission arms the rotors itself, at take-off"
+                } else {
+                    "not supported"
+                };
+                refuse(command, result, why).await;
             }
         },
+        Inbound::Param { request, .. } => handle_param(request, params, store).await,
+        Inbound::MissionList(to) => OUTBOX.send(Outbound::MissionCount { to }).await,
         Inbound::Ftp { message, from } => {
             let (answer, event) = ftp.handle(&message);
             OUTBOX
@@ -290,7 +426,8 @@ impl<W: Write> Sending<W> {
     async fn identity(&mut self) {
         let version = AUTOPILOT_VERSION_DATA {
             capabilities: MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MAVLINK2
-                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_FTP,
+                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_FTP
+                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE,
             flight_sw_version: 0x0001_0000,
             ..Default::default()
         };
@@ -355,6 +492,26 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
                 }
                 Outbound::Ack { command, result } => out.put(&ack(command, result)).await,
                 Outbound::Identity => out.identity().await,
+                Outbound::Params { values, which } => {
+                    let range = match which {
+                        Values::None => 0..0,
+                        Values::One(i) => i..i + 1,
+                        Values::All => 0..PARAM_COUNT,
+                    };
+                    for i in range {
+                        if let Some(m) = value_message(&values, i) {
+                            out.put(&m).await;
+                        }
+                    }
+                }
+                Outbound::MissionCount { to } => {
+                    let count = MISSION_COUNT_DATA {
+                        count: 0,
+                        target_system: to.system,
+                        target_component: to.component,
+                    };
+                    out.put(&count).await;
+                }
             },
             Either::Second(()) => {
                 out.heartbeat().await;

@@ -88,7 +88,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             imu: sample.reading(),
             mocap: MOCAP.try_take(),
             command: pending.map(|p| p.command),
-            payload: payload.as_ref(),
+            payload: payload.as_ref().map(|p| (&p.scenario, p.config)),
             job,
         };
         let mut out = autonomy.tick(&input);

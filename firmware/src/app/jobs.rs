@@ -6,28 +6,42 @@
 //! buffers, built in place in a static. A payload description that passed the link's checks
 //! comes here first: the planner is loaded with it (a grid-sized reset, never in a tick),
 //! and only then does the description go to the control task and the ground hear that it was
-//! accepted (or, should the estimator refuse it, why not).
+//! accepted (or, should the estimator refuse it, why not). Both are loaded with the
+//! configuration the parameters make at that moment (`super::MISSION_CONFIG`); when a
+//! parameter changes while the mission is not running, the last description is loaded again
+//! with the new configuration, so what the ground set is what the next mission flies.
 
-use embassy_futures::select::{Either, select};
+use core::sync::atomic::Ordering;
+
+use embassy_futures::select::{Either3, select3};
+use link::status::MissionState;
 use shared::mission::MissionPlanner;
-use static_cell::ConstStaticCell;
+use static_cell::{ConstStaticCell, StaticCell};
 
-use super::autonomy::{CONFIG, Report, Severity, run_job};
-use super::comms::Outbound;
-use super::{JOB_REQUESTS, JOB_RESULTS, OUTBOX, PAYLOAD, TO_LOAD};
+use super::autonomy::{Report, Severity, run_job};
+use super::comms::{Outbound, Received};
+use super::{
+    JOB_REQUESTS, JOB_RESULTS, LoadedPayload, MISSION_CONFIG, MISSION_STATE, OUTBOX, PAYLOAD,
+    RELOAD, TO_LOAD,
+};
 
 static PLANNER: ConstStaticCell<MissionPlanner> = ConstStaticCell::new(MissionPlanner::UNLOADED);
+/// The last payload description accepted, for loading again when the parameters change.
+static LAST: StaticCell<Option<Received>> = StaticCell::new();
 
 /// Runs each job asked for by the control task and hands its result back, numbered as asked;
 /// loads each payload description received.
 #[embassy_executor::task]
 pub async fn jobs() {
     let planner = PLANNER.take();
+    let last = LAST.init(None);
     loop {
-        match select(TO_LOAD.receive(), JOB_REQUESTS.receive()).await {
-            Either::First(received) => {
+        match select3(TO_LOAD.receive(), JOB_REQUESTS.receive(), RELOAD.wait()).await {
+            Either3::First(received) => {
                 let mut report = Report::default();
-                match planner.load(&received.scenario, CONFIG) {
+                // The parameters in force now; the mission gets the same with the description.
+                let config = MISSION_CONFIG.lock(|c| c.get());
+                match planner.load(&received.scenario, config) {
                     Ok(()) => {
                         let grid = &received.scenario.estimation;
                         report.text(
@@ -42,7 +56,11 @@ pub async fn jobs() {
                                 grid.axis_len(2)
                             ),
                         );
-                        PAYLOAD.signal(received.scenario);
+                        PAYLOAD.signal(LoadedPayload {
+                            scenario: received.scenario.clone(),
+                            config,
+                        });
+                        *last = Some(received);
                     }
                     Err(why) => {
                         report.text(Severity::Error, format_args!("payload refused: {why}"));
@@ -50,7 +68,32 @@ pub async fn jobs() {
                 }
                 OUTBOX.send(Outbound::Report(report)).await;
             }
-            Either::Second((id, request)) => {
+            Either3::Third(()) => {
+                // New parameters: the payload loaded again with them, unless the mission runs
+                // (the link refuses changes then; this guards the moment of a start).
+                let running = MISSION_STATE.load(Ordering::Relaxed) == MissionState::Running as u8;
+                if let (Some(received), false) = (last.as_ref(), running) {
+                    let config = MISSION_CONFIG.lock(|c| c.get());
+                    let mut report = Report::default();
+                    match planner.load(&received.scenario, config) {
+                        Ok(()) => {
+                            report.text(
+                                Severity::Info,
+                                format_args!("params applied to payload {}", received.name),
+                            );
+                            PAYLOAD.signal(LoadedPayload {
+                                scenario: received.scenario.clone(),
+                                config,
+                            });
+                        }
+                        Err(why) => {
+                            report.text(Severity::Error, format_args!("params not applied: {why}"));
+                        }
+                    }
+                    OUTBOX.send(Outbound::Report(report)).await;
+                }
+            }
+            Either3::Second((id, request)) => {
                 let result = run_job(planner, &request.work);
                 JOB_RESULTS.send((id, result)).await;
             }

@@ -17,10 +17,14 @@ pub mod jobs;
 
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
+use core::cell::Cell;
 use embassy_executor::{InterruptExecutor, Spawner, raw};
+
+use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
+use shared::mission::MissionConfig;
 use shared::scenario::Scenario;
 use static_cell::{ConstStaticCell, StaticCell};
 
@@ -41,8 +45,25 @@ pub static MOCAP: Signal<Cs, link::hil::MocapFix> = Signal::new();
 pub static COMMANDS: Channel<Cs, comms::PendingCommand, 4> = Channel::new();
 /// A payload description received and checked, for the job task to load the planner with.
 pub static TO_LOAD: Channel<Cs, comms::Received, 1> = Channel::new();
-/// A payload description loaded into the planner, for the autonomy.
-pub static PAYLOAD: Signal<Cs, Scenario> = Signal::new();
+/// A payload description loaded into the planner, for the autonomy, with the configuration
+/// the planner was loaded with (the mission takes the same).
+pub static PAYLOAD: Signal<Cs, LoadedPayload> = Signal::new();
+/// The mission configuration the parameters make now (set by the link task from the stored
+/// parameters and each accepted `PARAM_SET`; taken when a payload description is loaded).
+pub static MISSION_CONFIG: Mutex<Cs, Cell<MissionConfig>> =
+    Mutex::new(Cell::new(MissionConfig::DEFAULT));
+
+/// A parameter changed: the job task loads the last payload description again with the new
+/// configuration (when the mission is not running).
+pub static RELOAD: Signal<Cs, ()> = Signal::new();
+
+/// A payload description loaded into the planner, and the configuration it was loaded with.
+pub struct LoadedPayload {
+    /// The description.
+    pub scenario: Scenario,
+    /// The configuration.
+    pub config: MissionConfig,
+}
 /// A job for the thread-mode task, numbered by the control task.
 pub static JOB_REQUESTS: Channel<Cs, (u32, autonomy::JobRequest), 1> = Channel::new();
 /// Results of jobs, with their numbers.
@@ -76,6 +97,7 @@ pub fn run(parts: Parts<Selected>, board_tasks: impl FnOnce(Spawner)) -> ! {
         link_rx,
         link_tx,
         outputs,
+        param_flash,
         irqs,
     } = parts;
 
@@ -87,7 +109,7 @@ pub fn run(parts: Parts<Selected>, board_tasks: impl FnOnce(Spawner)) -> ! {
     }
 
     let comms_spawner = LINK_EXECUTOR.start(irqs.link);
-    match comms::receive(link_rx) {
+    match comms::receive(link_rx, param_flash) {
         Ok(token) => comms_spawner.spawn(token),
         Err(_) => panic!("link receive task not spawned"),
     }

@@ -8,7 +8,7 @@
 //!
 //! A board brings up its clocks and pins, gives the application its MAVLink link as an
 //! `embedded-io-async` byte stream, its actuator outputs, a cycle counter for the tick's cost,
-//! and three spare interrupts for the executors (control, link, thread-mode wake-up) with their
+//! a flash for the parameters, and three spare interrupts for the executors (control, link, thread-mode wake-up) with their
 //! priorities set. Everything else is the application's ([`crate::app`]).
 
 use cortex_m::interrupt::InterruptNumber;
@@ -25,6 +25,8 @@ pub mod pixhawk6c;
 #[cfg(feature = "pixhawk6c")]
 pub use pixhawk6c::Pixhawk6c as Selected;
 
+#[cfg(feature = "pixhawk6c")]
+pub mod fram;
 #[cfg(feature = "qemu")]
 pub mod qemu;
 #[cfg(feature = "qemu")]
@@ -47,6 +49,13 @@ pub trait Board: 'static {
     type Outputs: ActuatorOutputs + Send + 'static;
     /// An interrupt line.
     type Irq: InterruptNumber;
+    /// The NOR flash (or flash-like memory) the parameters are stored on.
+    type ParamFlash: embedded_storage_async::nor_flash::NorFlash + Send + 'static;
+    /// The part of [`Board::ParamFlash`] the parameters use: whole erase pages, at least two.
+    const PARAM_RANGE: core::ops::Range<u32>;
+    /// Whether [`Board::ParamFlash`] keeps its contents over a power cycle (reported to the
+    /// ground at start).
+    const PARAM_FLASH_PERSISTENT: bool;
 
     /// A free-running counter (wrapping) for measuring the control tick.
     fn cycle_count() -> u32;
@@ -79,6 +88,27 @@ pub struct Parts<B: Board> {
     pub link_tx: B::LinkTx,
     /// The actuator outputs.
     pub outputs: B::Outputs,
+    /// The parameters' flash.
+    pub param_flash: B::ParamFlash,
     /// The executors' interrupts.
     pub irqs: ExecutorIrqs<B::Irq>,
+}
+
+/// Checks a flash access of `len` bytes at `offset` against a flash of `capacity` bytes whose
+/// accesses align to `align` (as `embedded-storage`'s checks do for its blocking traits).
+pub fn check_flash_access(
+    offset: u32,
+    len: usize,
+    align: usize,
+    capacity: usize,
+) -> Result<(), embedded_storage_async::nor_flash::NorFlashErrorKind> {
+    use embedded_storage_async::nor_flash::NorFlashErrorKind;
+    let offset = offset as usize;
+    if !offset.is_multiple_of(align) || !len.is_multiple_of(align) {
+        return Err(NorFlashErrorKind::NotAligned);
+    }
+    if offset.checked_add(len).is_none_or(|end| end > capacity) {
+        return Err(NorFlashErrorKind::OutOfBounds);
+    }
+    Ok(())
 }

@@ -12,6 +12,8 @@
 //! - TELEM1 is UART7 (TX PE8, RX PE7): the MAVLink link for now, at [`LINK_BAUD`] (a HIL
 //!   bench uses a USB-serial adapter on TELEM1). The HIL link over the board's USB (CDC-ACM)
 //!   comes with the USB driver in a later issue.
+//! - Parameters: the 32 KiB FRAM on SPI2 (SCK PD3, MISO PC2, MOSI PC3, chip select PD4;
+//!   `board.h` "SPI2 is FRAM", `spi.cpp` `SPIDEV_FLASH(0)`), see [`super::fram`] (polled).
 //! - Executors on interrupt lines the board does not use: SPDIF_RX (control), CEC (link),
 //!   JPEG (thread-mode wake-up).
 //!
@@ -27,6 +29,7 @@ use embassy_stm32::rcc::{
     AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllDiv, PllMul, PllPreDiv, PllSource, Sysclk,
     VoltageScale,
 };
+use embassy_stm32::spi::{self, Spi};
 use embassy_stm32::time::Hertz;
 use embassy_stm32::usart::{self, BufferedUart, BufferedUartRx, BufferedUartTx};
 use embassy_stm32::{Config, bind_interrupts, interrupt, peripherals};
@@ -61,6 +64,11 @@ impl Board for Pixhawk6c {
     type LinkTx = BufferedUartTx<'static>;
     type Outputs = Outputs;
     type Irq = Interrupt;
+    type ParamFlash = super::fram::Fram;
+    /// The first 8 KiB of the FRAM: eight pages, room for every parameter many times over
+    /// (the rest stays free for the payload description).
+    const PARAM_RANGE: core::ops::Range<u32> = 0..(8 * super::fram::PAGE) as u32;
+    const PARAM_FLASH_PERSISTENT: bool = true;
 
     fn cycle_count() -> u32 {
         cortex_m::peripheral::DWT::cycle_count()
@@ -107,6 +115,9 @@ bind_interrupts!(struct LinkIrqs {
     UART7 => usart::BufferedInterruptHandler<peripherals::UART7>;
 });
 
+/// SPI clock of the FRAM: 10 MHz, well inside the part's 40 MHz.
+const FRAM_SPI_HZ: u32 = 10_000_000;
+
 static LINK_TX_BUFFER: StaticCell<[u8; 2048]> = StaticCell::new();
 static LINK_RX_BUFFER: StaticCell<[u8; 1024]> = StaticCell::new();
 
@@ -144,6 +155,11 @@ pub fn init() -> (Parts<Pixhawk6c>, Leds) {
     };
     let (link_tx, link_rx) = uart.split();
 
+    let mut spi_config = spi::Config::default();
+    spi_config.frequency = Hertz(FRAM_SPI_HZ);
+    let fram_spi = Spi::new_blocking(p.SPI2, p.PD3, p.PC3, p.PC2, spi_config);
+    let fram = super::fram::Fram::new(fram_spi, Output::new(p.PD4, Level::High, Speed::High));
+
     interrupt::SPDIF_RX.set_priority(Priority::P2);
     interrupt::CEC.set_priority(Priority::P3);
     interrupt::JPEG.set_priority(Priority::P15);
@@ -153,6 +169,7 @@ pub fn init() -> (Parts<Pixhawk6c>, Leds) {
         link_rx,
         link_tx,
         outputs: Outputs,
+        param_flash: fram,
         irqs: ExecutorIrqs {
             control: Interrupt::SPDIF_RX,
             link: Interrupt::CEC,

@@ -39,6 +39,11 @@ pub struct HilArgs {
     /// target/thumbv7em-none-eabihf/release/firmware-qemu.
     #[arg(long, value_name = "ELF")]
     pub qemu: Option<PathBuf>,
+    /// With --qemu: keep the firmware's parameter flash in this directory (file
+    /// firmware-params.bin), so parameters set in one run are there in the next. Without it
+    /// every run starts from the defaults.
+    #[arg(long, value_name = "DIR", requires = "qemu")]
+    pub storage: Option<PathBuf>,
     /// The firmware on a board (or QEMU's -serial pty) over this serial device.
     #[arg(long, value_name = "DEV")]
     pub serial: Option<String>,
@@ -69,6 +74,10 @@ pub struct HilArgs {
     /// The rotors' command-to-thrust map over-reads by this factor.
     #[arg(long, value_name = "S", default_value_t = 1.0)]
     pub map_error: f64,
+    /// Leave the mission start to the ground station (--gcs): upload the payload, then step
+    /// the idle vehicle until it starts (parameters may be changed meanwhile).
+    #[arg(long, requires = "gcs")]
+    pub ground_start: bool,
     /// Failure injection: motion capture stops this many seconds after take-off.
     #[arg(long, value_name = "S")]
     pub mocap_lost_after: Option<f64>,
@@ -112,6 +121,7 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
         gcs: args.gcs,
         map_error,
         mocap_lost_after_takeoff: mocap_lost_after,
+        ground_start: args.ground_start,
     };
     let json = args.json;
     let on_text: Box<dyn FnMut(&LoggedText) + Send> = Box::new(move |t: &LoggedText| {
@@ -122,7 +132,7 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
         }
     });
     let (_qemu, link) = if let Some(elf) = &args.qemu {
-        let (qemu, stream) = Qemu::launch(elf)?;
+        let (qemu, stream) = Qemu::launch_with_storage(elf, args.storage.as_deref())?;
         (Some(qemu), Link::over_tcp(stream)?)
     } else if let Some(path) = &args.serial {
         let endpoint = Endpoint::Serial {

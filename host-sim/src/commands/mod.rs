@@ -6,4 +6,5 @@ pub mod formation;
 pub mod hil;
 pub mod lift;
 pub mod mission;
+pub mod params;
 pub mod validate;

@@ -2,7 +2,8 @@
 //! (issue 11, section 3): its UART bridged to a local TCP socket this process listens on (or
 //! to a pseudo-terminal, as a serial device would be), `-icount shift=0` so one instruction is
 //! one virtual nanosecond (the firmware measures its control step in instructions), and
-//! semihosting so a panic prints and stops QEMU.
+//! semihosting so a panic prints and stops QEMU and the firmware keeps its parameter flash in
+//! a host file ([`PARAM_FLASH_FILE`], in QEMU's working directory).
 //!
 //! The QEMU process never outlives this one: it is killed when [`Qemu`] is dropped, and on
 //! Linux also when this process dies (parent-death signal).
@@ -26,6 +27,29 @@ const START_TIMEOUT: Duration = Duration::from_secs(20);
 pub struct Qemu {
     child: Child,
     output: Arc<Mutex<String>>,
+    /// QEMU's working directory when it is this run's own (removed at the end).
+    scratch: Option<PathBuf>,
+}
+
+/// Name of the firmware's parameter flash in QEMU's working directory (semihosting file I/O;
+/// `firmware/src/board/qemu/flash.rs`).
+pub const PARAM_FLASH_FILE: &str = "firmware-params.bin";
+
+/// Where QEMU runs: the firmware's semihosting files (its parameter flash) live there.
+fn working_dir(storage: Option<&Path>) -> Result<(PathBuf, bool)> {
+    if let Some(dir) = storage {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the storage directory {}", dir.display()))?;
+        return Ok((dir.to_path_buf(), false));
+    }
+    static RUNS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let n = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("host-sim-qemu-{}-{n}", std::process::id()));
+    // A directory left by an earlier process of the same id holds nothing of this run's.
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("cannot create QEMU's directory {}", dir.display()))?;
+    Ok((dir, true))
 }
 
 /// How the firmware's UART is brought out.
@@ -47,12 +71,19 @@ pub fn available() -> bool {
 }
 
 impl Qemu {
-    /// Starts the firmware `elf` with its UART connected to a TCP socket; returns QEMU and the
-    /// socket.
+    /// Starts the firmware `elf` with its UART connected to a TCP socket and an empty
+    /// parameter flash; returns QEMU and the socket.
     pub fn launch(elf: &Path) -> Result<(Self, TcpStream)> {
+        Self::launch_with_storage(elf, None)
+    }
+
+    /// As [`Self::launch`], with the firmware's parameter flash kept in `storage` (a
+    /// directory; the file [`PARAM_FLASH_FILE`] there outlives QEMU) or, for `None`, in a
+    /// directory of this run's own, removed at the end.
+    pub fn launch_with_storage(elf: &Path, storage: Option<&Path>) -> Result<(Self, TcpStream)> {
         let listener = TcpListener::bind("127.0.0.1:0").context("cannot listen for QEMU's UART")?;
         let port = listener.local_addr()?.port();
-        let mut qemu = Self::spawn(elf, Serial::Tcp(port))?;
+        let mut qemu = Self::spawn(elf, Serial::Tcp(port), storage)?;
         listener.set_nonblocking(true)?;
         let start = Instant::now();
         loop {
@@ -79,7 +110,7 @@ impl Qemu {
     /// Starts the firmware `elf` with its UART on a pseudo-terminal; returns QEMU and the
     /// terminal's path (a serial device for `--serial`).
     pub fn launch_pty(elf: &Path) -> Result<(Self, PathBuf)> {
-        let mut qemu = Self::spawn(elf, Serial::Pty)?;
+        let mut qemu = Self::spawn(elf, Serial::Pty, None)?;
         let start = Instant::now();
         loop {
             let found = {
@@ -110,19 +141,25 @@ impl Qemu {
         }
     }
 
-    fn spawn(elf: &Path, serial: Serial) -> Result<Self> {
+    fn spawn(elf: &Path, serial: Serial, storage: Option<&Path>) -> Result<Self> {
         if !elf.is_file() {
             bail!(
                 "firmware image {} not found (build it with `cargo fw-qemu`)",
                 elf.display()
             );
         }
+        // QEMU runs in its working directory, so the image's path must not be relative.
+        let elf = elf
+            .canonicalize()
+            .with_context(|| format!("cannot resolve {}", elf.display()))?;
+        let (dir, scratch) = working_dir(storage)?;
         let mut cmd = Command::new(QEMU);
+        cmd.current_dir(&dir);
         cmd.args(["-M", "mps2-an500", "-nographic", "-monitor", "none"])
             .args(["-icount", "shift=0"])
             .args(["-semihosting-config", "enable=on,target=native"])
             .arg("-kernel")
-            .arg(elf);
+            .arg(&elf);
         match serial {
             Serial::Tcp(port) => {
                 cmd.args([
@@ -178,7 +215,11 @@ impl Qemu {
                 }
             });
         }
-        Ok(Self { child, output })
+        Ok(Self {
+            child,
+            output,
+            scratch: scratch.then_some(dir),
+        })
     }
 
     /// The QEMU process id (tests stop and resume it to simulate a stalled firmware).
@@ -216,5 +257,8 @@ impl Drop for Qemu {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+        if let Some(dir) = &self.scratch {
+            let _ = std::fs::remove_dir_all(dir);
+        }
     }
 }

@@ -46,6 +46,9 @@ pub struct HilSetup {
     pub map_error: f32,
     /// Failure injection: motion capture stops this long after take-off began, s.
     pub mocap_lost_after_takeoff: Option<f32>,
+    /// The ground station (through `gcs`) starts the mission, not the plant: the plant
+    /// uploads the payload and steps the idle vehicle until the firmware reports it running.
+    pub ground_start: bool,
 }
 
 impl Default for HilSetup {
@@ -57,6 +60,7 @@ impl Default for HilSetup {
             reply_timeout: Duration::from_secs(10),
             gcs: None,
             map_error: 1.0,
+            ground_start: false,
             mocap_lost_after_takeoff: None,
         }
     }
@@ -122,12 +126,16 @@ struct Firmware {
     texts_seen: usize,
     values_seen: usize,
     was_running: bool,
+    ground_start: bool,
 }
 
 impl Autopilot for Firmware {
     fn step(&mut self, sensed: &Sensed) -> Result<Commanded> {
         if let Some(command) = sensed.command {
-            self.session.send_command(command_to_link(command))?;
+            // With the ground station starting the mission, the plant's own start is not sent.
+            if !(self.ground_start && command == OperatorCommand::Start) {
+                self.session.send_command(command_to_link(command))?;
+            }
         }
         let fixes: Vec<MocapFix> = sensed
             .mocap
@@ -147,7 +155,7 @@ impl Autopilot for Firmware {
         let reply = self
             .session
             .step(&sample, &fixes, self.robots, self.reply_timeout)?;
-        if self.session.steps() == 1 {
+        if self.session.steps() == 1 && !self.ground_start {
             match self.session.log().ack_of(MavCmd::MAV_CMD_MISSION_START) {
                 Some(MavResult::MAV_RESULT_ACCEPTED) => {}
                 Some(result) => {
@@ -251,6 +259,7 @@ pub fn run(
         texts_seen: 0,
         values_seen: 0,
         was_running: false,
+        ground_start: setup.ground_start,
     };
     autopilot.texts_seen = autopilot.session.log().texts.len();
     autopilot.values_seen = autopilot.session.log().values.len();

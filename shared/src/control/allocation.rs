@@ -267,7 +267,7 @@ impl Mixer {
         let mut thrusts = [0.0f32; MAX_ROBOTS];
         match room {
             Some((lo, hi)) => {
-                let shift = 0.0f32.clamp(lo, hi);
+                let shift = math::clamp(0.0f32, lo, hi);
                 saturation.collective = shift != 0.0;
                 for i in 0..n {
                     thrusts[i] = base[i] + shift * collective[i];
@@ -275,7 +275,7 @@ impl Mixer {
                 // Yaw last: as much of it as the room left allows.
                 let fit = self
                     .room(&thrusts, &yaw_part)
-                    .map_or(0.0, |(_, hi)| hi.clamp(0.0, 1.0));
+                    .map_or(0.0, |(_, hi)| math::clamp(hi, 0.0, 1.0));
                 saturation.yaw = fit < 1.0 && yaw_part[..n].iter().any(|v| v.abs() > 1e-9);
                 for i in 0..n {
                     thrusts[i] += fit * yaw_part[i];
@@ -292,7 +292,7 @@ impl Mixer {
             }
         }
         for t in thrusts.iter_mut().take(n) {
-            *t = t.clamp(0.0, self.max_thrust);
+            *t = math::clamp(*t, 0.0, self.max_thrust);
         }
         Allocation {
             thrusts,

@@ -127,7 +127,7 @@ impl FlightController {
         velocity_sp = Vec3::new(
             horizontal.x,
             horizontal.y,
-            velocity_sp.z.clamp(-p.max_speed_z, p.max_speed_z),
+            math::clamp(velocity_sp.z, -p.max_speed_z, p.max_speed_z),
         );
 
         // Velocity -> acceleration (NED), gravity compensated below.
@@ -165,7 +165,7 @@ impl FlightController {
         let q = inputs.attitude.attitude;
         let up_now = -q.rotate(Vec3::DOWN);
         let max_collective = p.max_collective_fraction * self.model.max_total_thrust;
-        let thrust = force.dot(up_now).clamp(0.0, max_collective);
+        let thrust = math::clamp(force.dot(up_now), 0.0, max_collective);
 
         let rate_sp = self.attitude_rate_setpoint(q, attitude_sp);
 
@@ -208,7 +208,7 @@ impl FlightController {
             };
         }
         let share = if p.attitude_p.x > 0.0 {
-            (p.attitude_p.z / p.attitude_p.x).clamp(0.0, 1.0)
+            math::clamp(p.attitude_p.z / p.attitude_p.x, 0.0, 1.0)
         } else {
             0.0
         };

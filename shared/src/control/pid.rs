@@ -57,13 +57,19 @@ impl Pid {
                 self.derivative += alpha * (raw - self.derivative);
             }
             if integrate {
-                self.integral = (self.integral + self.ki * error * dt)
-                    .clamp(-self.integral_limit, self.integral_limit);
+                self.integral = math::clamp(
+                    self.integral + self.ki * error * dt,
+                    -self.integral_limit,
+                    self.integral_limit,
+                );
             }
         }
         self.last_measurement = Some(measurement);
-        (self.kp * error + self.integral + self.kd * self.derivative)
-            .clamp(-self.output_limit, self.output_limit)
+        math::clamp(
+            self.kp * error + self.integral + self.kd * self.derivative,
+            -self.output_limit,
+            self.output_limit,
+        )
     }
 
     /// The integral's current contribution.

@@ -9,6 +9,7 @@
 //! the estimate invalid so the caller can hold or land.
 
 use crate::control::vector::Vec3;
+use crate::math;
 
 /// Ticks of history kept for late fixes (0.32 s at 400 Hz).
 pub const HISTORY: usize = 128;
@@ -115,7 +116,7 @@ impl PositionEstimator {
         let Some(then) = self.position_at(stamp_us) else {
             return false;
         };
-        let interval = (stamp_us.saturating_sub(first) as f32 * 1e-6).clamp(1e-3, 0.1);
+        let interval = math::clamp(stamp_us.saturating_sub(first) as f32 * 1e-6, 1e-3, 0.1);
         let innovation = position - then;
         let w = self.gains.bandwidth;
         let k_position = (2.0 * self.gains.damping * w * interval).min(1.0);

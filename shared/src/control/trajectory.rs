@@ -8,6 +8,7 @@
 //! take-off point.
 
 use crate::control::vector::Vec3;
+use crate::math;
 
 /// Where the flight is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -107,7 +108,7 @@ impl PlanSegment {
 
     /// The setpoint `t` seconds into the segment (held at its end after `duration`).
     pub fn sample(&self, t: f32) -> Setpoint {
-        let u = (t / self.duration).clamp(0.0, 1.0);
+        let u = math::clamp(t / self.duration, 0.0, 1.0);
         let (u2, u3) = (u * u, u * u * u);
         let s = 10.0 * u3 - 15.0 * u3 * u + 6.0 * u3 * u2;
         let ds = (30.0 * u2 - 60.0 * u3 + 30.0 * u2 * u2) / self.duration;

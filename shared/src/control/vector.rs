@@ -73,9 +73,9 @@ impl Vec3 {
     /// Each component clamped to `[-limit, limit]`.
     pub fn clamp_each(self, limit: Self) -> Self {
         Self::new(
-            self.x.clamp(-limit.x, limit.x),
-            self.y.clamp(-limit.y, limit.y),
-            self.z.clamp(-limit.z, limit.z),
+            math::clamp(self.x, -limit.x, limit.x),
+            math::clamp(self.y, -limit.y, limit.y),
+            math::clamp(self.z, -limit.z, limit.z),
         )
     }
 
@@ -254,7 +254,7 @@ impl Quat {
             2.0 * (self.w * self.x + self.y * self.z),
             1.0 - 2.0 * (self.x * self.x + self.y * self.y),
         );
-        let sin_pitch = (2.0 * (self.w * self.y - self.z * self.x)).clamp(-1.0, 1.0);
+        let sin_pitch = math::clamp(2.0 * (self.w * self.y - self.z * self.x), -1.0, 1.0);
         let pitch = math::asin(sin_pitch);
         let yaw = math::atan2(
             2.0 * (self.w * self.z + self.x * self.y),

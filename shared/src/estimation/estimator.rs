@@ -15,6 +15,7 @@ use crate::estimation::likelihood::{LiftLikelihood, Measurement};
 use crate::estimation::posterior::{CellModel, Concentration, Posterior, concentration};
 use crate::geometry::{ConvexHull, Vec2};
 use crate::math;
+use crate::numbers::Fixed;
 use crate::scenario::{MAX_CANDIDATES, MAX_GRID_POINTS, Scenario};
 use crate::statics::lift_fraction;
 
@@ -120,7 +121,8 @@ impl core::fmt::Display for OutsideGrid {
                 reading: Measurement::Lifted { thrust },
             } => write!(
                 f,
-                "pair {group} lifted at {thrust:.2} N, which no point of the grid explains"
+                "pair {group} lifted at {} N, which no point of the grid explains",
+                Fixed(thrust, 2)
             ),
             Self::BeyondEdge { axis, above } => write!(
                 f,

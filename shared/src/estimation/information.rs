@@ -108,7 +108,7 @@ pub fn mutual_information(
     each_point(&mut |w, reading| {
         let at = (reading - origin) / step;
         let i = (at as usize).min(nodes - 2);
-        let frac = (at - i as f32).clamp(0.0, 1.0);
+        let frac = math::clamp(at - i as f32, 0.0, 1.0);
         mixture[i] += w * (1.0 - frac);
         mixture[i + 1] += w * frac;
     });

@@ -20,6 +20,7 @@ use crate::control::allocation::Wrench;
 use crate::control::navigator::NavState;
 use crate::geometry::{Rail, Vec2};
 use crate::math;
+use crate::numbers::Fixed;
 use crate::rail::moves::{Positions, RailMove};
 use crate::rail::stepper::MotionLimits;
 
@@ -100,11 +101,17 @@ impl core::fmt::Display for AdaptEvent {
         match *self {
             Self::Shifted { com, mass } => write!(
                 f,
-                "the load shifted: COM ({:.3}, {:.3}) m, mass {:.2} kg",
-                com.x, com.y, mass
+                "the load shifted: COM ({}, {}) m, mass {} kg",
+                Fixed(com.x, 3),
+                Fixed(com.y, 3),
+                Fixed(mass, 2)
             ),
             Self::Moving { duration } => {
-                write!(f, "robots moving to the new formation ({duration:.1} s)")
+                write!(
+                    f,
+                    "robots moving to the new formation ({} s)",
+                    Fixed(duration, 1)
+                )
             }
             Self::Rebalanced => write!(f, "rebalanced: the robots are in the new formation"),
             Self::GaveUp => write!(f, "no new formation: flying on with the one it has"),

@@ -389,7 +389,7 @@ impl<'a> Face<'a> {
                     }
                     let den = ha.dot(ha);
                     if den > 0.0 {
-                        (-st.h.dot(ha) / den).clamp(0.0, limit)
+                        math::clamp(-st.h.dot(ha) / den, 0.0, limit)
                     } else {
                         0.0
                     }
@@ -746,7 +746,7 @@ fn quartic_argmax(st: &State, l: &Layout, dx: &[f32; N], limit: f32) -> f32 {
         push(-qc / qb);
     }
     let cuts = &mut cuts[..count];
-    cuts.sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(core::cmp::Ordering::Equal));
+    math::sort_small_by(cuts, |a, b| a < b);
     let mut best = (limit, value(limit));
     let v0 = value(0.0);
     if v0 >= best.1 {

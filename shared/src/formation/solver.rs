@@ -16,6 +16,7 @@
 //! When no assignment balances, the refusal reports the formation closest to balance (the
 //! global minimum of `|sum r|` over every assignment, a convex problem on each).
 
+use crate::numbers::Num;
 use heapless::Vec;
 
 use crate::formation::assignment::{Assignments, Layout, spin_period};
@@ -107,7 +108,9 @@ impl core::fmt::Display for FormationError {
                 perimeter,
             } => write!(
                 f,
-                "{count} robots need {needed} m of rail at min_spacing, the rail is {perimeter} m"
+                "{count} robots need {} m of rail at min_spacing, the rail is {} m",
+                Num(needed),
+                Num(perimeter)
             ),
             Self::Unbalanceable { com, closest } => {
                 let size = crate::math::sqrt(closest[0] * closest[0] + closest[1] * closest[1]);
@@ -115,7 +118,11 @@ impl core::fmt::Display for FormationError {
                     f,
                     "no formation on the rail balances about the COM ({}, {}): it is out of the robots' reach; \
                      the closest the rail allows leaves balance sums ({}, {}) m (|sum b| = {} m)",
-                    com.x, com.y, closest[0], closest[1], size
+                    Num(com.x),
+                    Num(com.y),
+                    Num(closest[0]),
+                    Num(closest[1]),
+                    Num(size)
                 )
             }
         }

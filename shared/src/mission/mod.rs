@@ -5,10 +5,12 @@
 //! - [`config`]: the mission's tuning.
 //! - [`machine`]: the tick side, stepped at 400 Hz.
 //! - [`jobs`]: the long computations the tick side hands off, and the planner that runs them.
+//! - [`params`]: the tunables as named parameters (the ground link serves them).
 
 pub mod config;
 pub mod jobs;
 pub mod machine;
+pub mod params;
 pub mod phases;
 
 pub use config::{DETECTOR_SIGMA, MissionConfig};

@@ -7,6 +7,7 @@ use crate::control::trajectory::FlightPhase;
 use crate::estimation::estimator::OutsideGrid;
 use crate::estimation::{EstimationError, Measurement};
 use crate::formation::FormationError;
+use crate::numbers::{Fixed, Sci};
 use crate::rail::moves::MoveError;
 
 /// Where the mission is.
@@ -127,14 +128,17 @@ impl core::fmt::Display for AbortReason {
             }
             Self::ThrustMarginTooSmall { needed, allowed } => write!(
                 f,
-                "not enough thrust margin: the heaviest payload the estimate allows needs {needed:.1} N to hover, {allowed:.1} N allowed"
+                "not enough thrust margin: the heaviest payload the estimate allows needs {} N to hover, {} N allowed",
+                Fixed(needed, 1),
+                Fixed(allowed, 1)
             ),
             Self::NoBalancedFormation(e) => write!(f, "no balanced formation: {e}"),
             Self::Uncontrollable(e) => write!(f, "the formation cannot be flown: {e}"),
             Self::EstimationFailed(e) => write!(f, "estimation failed: {e}"),
             Self::TakeoffFailed { height } => write!(
                 f,
-                "take-off failed: the payload did not leave the ground (greatest height {height:.3} m); rotors stopped"
+                "take-off failed: the payload did not leave the ground (greatest height {} m); rotors stopped",
+                Fixed(height, 3)
             ),
             Self::PositionLost => write!(f, "position lost"),
             Self::TrackingLost => {
@@ -192,11 +196,15 @@ impl core::fmt::Display for Reason {
             Self::Started => write!(f, "started"),
             Self::ChecksPassed => write!(f, "sensors valid, payload level"),
             Self::PairChosen { group, information } => {
-                write!(f, "pair {group} (information {information:.2} nats)")
+                write!(
+                    f,
+                    "pair {group} (information {} nats)",
+                    Fixed(information, 2)
+                )
             }
             Self::RobotsInPlace => write!(f, "robots in place"),
             Self::LiftRead(Measurement::Lifted { thrust }) => {
-                write!(f, "lifted at {thrust:.2} N per robot")
+                write!(f, "lifted at {} N per robot", Fixed(thrust, 2))
             }
             Self::LiftRead(Measurement::CouldNotLift) => {
                 write!(f, "could not lift at full thrust")
@@ -204,10 +212,12 @@ impl core::fmt::Display for Reason {
             Self::NeedMoreLifts => write!(f, "more lifts needed"),
             Self::Converged(t) => write!(
                 f,
-                "estimate COM ({:.3}, {:.3}) m, mass {:.2} kg",
-                t[0], t[1], t[2]
+                "estimate COM ({}, {}) m, mass {} kg",
+                Fixed(t[0], 3),
+                Fixed(t[1], 3),
+                Fixed(t[2], 2)
             ),
-            Self::FormationChosen(det) => write!(f, "formation det(BB^T) {det:.3e}"),
+            Self::FormationChosen(det) => write!(f, "formation det(BB^T) {}", Sci(det, 3)),
             Self::FlightReady => write!(f, "mixer built"),
             Self::Armed => write!(f, "armed"),
             Self::PlanAdvanced => write!(f, "plan advanced"),

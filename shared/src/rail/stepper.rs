@@ -114,7 +114,7 @@ impl TrapezoidProfile {
     /// Signed displacement at time `t` (clamped to the profile), m.
     pub fn position(&self, t: f32) -> f32 {
         let sign = if self.distance < 0.0 { -1.0 } else { 1.0 };
-        let t = t.clamp(0.0, self.duration());
+        let t = math::clamp(t, 0.0, self.duration());
         let (a, v, r) = (self.acceleration, self.peak_speed, self.ramp_time);
         let travelled = if t < r {
             0.5 * a * t * t
@@ -130,7 +130,7 @@ impl TrapezoidProfile {
     /// Time at which the displacement first reaches `|travel|` of the distance, s.
     pub fn time_at(&self, travel: f32) -> f32 {
         let d = math::abs(self.distance);
-        let x = math::abs(travel).clamp(0.0, d);
+        let x = math::clamp(math::abs(travel), 0.0, d);
         let (a, v, r) = (self.acceleration, self.peak_speed, self.ramp_time);
         let ramp_distance = 0.5 * a * r * r;
         if x <= ramp_distance {

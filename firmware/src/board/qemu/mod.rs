@@ -10,6 +10,7 @@
 //! | CMSDK timer 0: the free-running clock ([`time_driver`]) | 0x4000_0000 | 8 |
 //! | CMSDK timer 1: the alarm ([`time_driver`]) | 0x4000_1000 | 9 |
 //! | CMSDK UART 0: the MAVLink link ([`uart`]; QEMU's `-serial`) | 0x4000_4000 | RX 0, TX 1 |
+//! | the parameters' flash: a host file over semihosting ([`flash`]) | - | - |
 //! | executors: control, link, thread wake-up (unused lines) | - | 24, 25, 26 |
 //!
 //! Under `qemu-system-arm -icount shift=0` every instruction advances the virtual clock by
@@ -17,6 +18,7 @@
 //! measures the control tick in instructions. The thread-mode executor sleeps with `WFI`
 //! (QEMU does not halt on `WFE` under `-icount`).
 
+pub mod flash;
 pub mod time_driver;
 pub mod uart;
 
@@ -78,6 +80,9 @@ impl Board for QemuMps2An500 {
     type LinkTx = uart::UartTx;
     type Outputs = NoOutputs;
     type Irq = Irq;
+    type ParamFlash = flash::FileFlash;
+    const PARAM_RANGE: core::ops::Range<u32> = 0..(flash::PAGE * flash::PAGES) as u32;
+    const PARAM_FLASH_PERSISTENT: bool = true;
 
     fn cycle_count() -> u32 {
         time_driver::raw_count()
@@ -114,6 +119,7 @@ pub fn init() -> Parts<QemuMps2An500> {
         link_rx,
         link_tx,
         outputs: NoOutputs,
+        param_flash: flash::FileFlash::open(),
         irqs: ExecutorIrqs {
             control: Irq::ControlExecutor,
             link: Irq::LinkExecutor,

@@ -1,0 +1,304 @@
+//! MAVLink's parameter protocol, vehicle side (MAVLink "Parameter Protocol"; issue 14,
+//! "Parameters"), over the mission's table of `shared::mission::params`: every parameter a
+//! 32-bit float (`MAV_PARAM_TYPE_REAL32`), numbered in table order.
+//!
+//! | request | answer |
+//! |---|---|
+//! | `PARAM_REQUEST_LIST` | `PARAM_VALUE` of every parameter, index 0 to count - 1 |
+//! | `PARAM_REQUEST_READ` by index (or by name with index -1) | its `PARAM_VALUE`; an unknown one: a `STATUSTEXT` saying so |
+//! | `PARAM_SET` | always a `PARAM_VALUE` with the value now in force: the new one, or the old one kept when the new one is refused (not finite, out of range, not whole, or the mission is running) with a `STATUSTEXT` giving the reason |
+//!
+//! The service does no I/O: it says what to send and which value changed; the firmware sends
+//! and stores it ([`crate::store`]).
+
+use core::fmt::Write as _;
+
+use shared::mission::params::{COUNT, NAME_LEN, ParamValues, TABLE, find};
+use shared::numbers::Num;
+
+use crate::msg::{
+    MavParamType, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA,
+    PARAM_VALUE_DATA,
+};
+use crate::status::Text;
+
+/// A parameter request addressed to the vehicle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ParamRequest {
+    /// `PARAM_REQUEST_LIST`.
+    List,
+    /// `PARAM_REQUEST_READ` by index.
+    ReadIndex(u16),
+    /// `PARAM_REQUEST_READ` by name (index -1).
+    ReadName([u8; NAME_LEN]),
+    /// `PARAM_SET`.
+    Set {
+        /// Name, NUL-padded.
+        name: [u8; NAME_LEN],
+        /// The value asked for.
+        value: f32,
+    },
+}
+
+impl ParamRequest {
+    /// The request a `PARAM_REQUEST_LIST` makes.
+    pub fn from_list(_m: &PARAM_REQUEST_LIST_DATA) -> Self {
+        Self::List
+    }
+
+    /// The request a `PARAM_REQUEST_READ` makes.
+    pub fn from_read(m: &PARAM_REQUEST_READ_DATA) -> Self {
+        match u16::try_from(m.param_index) {
+            Ok(index) => Self::ReadIndex(index),
+            Err(_) => Self::ReadName(*m.param_id),
+        }
+    }
+
+    /// The request a `PARAM_SET` makes.
+    pub fn from_set(m: &PARAM_SET_DATA) -> Self {
+        Self::Set {
+            name: *m.param_id,
+            value: m.param_value,
+        }
+    }
+}
+
+/// What to send for a request.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamAnswer {
+    /// `PARAM_VALUE`s to send: none, one index, or all of them.
+    pub values: Values,
+    /// A parameter whose value changed (to store).
+    pub changed: Option<(usize, f32)>,
+    /// A `STATUSTEXT` (warning) explaining a refusal.
+    pub text: Option<Text>,
+}
+
+/// Which `PARAM_VALUE`s an answer sends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Values {
+    /// None.
+    None,
+    /// The one of this index.
+    One(usize),
+    /// All, in index order.
+    All,
+}
+
+/// The parameter service: the values in force and the protocol.
+#[derive(Clone, Debug, Default)]
+pub struct ParamService {
+    values: ParamValues,
+}
+
+fn name_str(name: &[u8; NAME_LEN]) -> &str {
+    let end = name.iter().position(|&b| b == 0).unwrap_or(NAME_LEN);
+    core::str::from_utf8(&name[..end]).unwrap_or("(not UTF-8)")
+}
+
+fn text(args: core::fmt::Arguments<'_>) -> Option<Text> {
+    let mut t = Text::new();
+    // Cut at the link's longest text.
+    let _ = t.write_fmt(args);
+    Some(t)
+}
+
+impl ParamService {
+    /// A service whose values are `values`.
+    pub fn new(values: ParamValues) -> Self {
+        Self { values }
+    }
+
+    /// The values in force.
+    pub fn values(&self) -> &ParamValues {
+        &self.values
+    }
+
+    /// Answers `request`; `may_change` is false while the mission runs (then every
+    /// `PARAM_SET` is refused).
+    pub fn handle(&mut self, request: &ParamRequest, may_change: bool) -> ParamAnswer {
+        let mut answer = ParamAnswer {
+            values: Values::None,
+            changed: None,
+            text: None,
+        };
+        match *request {
+            ParamRequest::List => answer.values = Values::All,
+            ParamRequest::ReadIndex(i) if usize::from(i) < COUNT => {
+                answer.values = Values::One(usize::from(i));
+            }
+            ParamRequest::ReadIndex(i) => {
+                answer.text = text(format_args!(
+                    "param read refused: no parameter {i} (0..{})",
+                    COUNT - 1
+                ));
+            }
+            ParamRequest::ReadName(name) => match find(&name) {
+                Some(i) => answer.values = Values::One(i),
+                None => {
+                    answer.text = text(format_args!(
+                        "param read refused: no parameter {}",
+                        name_str(&name)
+                    ));
+                }
+            },
+            ParamRequest::Set { name, value } => {
+                let Some(i) = find(&name) else {
+                    answer.text = text(format_args!(
+                        "param set refused: no parameter {}",
+                        name_str(&name)
+                    ));
+                    return answer;
+                };
+                answer.values = Values::One(i);
+                let spec = &TABLE[i];
+                if !may_change {
+                    answer.text = text(format_args!(
+                        "param {} not changed: the mission is running",
+                        spec.name
+                    ));
+                    return answer;
+                }
+                let old = self.values.get(i);
+                match self.values.set(i, value) {
+                    Ok(()) => {
+                        if old != Some(value) {
+                            answer.changed = Some((i, value));
+                        }
+                    }
+                    Err(e) => {
+                        answer.text = text(format_args!(
+                            "param {} = {} refused ({e}); kept {} {}",
+                            spec.name,
+                            Num(value),
+                            Num(old.unwrap_or(f32::NAN)),
+                            spec.unit
+                        ));
+                    }
+                }
+            }
+        }
+        answer
+    }
+
+    /// The `PARAM_VALUE` of parameter `index` (`None` past the table).
+    pub fn value_message(&self, index: usize) -> Option<PARAM_VALUE_DATA> {
+        value_message(&self.values, index)
+    }
+}
+
+/// The `PARAM_VALUE` of parameter `index` of `values` (`None` past the table).
+pub fn value_message(values: &ParamValues, index: usize) -> Option<PARAM_VALUE_DATA> {
+    let value = values.get(index)?;
+    Some(PARAM_VALUE_DATA {
+        param_value: value,
+        param_count: COUNT as u16,
+        param_index: index as u16,
+        param_id: TABLE[index].name.into(),
+        param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn id(name: &str) -> [u8; NAME_LEN] {
+        let mut out = [0u8; NAME_LEN];
+        out[..name.len()].copy_from_slice(name.as_bytes());
+        out
+    }
+
+    #[test]
+    fn list_and_reads_answer_with_consistent_indices() {
+        let mut s = ParamService::default();
+        assert_eq!(s.handle(&ParamRequest::List, true).values, Values::All);
+        for (i, spec) in TABLE.iter().enumerate() {
+            let m = s.value_message(i).expect("in table");
+            assert_eq!((m.param_index as usize, m.param_count as usize), (i, COUNT));
+            let by_name = s.handle(&ParamRequest::ReadName(*m.param_id), true);
+            assert_eq!(by_name.values, Values::One(i));
+            let by_index = s.handle(&ParamRequest::ReadIndex(i as u16), true);
+            assert_eq!(by_index.values, Values::One(i));
+            assert_eq!(m.param_type, MavParamType::MAV_PARAM_TYPE_REAL32);
+            assert_eq!(m.param_value, spec.default_value());
+        }
+        assert!(s.value_message(COUNT).is_none());
+        let past = s.handle(&ParamRequest::ReadIndex(COUNT as u16), true);
+        assert_eq!(past.values, Values::None);
+        assert!(past.text.is_some_and(|t| t.contains("no parameter")));
+    }
+
+    #[test]
+    fn a_good_set_changes_the_value_and_answers_with_it() {
+        let mut s = ParamService::default();
+        let a = s.handle(
+            &ParamRequest::Set {
+                name: id("MAX_TILT"),
+                value: 0.3,
+            },
+            true,
+        );
+        let i = find(b"MAX_TILT").expect("exists");
+        assert_eq!(a.values, Values::One(i));
+        assert_eq!(a.changed, Some((i, 0.3)));
+        assert_eq!(a.text, None);
+        assert_eq!(s.value_message(i).map(|m| m.param_value), Some(0.3));
+        assert_eq!(s.values().config().flight.control.max_tilt, 0.3);
+    }
+
+    #[test]
+    fn bad_sets_answer_with_the_old_value_and_say_why() {
+        let mut s = ParamService::default();
+        let i = find(b"LIFT_RAMP").expect("exists");
+        let old = TABLE[i].default_value();
+        for (value, why) in [
+            (f32::NAN, "not a finite number"),
+            (f32::NEG_INFINITY, "not a finite number"),
+            (1e9, "outside"),
+            (-1.0, "outside"),
+        ] {
+            let a = s.handle(
+                &ParamRequest::Set {
+                    name: id("LIFT_RAMP"),
+                    value,
+                },
+                true,
+            );
+            assert_eq!(a.values, Values::One(i), "PARAM_VALUE still sent");
+            assert_eq!(a.changed, None);
+            let t = a.text.expect("a reason");
+            assert!(t.contains("LIFT_RAMP") && t.contains(why), "{t}");
+            assert_eq!(s.value_message(i).map(|m| m.param_value), Some(old));
+        }
+        let running = s.handle(
+            &ParamRequest::Set {
+                name: id("LIFT_RAMP"),
+                value: 2.0,
+            },
+            false,
+        );
+        assert_eq!(running.changed, None);
+        assert!(running.text.is_some_and(|t| t.contains("running")));
+        assert_eq!(s.value_message(i).map(|m| m.param_value), Some(old));
+        let unknown = s.handle(
+            &ParamRequest::Set {
+                name: [0xFF; NAME_LEN],
+                value: 1.0,
+            },
+            true,
+        );
+        assert_eq!(unknown.values, Values::None);
+        assert!(unknown.text.is_some());
+    }
+
+    #[test]
+    fn setting_the_same_value_again_stores_nothing() {
+        let mut s = ParamService::default();
+        let set = ParamRequest::Set {
+            name: id("PLN_HOVER_T"),
+            value: TABLE[find(b"PLN_HOVER_T").expect("exists")].default_value(),
+        };
+        assert_eq!(s.handle(&set, true).changed, None);
+    }
+}

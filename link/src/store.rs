@@ -1,0 +1,396 @@
+//! Parameter storage that survives a power cut at any instant (issue 14, "Parameters"): a
+//! `sequential-storage` map over any NOR flash (`embedded-storage-async`), keyed by the
+//! parameter's name, one item per changed parameter.
+//!
+//! `sequential-storage` writes each item with its own CRC and only ever appends; a page is
+//! erased only after its live items were copied on. So a cut in the middle of a write leaves
+//! the item it was writing unreadable (skipped: the older value is found) and a cut in an
+//! erase leaves a page the next start repairs. Either way a parameter reads back as its old
+//! or its new value, never anything else; the tests below cut the power at every write and
+//! erase step of a long run of changes, partway through the operation, and check exactly that.
+//!
+//! Keys are names, not indices, so a firmware whose table gains or reorders parameters still
+//! finds the stored ones; a stored value the current table refuses (a range that shrank) is
+//! dropped in favour of the default and counted.
+
+use core::ops::Range;
+
+use embedded_storage_async::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
+use sequential_storage::cache::{Cache, Uncached};
+use sequential_storage::map::{MapConfig, MapStorage};
+use shared::mission::params::{NAME_LEN, ParamValues, TABLE};
+
+/// Bytes of the work buffer: a key (16) and a value (4), rounded up to any flash's word (up
+/// to 32 bytes).
+const BUFFER_LEN: usize = 64;
+
+/// Why the store failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StoreError {
+    /// The flash range does not suit the flash (pages, alignment, at least two pages).
+    BadRange,
+    /// The flash itself reported an error.
+    Flash(NorFlashErrorKind),
+    /// No room left for the item (never with the ranges used: every parameter fits many
+    /// times).
+    Full,
+    /// The stored data did not hold together even after repair; the range was erased.
+    Corrupted,
+    /// Any other error of the storage layer.
+    Other,
+}
+
+impl core::fmt::Display for StoreError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::BadRange => write!(f, "the storage range does not fit the flash"),
+            Self::Flash(kind) => write!(f, "flash error: {kind}"),
+            Self::Full => write!(f, "parameter storage full"),
+            Self::Corrupted => write!(f, "parameter storage corrupted; erased, defaults used"),
+            Self::Other => write!(f, "parameter storage error"),
+        }
+    }
+}
+
+fn error<E: NorFlashError>(e: sequential_storage::Error<E>) -> StoreError {
+    match e {
+        sequential_storage::Error::Storage { value, .. } => StoreError::Flash(value.kind()),
+        sequential_storage::Error::FullStorage => StoreError::Full,
+        sequential_storage::Error::Corrupted { .. } => StoreError::Corrupted,
+        _ => StoreError::Other,
+    }
+}
+
+/// What [`ParamStore::load`] found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Loaded {
+    /// Parameters restored from storage.
+    pub restored: usize,
+    /// Stored values the table refuses now (left at their defaults).
+    pub refused: usize,
+    /// A storage error (all parameters not yet read stay at their defaults).
+    pub error: Option<StoreError>,
+}
+
+/// No cache: parameters are read once at start and written rarely.
+type NoCache = Cache<Uncached, Uncached, Uncached, [u8; NAME_LEN]>;
+
+/// The parameters' storage on a flash `F`.
+pub struct ParamStore<F: NorFlash> {
+    map: MapStorage<[u8; NAME_LEN], F, NoCache>,
+    buffer: [u8; BUFFER_LEN],
+}
+
+fn key(index: usize) -> [u8; NAME_LEN] {
+    let mut k = [0u8; NAME_LEN];
+    let name = TABLE[index].name.as_bytes();
+    k[..name.len()].copy_from_slice(name);
+    k
+}
+
+impl<F: NorFlash> ParamStore<F> {
+    /// The store on `range` of `flash` (whole erase pages, at least two).
+    pub fn new(flash: F, range: Range<u32>) -> Result<Self, StoreError> {
+        let config = MapConfig::try_new(range).map_err(|_| StoreError::BadRange)?;
+        Ok(Self {
+            map: MapStorage::new(flash, config, Cache::new_uncached()),
+            buffer: [0; BUFFER_LEN],
+        })
+    }
+
+    /// Sets `values` from storage: every parameter stored and still acceptable.
+    pub async fn load(&mut self, values: &mut ParamValues) -> Loaded {
+        let mut loaded = Loaded::default();
+        for index in 0..TABLE.len() {
+            match self
+                .map
+                .fetch_item::<f32>(&mut self.buffer, &key(index))
+                .await
+            {
+                Ok(Some(v)) => match values.set(index, v) {
+                    Ok(()) => loaded.restored += 1,
+                    Err(_) => loaded.refused += 1,
+                },
+                Ok(None) => {}
+                Err(e) => {
+                    let e = error(e);
+                    if e == StoreError::Corrupted {
+                        // Beyond repair: start over rather than fail on every start.
+                        let _ = self.map.erase_all().await;
+                    }
+                    loaded.error = Some(e);
+                    break;
+                }
+            }
+        }
+        loaded
+    }
+
+    /// Stores parameter `index` (of the table) as `value`.
+    pub async fn save(&mut self, index: usize, value: f32) -> Result<(), StoreError> {
+        if index >= TABLE.len() {
+            return Err(StoreError::Other);
+        }
+        self.map
+            .store_item(&mut self.buffer, &key(index), &value)
+            .await
+            .map_err(error)
+    }
+
+    /// The flash back.
+    pub fn into_flash(self) -> F {
+        self.map.destroy().0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use embedded_storage_async::nor_flash::{ErrorType, ReadNorFlash};
+    use shared::mission::params::COUNT;
+    use std::vec;
+    use std::vec::Vec;
+
+    const PAGE: usize = 1024;
+    const PAGES: usize = 4;
+
+    /// A NOR flash in memory (writes only clear bits, erase sets a page to 0xFF) whose power
+    /// fails after `budget` write or erase operations: the failing operation gets only part of
+    /// the way (a prefix of the bytes it was to write or erase), and every later one fails.
+    struct CutFlash {
+        bytes: Vec<u8>,
+        budget: Option<usize>,
+        /// Of the failing operation, the share of bytes that still happen, per 256.
+        partial: u8,
+        ops: usize,
+        dead: bool,
+    }
+
+    #[derive(Debug)]
+    struct PowerCut;
+
+    impl NorFlashError for PowerCut {
+        fn kind(&self) -> NorFlashErrorKind {
+            NorFlashErrorKind::Other
+        }
+    }
+
+    impl CutFlash {
+        fn new() -> Self {
+            Self {
+                bytes: vec![0xFF; PAGE * PAGES],
+                budget: None,
+                partial: 0,
+                ops: 0,
+                dead: false,
+            }
+        }
+
+        /// Whether this operation is the one the power dies in; how many bytes of `len` happen.
+        fn step(&mut self, len: usize) -> Result<usize, usize> {
+            if self.dead {
+                return Err(0);
+            }
+            self.ops += 1;
+            match self.budget {
+                Some(b) if self.ops > b => {
+                    self.dead = true;
+                    Err(len * usize::from(self.partial) / 256)
+                }
+                _ => Ok(len),
+            }
+        }
+
+        fn reboot(&mut self) {
+            self.budget = None;
+            self.dead = false;
+        }
+    }
+
+    impl ErrorType for CutFlash {
+        type Error = PowerCut;
+    }
+
+    impl ReadNorFlash for CutFlash {
+        const READ_SIZE: usize = 1;
+        async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), PowerCut> {
+            let at = offset as usize;
+            bytes.copy_from_slice(&self.bytes[at..at + bytes.len()]);
+            Ok(())
+        }
+        fn capacity(&self) -> usize {
+            self.bytes.len()
+        }
+    }
+
+    impl NorFlash for CutFlash {
+        const WRITE_SIZE: usize = 4;
+        const ERASE_SIZE: usize = PAGE;
+        async fn erase(&mut self, from: u32, to: u32) -> Result<(), PowerCut> {
+            let (from, to) = (from as usize, to as usize);
+            let (done, result) = match self.step(to - from) {
+                Ok(n) => (n, Ok(())),
+                Err(n) => (n, Err(PowerCut)),
+            };
+            self.bytes[from..from + done].fill(0xFF);
+            result
+        }
+        async fn write(&mut self, offset: u32, data: &[u8]) -> Result<(), PowerCut> {
+            let at = offset as usize;
+            let (done, result) = match self.step(data.len()) {
+                Ok(n) => (n, Ok(())),
+                Err(n) => (n, Err(PowerCut)),
+            };
+            for (cell, &b) in self.bytes[at..at + done].iter_mut().zip(data) {
+                // NOR: a write only clears bits.
+                *cell &= b;
+            }
+            result
+        }
+    }
+
+    fn block_on<T>(f: impl core::future::Future<Output = T>) -> T {
+        embassy_futures::block_on(f)
+    }
+
+    /// A small deterministic generator (xorshift) for the changes and the cut points.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            self.0
+        }
+    }
+
+    /// The changes of a run: (parameter, value), all in range; few parameters, so pages fill
+    /// and are collected many times.
+    fn changes(seed: u64, n: usize) -> Vec<(usize, f32)> {
+        let mut rng = Rng(seed | 1);
+        (0..n)
+            .map(|_| {
+                let i = (rng.next() % 6) as usize * 7 % COUNT;
+                let spec = &TABLE[i];
+                let t = (rng.next() % 1000) as f32 / 1000.0;
+                let mut v = spec.min + t * (spec.max - spec.min);
+                if spec.integer {
+                    v = shared::math::floor(v);
+                }
+                (i, v)
+            })
+            .collect()
+    }
+
+    /// Runs `changes` until the power dies after `budget` operations (with `partial` of the
+    /// last one done), restarts, and checks every parameter is its last saved value or, for
+    /// the one being saved at the cut, the new one. Returns whether the cut came before the
+    /// end.
+    fn run_with_cut(changes: &[(usize, f32)], budget: usize, partial: u8) -> bool {
+        let mut flash = CutFlash::new();
+        flash.budget = Some(budget);
+        flash.partial = partial;
+        let mut saved = ParamValues::DEFAULT;
+        let mut in_flight = None;
+        let mut store = ParamStore::new(flash, 0..(PAGE * PAGES) as u32).expect("range");
+        let mut cut = false;
+        for &(i, v) in changes {
+            match block_on(store.save(i, v)) {
+                Ok(()) => saved.set(i, v).expect("in range"),
+                Err(_) => {
+                    in_flight = Some((i, v));
+                    cut = true;
+                    break;
+                }
+            }
+        }
+        let mut flash = store.into_flash();
+        flash.reboot();
+        let mut store = ParamStore::new(flash, 0..(PAGE * PAGES) as u32).expect("range");
+        let mut after = ParamValues::DEFAULT;
+        let loaded = block_on(store.load(&mut after));
+        assert_eq!(loaded.error, None, "budget {budget}: {loaded:?}");
+        assert_eq!(loaded.refused, 0);
+        for (i, spec) in TABLE.iter().enumerate() {
+            let got = after.get(i);
+            let old = saved.get(i);
+            let ok = got == old || in_flight.is_some_and(|(j, v)| j == i && got == Some(v));
+            assert!(
+                ok,
+                "budget {budget} partial {partial}: {} read {got:?}, saved {old:?}, in flight {in_flight:?}",
+                spec.name
+            );
+        }
+        // The store still works after the cut.
+        let (i, v) = changes[0];
+        block_on(store.save(i, v)).expect("saves after restart");
+        let mut again = ParamValues::DEFAULT;
+        block_on(store.load(&mut again));
+        assert_eq!(again.get(i), Some(v));
+        cut
+    }
+
+    #[test]
+    fn values_survive_a_restart() {
+        let mut store = ParamStore::new(CutFlash::new(), 0..(PAGE * PAGES) as u32).expect("range");
+        let mut values = ParamValues::DEFAULT;
+        assert_eq!(block_on(store.load(&mut values)).restored, 0);
+        block_on(store.save(3, 0.05)).expect("saved");
+        block_on(store.save(3, 0.06)).expect("saved");
+        let flash = store.into_flash();
+        let mut store = ParamStore::new(flash, 0..(PAGE * PAGES) as u32).expect("range");
+        let loaded = block_on(store.load(&mut values));
+        assert_eq!((loaded.restored, loaded.error), (1, None));
+        assert_eq!(values.get(3), Some(0.06));
+        assert_eq!(values.get(4), Some(TABLE[4].default_value()));
+    }
+
+    #[test]
+    fn a_stored_value_the_table_now_refuses_is_dropped() {
+        let mut store = ParamStore::new(CutFlash::new(), 0..(PAGE * PAGES) as u32).expect("range");
+        // Written as a firmware with a wider range might have.
+        block_on(store.save(1, 1e6)).expect("saved");
+        let mut values = ParamValues::DEFAULT;
+        let loaded = block_on(store.load(&mut values));
+        assert_eq!(loaded.refused, 1);
+        assert_eq!(values.get(1), Some(TABLE[1].default_value()));
+    }
+
+    #[test]
+    fn a_power_cut_at_every_step_leaves_old_or_new_values() {
+        // 300 changes of six parameters: pages fill and are collected repeatedly.
+        let run = changes(7, 300);
+        let mut budget = 0;
+        let mut trials = 0;
+        // Every operation of the run is the one the power dies in, cut halfway through.
+        while run_with_cut(&run, budget, 128) {
+            budget += 1;
+            trials += 1;
+        }
+        std::eprintln!("power cut at each of {trials} write/erase steps");
+        assert!(trials > 600, "only {trials} steps: the run is too short");
+    }
+
+    #[test]
+    fn random_power_cuts_leave_old_or_new_values() {
+        let mut rng = Rng(0x5eed);
+        for trial in 0..2000u64 {
+            let run = changes(trial + 1, 120);
+            let budget = (rng.next() % 400) as usize;
+            let partial = (rng.next() % 256) as u8;
+            run_with_cut(&run, budget, partial);
+        }
+    }
+
+    #[test]
+    fn a_range_that_does_not_fit_the_flash_is_refused() {
+        assert_eq!(
+            ParamStore::new(CutFlash::new(), 0..PAGE as u32).err(),
+            Some(StoreError::BadRange)
+        );
+        assert_eq!(
+            ParamStore::new(CutFlash::new(), 100..(2 * PAGE) as u32).err(),
+            Some(StoreError::BadRange)
+        );
+    }
+}

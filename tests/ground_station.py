@@ -1,0 +1,293 @@
+#!/usr/bin/env python3
+"""A real ground station against the firmware under QEMU (issue 14): pymavlink, as
+QGroundControl and MAVProxy talk to a vehicle, through `host-sim hil --gcs`.
+
+Run by tests/ground_link.rs (cargo test); by hand:
+
+    python3 tests/ground_station.py --host-sim target/debug/host-sim \
+        --elf target/thumbv7em-none-eabihf/release/firmware-qemu \
+        --scenario tests/scenarios/rect-ex1.toml
+
+Two runs of the firmware share one parameter flash (`--storage DIR`):
+
+1. connect (HEARTBEAT from component 1, MAV_AUTOPILOT_GENERIC), AUTOPILOT_VERSION through
+   MAV_CMD_REQUEST_MESSAGE (MAVLink 2 and parameter-encoding capabilities), MISSION_COUNT 0,
+   every parameter (count and indices consistent, read back by name and by index), arming
+   refused with its COMMAND_ACK and a STATUSTEXT, bad values refused (PARAM_VALUE with the old
+   value and a STATUSTEXT), one good value set; then the power is cut (host-sim and QEMU
+   killed).
+2. restart: the value is still there; the ground station starts the mission, a PARAM_SET in
+   flight is refused, the STATUSTEXTs are followed to the landing, and the plant's report shows
+   the parameter changed the mission (the pre-flight checks lasted MIS_CHECKS_T).
+
+Exit status 0 when everything holds; 2 with one line on stderr when pymavlink is missing
+(the Rust test turns that into a skip or, in CI, a failure); 1 for any failure, saying which.
+"""
+
+import argparse
+import json
+import os
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+os.environ.setdefault("MAVLINK20", "1")
+try:
+    from pymavlink import mavutil
+except ImportError:
+    print("pymavlink is not installed (pip install pymavlink)", file=sys.stderr)
+    sys.exit(2)
+
+mavlink = mavutil.mavlink
+CHECKS_PARAM = "MIS_CHECKS_T"
+CHECKS_VALUE = 2.0
+BAD_VALUES = [("MAX_TILT", 5.0, "outside"), ("MAX_TILT", float("nan"), "finite"),
+              ("MIS_CONFIRM", 1.5, "whole")]
+
+
+class Failure(Exception):
+    """What did not hold."""
+
+
+def free_udp_port():
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Vehicle:
+    """The firmware as a ground station sees it, with every STATUSTEXT kept."""
+
+    def __init__(self, port):
+        self.conn = mavutil.mavlink_connection(
+            f"udpin:127.0.0.1:{port}", source_system=255, source_component=190,
+            dialect="common")
+        self.texts = []
+
+    def recv(self, types, timeout, condition=None):
+        """The next message of one of `types` meeting `condition`, or None after `timeout`;
+        every STATUSTEXT on the way is kept."""
+        end = time.monotonic() + timeout
+        listen = list(set(types) | {"STATUSTEXT"})
+        while time.monotonic() < end:
+            m = self.conn.recv_match(type=listen, blocking=True, timeout=0.2)
+            if m is None:
+                continue
+            if m.get_type() == "STATUSTEXT":
+                self.texts.append(m.text)
+            if m.get_type() in types and (condition is None or condition(m)):
+                return m
+        return None
+
+    def has_text(self, needle):
+        # Long texts come in 50-byte chunks: look across them too.
+        return any(needle in t for t in self.texts) or needle in "".join(self.texts)
+
+    def expect(self, types, timeout, what, condition=None):
+        m = self.recv(types, timeout, condition)
+        if m is None:
+            raise Failure(f"no {what} within {timeout} s")
+        return m
+
+    def text_matching(self, needle, timeout):
+        """Waits for a STATUSTEXT containing `needle` (or finds one already received)."""
+        if self.has_text(needle):
+            return
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            self.recv(["STATUSTEXT"], 0.5)
+            if self.has_text(needle):
+                return
+        raise Failure(f"no STATUSTEXT containing {needle!r} within {timeout} s "
+                      f"(got: {self.texts[-5:]})")
+
+    def command(self, cmd, *params):
+        p = list(params) + [0.0] * (7 - len(params))
+        self.conn.mav.command_long_send(1, 1, cmd, 0, *p)
+        return self.expect(["COMMAND_ACK"], 10, f"COMMAND_ACK of command {cmd}",
+                           lambda m: m.command == cmd)
+
+    def param_set(self, name, value):
+        self.conn.mav.param_set_send(1, 1, name.encode(), value,
+                                     mavlink.MAV_PARAM_TYPE_REAL32)
+        return self.expect(["PARAM_VALUE"], 10, f"PARAM_VALUE answering PARAM_SET {name}",
+                           lambda m: m.param_id == name)
+
+    def param_read(self, name=None, index=-1):
+        self.conn.mav.param_request_read_send(1, 1, (name or "").encode(), index)
+        return self.expect(["PARAM_VALUE"], 10, f"PARAM_VALUE of {name or index}",
+                           lambda m: (name is None and m.param_index == index)
+                           or (name is not None and m.param_id == name))
+
+    def all_params(self):
+        self.conn.mav.param_request_list_send(1, 1)
+        values, count = {}, None
+        end = time.monotonic() + 30
+        while time.monotonic() < end and (count is None or len(values) < count):
+            m = self.recv(["PARAM_VALUE"], 1)
+            if m is None:
+                continue
+            if count is None:
+                count = m.param_count
+            if m.param_count != count:
+                raise Failure(f"param_count changed from {count} to {m.param_count}")
+            if not 0 <= m.param_index < count:
+                raise Failure(f"param_index {m.param_index} outside 0..{count}")
+            values[m.param_index] = (m.param_id, m.param_value, m.param_type)
+        if count is None or len(values) != count:
+            raise Failure(f"PARAM_REQUEST_LIST: {len(values)} of {count} parameters came")
+        names = [values[i][0] for i in range(count)]
+        if len(set(names)) != count:
+            raise Failure("two parameters share a name")
+        if any(v[2] != mavlink.MAV_PARAM_TYPE_REAL32 for v in values.values()):
+            raise Failure("a parameter is not MAV_PARAM_TYPE_REAL32")
+        return {values[i][0]: (i, values[i][1]) for i in range(count)}
+
+
+def start_hil(args, port, extra):
+    cmd = [args.host_sim, "hil", "--scenario", args.scenario, "--qemu", args.elf,
+           "--storage", args.storage, "--gcs", f"udp:127.0.0.1:{port}", "--ground-start",
+           "--json"] + extra
+    return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def connect(port, plant):
+    v = Vehicle(port)
+    hb = v.recv(["HEARTBEAT"], 60, lambda m: m.get_srcComponent() == 1)
+    if hb is None:
+        plant.kill()
+        out, err = plant.communicate()
+        raise Failure(f"no HEARTBEAT from the vehicle; host-sim said: {err.strip()[-500:]}")
+    if hb.get_srcSystem() == 0 or hb.autopilot != mavlink.MAV_AUTOPILOT_GENERIC:
+        raise Failure(f"HEARTBEAT from system {hb.get_srcSystem()} autopilot {hb.autopilot}")
+    v.conn.target_system, v.conn.target_component = 1, 1
+    return v
+
+
+def first_run(args, port):
+    plant = start_hil(args, port, [])
+    try:
+        v = connect(port, plant)
+        print("connected: HEARTBEAT from 1/1, MAV_AUTOPILOT_GENERIC")
+        ack = v.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION)
+        if ack.result != mavlink.MAV_RESULT_ACCEPTED:
+            raise Failure(f"REQUEST_MESSAGE(AUTOPILOT_VERSION) acknowledged {ack.result}")
+        version = v.expect(["AUTOPILOT_VERSION"], 10, "AUTOPILOT_VERSION")
+        need = (mavlink.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+                | mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE)
+        if version.capabilities & need != need:
+            raise Failure(f"AUTOPILOT_VERSION capabilities {version.capabilities:#x}")
+        v.conn.mav.mission_request_list_send(1, 1)
+        count = v.expect(["MISSION_COUNT"], 10, "MISSION_COUNT")
+        if count.count != 0:
+            raise Failure(f"MISSION_COUNT {count.count}, expected 0")
+        print("AUTOPILOT_VERSION and MISSION_COUNT 0 as QGroundControl expects")
+
+        params = v.all_params()
+        print(f"{len(params)} parameters, indices 0..{len(params) - 1}")
+        for name in [CHECKS_PARAM, "MAX_TILT", "LIFT_SIGMA"]:
+            if name not in params:
+                raise Failure(f"parameter {name} missing")
+            i, value = params[name]
+            by_name, by_index = v.param_read(name=name), v.param_read(index=i)
+            if (by_name.param_index, by_index.param_id) != (i, name):
+                raise Failure(f"{name}: read by name gave index {by_name.param_index}, "
+                              f"by index {i} gave {by_index.param_id}")
+        old_tilt = params["MAX_TILT"][1]
+
+        ack = v.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1.0)
+        if ack.result != mavlink.MAV_RESULT_DENIED:
+            raise Failure(f"arming acknowledged {ack.result}, expected DENIED")
+        v.text_matching("refused", 10)
+        print("arming refused: COMMAND_ACK DENIED with a STATUSTEXT")
+
+        for name, bad, why in BAD_VALUES:
+            answer = v.param_set(name, bad)
+            if answer.param_value != params[name][1]:
+                raise Failure(f"{name} = {bad} taken ({answer.param_value})")
+            v.text_matching(why, 10)
+        print("bad values refused: PARAM_VALUE with the old value and a STATUSTEXT each")
+        if v.param_read(name="MAX_TILT").param_value != old_tilt:
+            raise Failure("MAX_TILT changed by a refused value")
+
+        answer = v.param_set(CHECKS_PARAM, CHECKS_VALUE)
+        if answer.param_value != CHECKS_VALUE:
+            raise Failure(f"{CHECKS_PARAM} = {CHECKS_VALUE} answered {answer.param_value}")
+        print(f"{CHECKS_PARAM} set to {CHECKS_VALUE}; cutting the power")
+    finally:
+        # The power cut: host-sim and, with it, QEMU die at once.
+        plant.kill()
+        plant.communicate()
+        v_conn = locals().get("v")
+        if v_conn is not None:
+            v_conn.conn.close()
+
+
+def second_run(args, port):
+    plant = start_hil(args, port, [])
+    try:
+        v = connect(port, plant)
+        value = v.param_read(name=CHECKS_PARAM).param_value
+        if value != CHECKS_VALUE:
+            raise Failure(f"after the restart {CHECKS_PARAM} reads {value}, set {CHECKS_VALUE}")
+        if len(v.all_params()) == 0:
+            raise Failure("no parameters after the restart")
+        print(f"after the restart {CHECKS_PARAM} = {value}")
+        v.text_matching("accepted", 60)
+        ack = v.command(mavlink.MAV_CMD_MISSION_START)
+        if ack.result != mavlink.MAV_RESULT_ACCEPTED:
+            raise Failure(f"MISSION_START acknowledged {ack.result}")
+        v.text_matching("phase: preflight-checks", 20)
+        answer = v.param_set("MAX_TILT", 0.3)
+        if answer.param_value == 0.3:
+            raise Failure("MAX_TILT changed while the mission runs")
+        v.text_matching("running", 10)
+        print("mission started; a PARAM_SET in flight refused")
+        seen = []
+        for phase in ["select-pair", "lift", "decide-formation", "takeoff", "landing",
+                      "disarmed"]:
+            v.text_matching(f"phase: {phase}", 900)
+            seen.append(phase)
+            print(f"  STATUSTEXT phase: {phase}")
+        out, err = plant.communicate(timeout=120)
+        try:
+            report = json.loads(out)
+        except json.JSONDecodeError:
+            raise Failure(f"host-sim printed no JSON (exit {plant.returncode}): {err[-500:]}")
+        checks = [p for p in report["phases"] if p["name"] == "preflight-checks"]
+        if not checks or abs(checks[0]["duration_s"] - CHECKS_VALUE) > 0.1:
+            raise Failure(f"pre-flight checks lasted {checks}, {CHECKS_PARAM} = {CHECKS_VALUE}")
+        print(f"pre-flight checks lasted {checks[0]['duration_s']:.2f} s ({CHECKS_PARAM}); "
+              f"delivered: {report['delivered']}, host-sim exit {plant.returncode}")
+        if plant.returncode != 0 or not report["delivered"]:
+            raise Failure(f"mission not delivered (exit {plant.returncode})")
+    finally:
+        if plant.poll() is None:
+            plant.kill()
+            plant.communicate()
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--host-sim", required=True)
+    parser.add_argument("--elf", required=True)
+    parser.add_argument("--scenario", required=True)
+    parser.add_argument("--storage", help="parameter flash directory (default: a fresh one)")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory(prefix="ground-station-") as tmp:
+        args.storage = args.storage or tmp
+        started = time.monotonic()
+        try:
+            first_run(args, free_udp_port())
+            second_run(args, free_udp_port())
+        except Failure as e:
+            print(f"ground station: FAILED: {e}", file=sys.stderr)
+            return 1
+        print(f"ground station: all checks held in {time.monotonic() - started:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
