@@ -1,0 +1,29 @@
+//! Driver cores for the Pixhawk 6C board (issue 13): the parts of each driver that are plain
+//! computation (frame encoding, checksums, packet parsing, unit scaling, register packing),
+//! kept apart from the embassy glue in `firmware/src/board` as Hubris splits a driver core from
+//! its server, so that they are tested on the host against the datasheets' own examples.
+//!
+//! | module | device |
+//! |---|---|
+//! | [`dshot`] | ESC frames, DShot600 (the DShot protocol's frame and its 4-bit checksum) |
+//! | [`pulse`] | ESC pulses for ESCs without DShot: PWM (1000-2000 us) and OneShot125 |
+//! | [`thrust_map`] | rotor thrust to ESC command, a table replaceable by a bench calibration |
+//! | [`icm42688`] | the ICM-42688-P IMU: registers, start-up, 20-byte FIFO packets, scaling |
+//! | [`imu`] | mounting rotation, anti-alias filter and decimation to the tick, IMU health |
+//! | [`tmc2209`] | the TMC2209 stepper driver's single-wire UART: datagrams, CRC, registers |
+//! | [`stepper`] | a robot's rail axis on a TMC2209: velocity commands, arc length, stalls |
+//! | [`reset`] | why the STM32H7 last reset (RCC_RSR), for the start-up report |
+#![no_std]
+#![forbid(unsafe_code)]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod dshot;
+pub mod icm42688;
+pub mod imu;
+pub mod pulse;
+pub mod reset;
+pub mod stepper;
+pub mod thrust_map;
+pub mod tmc2209;

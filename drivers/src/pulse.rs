@@ -1,0 +1,105 @@
+//! ESC pulses for ESCs without DShot (issue 13): the protocol choice and the pulse width of a
+//! command fraction. PWM: 1000 us (stop) to 2000 us (full) at 400 Hz; OneShot125: 125 us to
+//! 250 us, one pulse per control step. The board's timers turn the width into compare counts.
+
+/// The ESC protocol on the eight FMU outputs (parameter `ESC_PROTOCOL`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EscProtocol {
+    /// DShot600, digital (see [`crate::dshot`]); the default.
+    Dshot600,
+    /// Standard PWM: 1000-2000 us pulses at 400 Hz.
+    Pwm,
+    /// OneShot125: 125-250 us pulses, one per control step.
+    OneShot125,
+}
+
+/// A protocol number that names no protocol.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct UnknownProtocol(pub i32);
+
+impl core::fmt::Display for UnknownProtocol {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "ESC protocol {} is unknown (0 DShot600, 1 PWM, 2 OneShot125)",
+            self.0
+        )
+    }
+}
+
+impl EscProtocol {
+    /// The protocol a parameter value names: 0 DShot600, 1 PWM, 2 OneShot125.
+    pub fn from_param(value: i32) -> Result<Self, UnknownProtocol> {
+        match value {
+            0 => Ok(Self::Dshot600),
+            1 => Ok(Self::Pwm),
+            2 => Ok(Self::OneShot125),
+            other => Err(UnknownProtocol(other)),
+        }
+    }
+
+    /// The pulse width (ns) for a command fraction in `[0, 1]`: the stop width at or below
+    /// zero, for a non-finite fraction, and always for DShot (which sends frames instead).
+    pub fn pulse_ns(self, fraction: f32) -> u32 {
+        let (stop, span) = match self {
+            Self::Dshot600 => return 0,
+            Self::Pwm => (1_000_000, 1_000_000),
+            Self::OneShot125 => (125_000, 125_000),
+        };
+        if fraction.is_nan() || fraction <= 0.0 {
+            return stop;
+        }
+        stop + libm::roundf(fraction.min(1.0) * span as f32) as u32
+    }
+
+    /// Pulses per second the outputs run at, for a control step of `tick_hz`.
+    pub fn update_hz(self, tick_hz: u32) -> u32 {
+        match self {
+            Self::Dshot600 | Self::OneShot125 => tick_hz,
+            Self::Pwm => tick_hz.min(400),
+        }
+    }
+}
+
+/// Compare counts for a pulse of `pulse_ns` on a timer counting at `count_hz` (rounded to the
+/// nearest count, saturating at `u16::MAX`).
+pub fn pulse_counts(pulse_ns: u32, count_hz: u32) -> u16 {
+    let counts = (u64::from(pulse_ns) * u64::from(count_hz) + 500_000_000) / 1_000_000_000;
+    u16::try_from(counts).unwrap_or(u16::MAX)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parameter_values_name_the_protocols_and_others_are_refused() {
+        assert_eq!(EscProtocol::from_param(0), Ok(EscProtocol::Dshot600));
+        assert_eq!(EscProtocol::from_param(1), Ok(EscProtocol::Pwm));
+        assert_eq!(EscProtocol::from_param(2), Ok(EscProtocol::OneShot125));
+        let err = EscProtocol::from_param(7).unwrap_err();
+        assert_eq!(err, UnknownProtocol(7));
+        assert!(std::format!("{err}").starts_with("ESC protocol 7"));
+    }
+
+    #[test]
+    fn pulse_widths_span_the_protocols_ranges() {
+        assert_eq!(EscProtocol::Pwm.pulse_ns(0.0), 1_000_000);
+        assert_eq!(EscProtocol::Pwm.pulse_ns(0.5), 1_500_000);
+        assert_eq!(EscProtocol::Pwm.pulse_ns(2.0), 2_000_000);
+        assert_eq!(EscProtocol::Pwm.pulse_ns(f32::NAN), 1_000_000);
+        assert_eq!(EscProtocol::OneShot125.pulse_ns(-1.0), 125_000);
+        assert_eq!(EscProtocol::OneShot125.pulse_ns(1.0), 250_000);
+        assert_eq!(EscProtocol::Dshot600.pulse_ns(1.0), 0);
+        assert_eq!(EscProtocol::Pwm.update_hz(400), 400);
+        assert_eq!(EscProtocol::Pwm.update_hz(1000), 400);
+    }
+
+    /// A 1 MHz timer: 1500 us is 1500 counts; at 240 MHz 125 us is 30,000 counts.
+    #[test]
+    fn counts_at_the_timers_clock() {
+        assert_eq!(pulse_counts(1_500_000, 1_000_000), 1500);
+        assert_eq!(pulse_counts(125_000, 240_000_000), 30_000);
+        assert_eq!(pulse_counts(2_000_000, 240_000_000), u16::MAX);
+    }
+}
