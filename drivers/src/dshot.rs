@@ -74,14 +74,19 @@ impl BitTiming {
         if period < 20 {
             return Err(ClockTooSlow { timer_hz });
         }
-        // 75 % and 37.5 % of the bit, rounded to the nearest count; at most 7,158 counts.
-        let one = ((period * 3 + 2) / 4) as u16;
-        let zero = ((period * 3 + 4) / 8) as u16;
-        Ok(Self {
-            period: period as u16,
-            one,
-            zero,
-        })
+        // At most 7,158 counts.
+        Ok(Self::from_period(period as u16))
+    }
+
+    /// The timing of a timer already running at DShot600's bit rate with `period` counts per
+    /// bit: 75 % and 37.5 % of the bit, rounded to the nearest count.
+    pub fn from_period(period: u16) -> Self {
+        let p = u32::from(period);
+        Self {
+            period,
+            one: ((p * 3 + 2) / 4) as u16,
+            zero: ((p * 3 + 4) / 8) as u16,
+        }
     }
 }
 

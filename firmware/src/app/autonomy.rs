@@ -209,10 +209,10 @@ fn fix(f: &MocapFix) -> Fix {
 }
 
 impl Autonomy {
-    /// Idle, no payload description.
-    pub const fn new() -> Self {
+    /// Idle, no payload description, built at run time (see [`Mission::unloaded`]).
+    pub fn new() -> Self {
         Self {
-            mission: Mission::UNLOADED,
+            mission: Mission::unloaded(),
             loaded: false,
         }
     }

@@ -124,7 +124,8 @@ const FILE_CAPACITY: usize = MAX_ENCODED_LEN;
 
 static FTP: StaticCell<Server<FILE_CAPACITY>> = StaticCell::new();
 
-fn report(severity: Severity, args: core::fmt::Arguments<'_>) -> Outbound {
+/// A report of one text line, ready for the send task.
+pub fn report(severity: Severity, args: core::fmt::Arguments<'_>) -> Outbound {
     let mut r = Report::default();
     r.text(severity, args);
     Outbound::Report(r)

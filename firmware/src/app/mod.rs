@@ -18,7 +18,7 @@ pub mod jobs;
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
 use core::cell::Cell;
-use embassy_executor::{InterruptExecutor, Spawner, raw};
+use embassy_executor::{InterruptExecutor, SendSpawner, Spawner, raw};
 
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
@@ -26,7 +26,7 @@ use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
 use shared::mission::MissionConfig;
 use shared::scenario::Scenario;
-use static_cell::{ConstStaticCell, StaticCell};
+use static_cell::StaticCell;
 
 use crate::board::{Parts, Selected};
 
@@ -87,12 +87,18 @@ pub fn thread_woken() {
 }
 
 static THREAD_EXECUTOR: StaticCell<raw::Executor> = StaticCell::new();
-static AUTONOMY: ConstStaticCell<autonomy::Autonomy> =
-    ConstStaticCell::new(autonomy::Autonomy::new());
+/// Built at start ([`autonomy::Autonomy::new`]): a constant initialiser would keep its 18 KB
+/// image in flash.
+static AUTONOMY: StaticCell<autonomy::Autonomy> = StaticCell::new();
 
-/// Starts the application on a board that is up; `board_tasks` spawns the board's own tasks
-/// (status LEDs) in thread mode. Never returns: thread mode then runs the jobs.
-pub fn run(parts: Parts<Selected>, board_tasks: impl FnOnce(Spawner)) -> ! {
+/// Starts the application on a board that is up; `control_tasks` spawns the board's tasks
+/// that run at the control priority (sensors, ESCs), `board_tasks` its thread-mode tasks
+/// (status LEDs). Never returns: thread mode then runs the jobs.
+pub fn run(
+    parts: Parts<Selected>,
+    control_tasks: impl FnOnce(SendSpawner),
+    board_tasks: impl FnOnce(Spawner),
+) -> ! {
     let Parts {
         link_rx,
         link_tx,
@@ -102,11 +108,12 @@ pub fn run(parts: Parts<Selected>, board_tasks: impl FnOnce(Spawner)) -> ! {
     } = parts;
 
     let control = CONTROL_EXECUTOR.start(irqs.control);
-    let autonomy = AUTONOMY.take();
+    let autonomy = AUTONOMY.init_with(autonomy::Autonomy::new);
     match control::control(autonomy, outputs) {
         Ok(token) => control.spawn(token),
         Err(_) => panic!("control task not spawned"),
     }
+    control_tasks(control);
 
     let comms_spawner = LINK_EXECUTOR.start(irqs.link);
     match comms::receive(link_rx, param_flash) {

@@ -7,8 +7,14 @@ use cortex_m_rt::entry;
 
 #[entry]
 fn main() -> ! {
-    let (parts, leds) = firmware::board::pixhawk6c::init();
-    firmware::app::run(parts, move |spawner| {
-        firmware::board::pixhawk6c::spawn_tasks(spawner, leds)
-    })
+    let (parts, board) = firmware::board::pixhawk6c::init();
+    let firmware::board::pixhawk6c::BoardParts {
+        leds,
+        control_tasks,
+    } = board;
+    firmware::app::run(
+        parts,
+        move |spawner| firmware::board::pixhawk6c::spawn_control_tasks(spawner, control_tasks),
+        move |spawner| firmware::board::pixhawk6c::spawn_tasks(spawner, leds),
+    )
 }

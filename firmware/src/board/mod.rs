@@ -26,7 +26,11 @@ pub mod pixhawk6c;
 pub use pixhawk6c::Pixhawk6c as Selected;
 
 #[cfg(feature = "pixhawk6c")]
+pub mod escs;
+#[cfg(feature = "pixhawk6c")]
 pub mod fram;
+#[cfg(feature = "pixhawk6c")]
+pub mod imu_spi;
 #[cfg(feature = "qemu")]
 pub mod qemu;
 #[cfg(feature = "qemu")]

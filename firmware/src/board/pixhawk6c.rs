@@ -16,14 +16,25 @@
 //!   `board.h` "SPI2 is FRAM", `spi.cpp` `SPIDEV_FLASH(0)`), see [`super::fram`] (polled).
 //! - Executors on interrupt lines the board does not use: SPDIF_RX (control), CEC (link),
 //!   JPEG (thread-mode wake-up).
+//! - IMU: the ICM-42688-P on SPI1 (SCK PA5, MISO PA6, MOSI PA7; `spi.cpp`: chip select PC13,
+//!   data ready PE6; sensor bus power PB2), mounted yaw 270 deg (`init/rc.board_sensors`
+//!   `icm42688p -R 6`), see [`super::imu_spi`]. Its samples drive the control step. (The
+//!   BMI088 on PC14/PC15, yaw 180 deg, `-R 4`, is not used.)
+//! - ESCs: DShot600 on the eight FMU outputs (`timer_config.cpp`: TIM1 CH1-4 on PA8, PE11,
+//!   PE13, PE14; TIM4 CH3-4 on PD14, PD15; TIM5 CH1-2 on PA0, PA1), see [`super::escs`].
+//! - Watchdog: the independent watchdog (IWDG1, [`WATCHDOG_TIMEOUT_US`]), started by the
+//!   first control step and fed by every one after it ([`Outputs::apply`]); the reset reason
+//!   (RCC_RSR) goes to the ground at start, a watchdog reset as an error.
 //!
-//! TODO(drivers issue): the IMU (ICM-42688-P on SPI) feeding the control task, the ESC outputs
-//! and the steppers. Until then [`Outputs`] keeps everything off and the control task runs
-//! only in hardware-in-the-loop.
+//! Not yet on this board (issue 13): the TMC2209 steppers on TELEM2/TELEM3 (their driver core
+//! is `drivers::tmc2209` and `drivers::stepper`), MAVLink over USB, the PWM/OneShot125 option.
 
 use defmt_rtt as _;
-use embassy_executor::Spawner;
-use embassy_stm32::gpio::{Level, Output, Speed};
+use drivers::reset::ResetReason;
+use drivers::thrust_map::ThrustMap;
+use embassy_executor::{SendSpawner, Spawner};
+use embassy_stm32::exti::{self, ExtiInput};
+use embassy_stm32::gpio::{Level, Output, OutputType, Pull, Speed};
 use embassy_stm32::interrupt::{Interrupt, InterruptExt, Priority};
 use embassy_stm32::rcc::{
     AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllDiv, PllMul, PllPreDiv, PllSource, Sysclk,
@@ -31,8 +42,12 @@ use embassy_stm32::rcc::{
 };
 use embassy_stm32::spi::{self, Spi};
 use embassy_stm32::time::Hertz;
+use embassy_stm32::timer::low_level::CountingMode;
+use embassy_stm32::timer::simple_pwm::{PwmPin, SimplePwm};
 use embassy_stm32::usart::{self, BufferedUart, BufferedUartRx, BufferedUartTx};
+use embassy_stm32::wdg::IndependentWatchdog;
 use embassy_stm32::{Config, bind_interrupts, interrupt, peripherals};
+use embassy_stm32::{dma, pac};
 use embassy_time::{Duration, Ticker};
 use panic_probe as _;
 use static_cell::StaticCell;
@@ -49,11 +64,31 @@ pub const LINK_BAUD: u32 = 921_600;
 /// The board.
 pub struct Pixhawk6c;
 
-/// The rotor and stepper outputs. TODO(drivers issue): ESCs and steppers; all off until then.
-pub struct Outputs;
+/// Timeout of the independent watchdog: 100 control steps.
+pub const WATCHDOG_TIMEOUT_US: u32 = 250_000;
+
+/// The rotor outputs (DShot600, [`super::escs`]) and the watchdog the control step feeds.
+/// TODO(issue 13): the steppers.
+pub struct Outputs {
+    watchdog: IndependentWatchdog<'static, peripherals::IWDG1>,
+    watchdog_running: bool,
+    thrust_map: ThrustMap,
+}
 
 impl ActuatorOutputs for Outputs {
-    fn apply(&mut self, _thrust: &[f32], _rail: &[f32], _armed: bool) {}
+    fn apply(&mut self, thrust: &[f32], _rail: &[f32], armed: bool) {
+        if !self.watchdog_running {
+            // Started by the first step, so a board whose IMU never came up stays up to say so.
+            self.watchdog.unleash();
+            self.watchdog_running = true;
+        }
+        self.watchdog.pet();
+        let mut commands = [0.0f32; super::escs::OUTPUTS];
+        for (command, &t) in commands.iter_mut().zip(thrust) {
+            *command = self.thrust_map.command(t);
+        }
+        super::escs::command(&commands[..thrust.len().min(super::escs::OUTPUTS)], armed);
+    }
 }
 
 impl Board for Pixhawk6c {
@@ -115,15 +150,52 @@ bind_interrupts!(struct LinkIrqs {
     UART7 => usart::BufferedInterruptHandler<peripherals::UART7>;
 });
 
+bind_interrupts!(
+    /// The DMA streams and the IMU's data-ready line.
+    pub struct Irqs {
+    DMA1_STREAM0 => dma::InterruptHandler<peripherals::DMA1_CH0>;
+    DMA1_STREAM1 => dma::InterruptHandler<peripherals::DMA1_CH1>;
+    DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
+    DMA1_STREAM3 => dma::InterruptHandler<peripherals::DMA1_CH3>;
+    DMA1_STREAM4 => dma::InterruptHandler<peripherals::DMA1_CH4>;
+    EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
+});
+
+/// SPI clock of the IMU: 10 MHz (the ICM-42688-P takes up to 24 MHz).
+const IMU_SPI_HZ: u32 = 10_000_000;
+
+/// What the board's own tasks take.
+pub struct BoardParts {
+    /// The status LEDs (thread mode).
+    pub leds: Leds,
+    /// The IMU and the ESCs (control priority).
+    pub control_tasks: ControlTasks,
+}
+
+/// The board's tasks at the control priority.
+pub struct ControlTasks {
+    imu: super::imu_spi::ImuBus,
+    escs: super::escs::EscTimers,
+    reset: ResetReason,
+}
+
 /// SPI clock of the FRAM: 10 MHz, well inside the part's 40 MHz.
 const FRAM_SPI_HZ: u32 = 10_000_000;
 
 static LINK_TX_BUFFER: StaticCell<[u8; 2048]> = StaticCell::new();
 static LINK_RX_BUFFER: StaticCell<[u8; 1024]> = StaticCell::new();
 
+/// Why the MCU last reset (RCC_RSR), its flags then cleared for the next start.
+fn take_reset_reason() -> ResetReason {
+    let rsr = pac::RCC.rsr().read().0;
+    pac::RCC.rsr().modify(|w| w.set_rmvf(true));
+    ResetReason::from_rsr(rsr)
+}
+
 /// Brings the clocks up, claims the pins, opens the link; returns what the application takes
-/// and the LEDs.
-pub fn init() -> (Parts<Pixhawk6c>, Leds) {
+/// and what the board's own tasks take.
+pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
+    let reset = take_reset_reason();
     let p = embassy_stm32::init(clock_config());
     if let Some(mut core) = cortex_m::Peripherals::take() {
         core.DCB.enable_trace();
@@ -160,6 +232,68 @@ pub fn init() -> (Parts<Pixhawk6c>, Leds) {
     let fram_spi = Spi::new_blocking(p.SPI2, p.PD3, p.PC3, p.PC2, spi_config);
     let fram = super::fram::Fram::new(fram_spi, Output::new(p.PD4, Level::High, Speed::High));
 
+    // IMU on SPI1, its bus powered (PB2 high), chip select PC13, data ready PE6.
+    let imu_power = Output::new(p.PB2, Level::High, Speed::Low);
+    core::mem::forget(imu_power); // keep the sensors powered for good
+    let mut imu_spi_config = spi::Config::default();
+    imu_spi_config.frequency = Hertz(IMU_SPI_HZ);
+    imu_spi_config.mode = spi::MODE_3;
+    let imu = super::imu_spi::ImuBus {
+        spi: Spi::new(
+            p.SPI1,
+            p.PA5,
+            p.PA7,
+            p.PA6,
+            p.DMA1_CH3,
+            p.DMA1_CH4,
+            Irqs,
+            imu_spi_config,
+        ),
+        cs: Output::new(p.PC13, Level::High, Speed::VeryHigh),
+        drdy: ExtiInput::new(p.PE6, p.EXTI6, Pull::None, Irqs),
+    };
+
+    // ESCs: each timer counts one DShot600 bit per period.
+    let dshot = Hertz(drivers::dshot::DSHOT600_BIT_HZ);
+    let pin = OutputType::PushPull;
+    let escs = super::escs::EscTimers {
+        tim1: SimplePwm::new(
+            p.TIM1,
+            Some(PwmPin::new(p.PA8, pin)),
+            Some(PwmPin::new(p.PE11, pin)),
+            Some(PwmPin::new(p.PE13, pin)),
+            Some(PwmPin::new(p.PE14, pin)),
+            dshot,
+            CountingMode::EdgeAlignedUp,
+        ),
+        tim4: SimplePwm::new(
+            p.TIM4,
+            None,
+            None,
+            Some(PwmPin::new(p.PD14, pin)),
+            Some(PwmPin::new(p.PD15, pin)),
+            dshot,
+            CountingMode::EdgeAlignedUp,
+        ),
+        tim5: SimplePwm::new(
+            p.TIM5,
+            Some(PwmPin::new(p.PA0, pin)),
+            Some(PwmPin::new(p.PA1, pin)),
+            None,
+            None,
+            dshot,
+            CountingMode::EdgeAlignedUp,
+        ),
+        dma1: p.DMA1_CH0,
+        dma4: p.DMA1_CH1,
+        dma5: p.DMA1_CH2,
+    };
+    let outputs = Outputs {
+        watchdog: IndependentWatchdog::new(p.IWDG1, WATCHDOG_TIMEOUT_US),
+        watchdog_running: false,
+        thrust_map: ThrustMap::SQUARE,
+    };
+
     interrupt::SPDIF_RX.set_priority(Priority::P2);
     interrupt::CEC.set_priority(Priority::P3);
     interrupt::JPEG.set_priority(Priority::P15);
@@ -168,7 +302,7 @@ pub fn init() -> (Parts<Pixhawk6c>, Leds) {
     let parts = Parts {
         link_rx,
         link_tx,
-        outputs: Outputs,
+        outputs,
         param_flash: fram,
         irqs: ExecutorIrqs {
             control: Interrupt::SPDIF_RX,
@@ -176,7 +310,34 @@ pub fn init() -> (Parts<Pixhawk6c>, Leds) {
             thread_wake: Interrupt::JPEG,
         },
     };
-    (parts, leds)
+    let board = BoardParts {
+        leds,
+        control_tasks: ControlTasks { imu, escs, reset },
+    };
+    (parts, board)
+}
+
+/// Spawns the board's tasks at the control priority (the IMU, the ESCs) and reports why the
+/// board started.
+pub fn spawn_control_tasks(spawner: SendSpawner, tasks: ControlTasks) {
+    let ControlTasks { imu, escs, reset } = tasks;
+    let severity = if reset.is_fault() {
+        crate::app::autonomy::Severity::Critical
+    } else {
+        crate::app::autonomy::Severity::Info
+    };
+    let _ = crate::app::OUTBOX.try_send(crate::app::comms::report(
+        severity,
+        format_args!("{}; disarmed", reset.describe()),
+    ));
+    match super::imu_spi::imu(imu) {
+        Ok(token) => spawner.spawn(token),
+        Err(e) => defmt::error!("IMU task not spawned: {}", e),
+    }
+    match super::escs::escs(escs) {
+        Ok(token) => spawner.spawn(token),
+        Err(e) => defmt::error!("ESC task not spawned: {}", e),
+    }
 }
 
 #[interrupt]

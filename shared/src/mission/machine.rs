@@ -179,6 +179,36 @@ impl Mission {
         abort: None,
     };
 
+    /// [`Self::UNLOADED`], built at run time field by field. A static initialised from the
+    /// constant keeps the whole 18 KB value in the flight controller's flash (its few non-zero
+    /// bytes put it in `.data`); built here into a zeroed static it costs a few stores.
+    #[inline(never)]
+    pub fn unloaded() -> Self {
+        Self {
+            scenario: NO_SCENARIO,
+            config: MissionConfig::DEFAULT,
+            navigator: Navigator::new(),
+            clock: LoopMonitor::at_rate(CONTROL_RATE_HZ),
+            tick: 0,
+            phase: Phase::Idle,
+            phase_time: 0.0,
+            robots: Positions::new(),
+            rail_move: None,
+            lift_plan: None,
+            lift: None,
+            pending: None,
+            outgoing: None,
+            latest: None,
+            converged_in_a_row: 0,
+            estimate: None,
+            formation: None,
+            flight: None,
+            adapter: None,
+            adaptation: None,
+            abort: None,
+        }
+    }
+
     /// In place: a fresh, idle mission for `scenario`, as [`Self::new`] builds it (the state
     /// estimate and the loop clock carry on).
     pub fn load(&mut self, scenario: &Scenario, config: MissionConfig) {
