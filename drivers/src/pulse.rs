@@ -68,6 +68,19 @@ pub fn pulse_counts(pulse_ns: u32, count_hz: u32) -> u16 {
     u16::try_from(counts).unwrap_or(u16::MAX)
 }
 
+/// The compare value for a pulse of `pulse_ns` on a timer whose period is `period_ns` and
+/// `max_duty` counts (rounded down, at most `max_duty`).
+pub fn duty_of(pulse_ns: u32, period_ns: u32, max_duty: u32) -> u32 {
+    if period_ns == 0 {
+        return 0;
+    }
+    let duty = u64::from(pulse_ns) * u64::from(max_duty) / u64::from(period_ns);
+    duty.min(u64::from(max_duty)) as u32
+}
+
+/// Period of the PWM and OneShot125 outputs at [`EscProtocol::update_hz`] 400 Hz, ns.
+pub const PERIOD_400HZ_NS: u32 = 2_500_000;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -93,6 +106,15 @@ mod tests {
         assert_eq!(EscProtocol::Dshot600.pulse_ns(1.0), 0);
         assert_eq!(EscProtocol::Pwm.update_hz(400), 400);
         assert_eq!(EscProtocol::Pwm.update_hz(1000), 400);
+    }
+
+    /// 400 Hz with 60,000 counts a period: 1500 us is 36,000 counts, 125 us 3,000.
+    #[test]
+    fn duty_within_the_period() {
+        assert_eq!(duty_of(1_500_000, PERIOD_400HZ_NS, 60_000), 36_000);
+        assert_eq!(duty_of(125_000, PERIOD_400HZ_NS, 60_000), 3_000);
+        assert_eq!(duty_of(3_000_000, PERIOD_400HZ_NS, 60_000), 60_000);
+        assert_eq!(duty_of(1_000, 0, 60_000), 0);
     }
 
     /// A 1 MHz timer: 1500 us is 1500 counts; at 240 MHz 125 us is 30,000 counts.

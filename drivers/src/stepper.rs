@@ -66,8 +66,10 @@ impl RailAxis {
             return 0;
         }
         let per_m = self.config.microsteps_per_m();
-        let speed = ((target_m - self.position_m) / dt)
-            .clamp(-self.config.max_speed_m_s, self.config.max_speed_m_s);
+        // min/max, not `f32::clamp`: that one panics on a bad range (and its message pulls
+        // float formatting, 14 KB, into the firmware).
+        let limit = libm::fabsf(self.config.max_speed_m_s);
+        let speed = ((target_m - self.position_m) / dt).max(-limit).min(limit);
         self.vactual = tmc2209::vactual(speed * per_m);
         self.position_m += tmc2209::velocity_of(self.vactual) / per_m * dt;
         self.vactual

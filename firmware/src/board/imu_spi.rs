@@ -123,6 +123,9 @@ pub async fn imu(mut bus: ImuBus) {
         match select(bus.drdy.wait_for_rising_edge(), ticker.next()).await {
             Either::First(()) => bus.drain(&mut front).await,
             Either::Second(()) => {
+                // Whatever the interrupt left (it re-fires each sample above the watermark,
+                // so a missed edge only delays a read to here).
+                bus.drain(&mut front).await;
                 let reading = front.tick();
                 if IN_HIL.load(Ordering::Relaxed) {
                     continue;

@@ -33,6 +33,8 @@ pub mod fram;
 pub mod imu_spi;
 #[cfg(feature = "qemu")]
 pub mod qemu;
+#[cfg(feature = "pixhawk6c")]
+pub mod steppers;
 #[cfg(feature = "qemu")]
 pub use qemu::QemuMps2An500 as Selected;
 

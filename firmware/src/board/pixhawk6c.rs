@@ -20,16 +20,19 @@
 //!   data ready PE6; sensor bus power PB2), mounted yaw 270 deg (`init/rc.board_sensors`
 //!   `icm42688p -R 6`), see [`super::imu_spi`]. Its samples drive the control step. (The
 //!   BMI088 on PC14/PC15, yaw 180 deg, `-R 4`, is not used.)
-//! - ESCs: DShot600 on the eight FMU outputs (`timer_config.cpp`: TIM1 CH1-4 on PA8, PE11,
+//! - ESCs: DShot600 (or PWM, OneShot125) on the eight FMU outputs (`timer_config.cpp`: TIM1 CH1-4 on PA8, PE11,
 //!   PE13, PE14; TIM4 CH3-4 on PD14, PD15; TIM5 CH1-2 on PA0, PA1), see [`super::escs`].
 //! - Watchdog: the independent watchdog (IWDG1, [`WATCHDOG_TIMEOUT_US`]), started by the
 //!   first control step and fed by every one after it ([`Outputs::apply`]); the reset reason
 //!   (RCC_RSR) goes to the ground at start, a watchdog reset as an error.
 //!
-//! Not yet on this board (issue 13): the TMC2209 steppers on TELEM2/TELEM3 (their driver core
-//! is `drivers::tmc2209` and `drivers::stepper`), MAVLink over USB, the PWM/OneShot125 option.
+//! - Steppers: TMC2209s on TELEM2 (UART5, TX PC12) and TELEM3 (USART2, TX PD5), half duplex,
+//!   see [`super::steppers`] and the README's wiring.
+//!
+//! Not yet on this board (issue 13): MAVLink over USB (CDC-ACM).
 
 use defmt_rtt as _;
+use drivers::pulse::EscProtocol;
 use drivers::reset::ResetReason;
 use drivers::thrust_map::ThrustMap;
 use embassy_executor::{SendSpawner, Spawner};
@@ -50,7 +53,8 @@ use embassy_stm32::{Config, bind_interrupts, interrupt, peripherals};
 use embassy_stm32::{dma, pac};
 use embassy_time::{Duration, Ticker};
 use panic_probe as _;
-use static_cell::StaticCell;
+use shared::mission::HardwareConfig;
+use static_cell::{ConstStaticCell, StaticCell};
 
 use super::{ActuatorOutputs, Board, ExecutorIrqs, Parts};
 
@@ -67,27 +71,58 @@ pub struct Pixhawk6c;
 /// Timeout of the independent watchdog: 100 control steps.
 pub const WATCHDOG_TIMEOUT_US: u32 = 250_000;
 
-/// The rotor outputs (DShot600, [`super::escs`]) and the watchdog the control step feeds.
-/// TODO(issue 13): the steppers.
+/// The rotor outputs ([`super::escs`]), the steppers ([`super::steppers`]) and the watchdog
+/// the control step feeds.
 pub struct Outputs {
     watchdog: IndependentWatchdog<'static, peripherals::IWDG1>,
     watchdog_running: bool,
     thrust_map: ThrustMap,
+    protocol: EscProtocol,
+    /// The parameters' hardware settings last seen, refused or taken.
+    settings: HardwareConfig,
+}
+
+impl Outputs {
+    /// Takes the ESC protocol and the thrust map from the parameters, while disarmed; says
+    /// what it refuses.
+    fn follow_parameters(&mut self, armed: bool) {
+        let settings = crate::app::MISSION_CONFIG.lock(|c| c.get().hardware);
+        if armed || settings == self.settings {
+            return;
+        }
+        self.settings = settings;
+        let refuse = |args: core::fmt::Arguments<'_>| {
+            let _ = crate::app::OUTBOX.try_send(crate::app::comms::report(
+                crate::app::autonomy::Severity::Error,
+                args,
+            ));
+        };
+        match ThrustMap::new(settings.thrust_map) {
+            Ok(map) => self.thrust_map = map,
+            Err(e) => refuse(format_args!("{e}; the previous map stays")),
+        }
+        match EscProtocol::from_param(i32::from(settings.esc_protocol)) {
+            Ok(p) => self.protocol = p,
+            Err(e) => refuse(format_args!("{e}")),
+        }
+    }
 }
 
 impl ActuatorOutputs for Outputs {
-    fn apply(&mut self, thrust: &[f32], _rail: &[f32], armed: bool) {
+    fn apply(&mut self, thrust: &[f32], rail: &[f32], armed: bool) {
         if !self.watchdog_running {
             // Started by the first step, so a board whose IMU never came up stays up to say so.
             self.watchdog.unleash();
             self.watchdog_running = true;
         }
         self.watchdog.pet();
+        self.follow_parameters(armed);
         let mut commands = [0.0f32; super::escs::OUTPUTS];
         for (command, &t) in commands.iter_mut().zip(thrust) {
             *command = self.thrust_map.command(t);
         }
-        super::escs::command(&commands[..thrust.len().min(super::escs::OUTPUTS)], armed);
+        super::escs::command(self.protocol, &commands, armed);
+        super::steppers::command(rail);
     }
 }
 
@@ -158,6 +193,12 @@ bind_interrupts!(
     DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
     DMA1_STREAM3 => dma::InterruptHandler<peripherals::DMA1_CH3>;
     DMA1_STREAM4 => dma::InterruptHandler<peripherals::DMA1_CH4>;
+    DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
+    DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
+    DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
+    DMA2_STREAM0 => dma::InterruptHandler<peripherals::DMA2_CH0>;
+    UART5 => usart::InterruptHandler<peripherals::UART5>;
+    USART2 => usart::InterruptHandler<peripherals::USART2>;
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
 });
 
@@ -176,6 +217,7 @@ pub struct BoardParts {
 pub struct ControlTasks {
     imu: super::imu_spi::ImuBus,
     escs: super::escs::EscTimers,
+    steppers: [Option<super::steppers::StepperBus>; 2],
     reset: ResetReason,
 }
 
@@ -183,6 +225,9 @@ pub struct ControlTasks {
 const FRAM_SPI_HZ: u32 = 10_000_000;
 
 static LINK_TX_BUFFER: StaticCell<[u8; 2048]> = StaticCell::new();
+/// The stepper buses' receive rings.
+static STEPPER_RX: [ConstStaticCell<[u8; 64]>; 2] =
+    [ConstStaticCell::new([0; 64]), ConstStaticCell::new([0; 64])];
 static LINK_RX_BUFFER: StaticCell<[u8; 1024]> = StaticCell::new();
 
 /// Why the MCU last reset (RCC_RSR), its flags then cleared for the next start.
@@ -288,10 +333,56 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
         dma4: p.DMA1_CH1,
         dma5: p.DMA1_CH2,
     };
+    // Steppers: TMC2209s on TELEM2 (UART5) and TELEM3 (USART2), TX through 1 kOhm and RX on
+    // the drivers' single wire.
+    let mut stepper_config = usart::Config::default();
+    stepper_config.baudrate = super::steppers::BAUD;
+    let telem2 = usart::Uart::new(
+        p.UART5,
+        p.PD2,
+        p.PC12,
+        p.DMA1_CH5,
+        p.DMA1_CH6,
+        Irqs,
+        stepper_config,
+    );
+    let telem3 = usart::Uart::new(
+        p.USART2,
+        p.PA3,
+        p.PD5,
+        p.DMA1_CH7,
+        p.DMA2_CH0,
+        Irqs,
+        stepper_config,
+    );
+    let bus = |uart: usart::Uart<'static, embassy_stm32::mode::Async>,
+               ring: &'static mut [u8; 64],
+               first_robot,
+               name| {
+        let (tx, rx) = uart.split();
+        super::steppers::StepperBus {
+            tx,
+            rx: rx.into_ring_buffered(ring),
+            first_robot,
+            name,
+        }
+    };
+    let steppers = [
+        telem2
+            .ok()
+            .map(|uart| bus(uart, STEPPER_RX[0].take(), 0, "TELEM2")),
+        telem3
+            .ok()
+            .map(|uart| bus(uart, STEPPER_RX[1].take(), 4, "TELEM3")),
+    ];
+    // A core halted by a debug probe freezes the watchdog too, so a breakpoint does not reset.
+    pac::DBGMCU.apb4fzr1().modify(|w| w.set_iwdg1(true));
     let outputs = Outputs {
         watchdog: IndependentWatchdog::new(p.IWDG1, WATCHDOG_TIMEOUT_US),
         watchdog_running: false,
         thrust_map: ThrustMap::SQUARE,
+        protocol: EscProtocol::Dshot600,
+        settings: HardwareConfig::DEFAULT,
     };
 
     interrupt::SPDIF_RX.set_priority(Priority::P2);
@@ -312,7 +403,12 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
     };
     let board = BoardParts {
         leds,
-        control_tasks: ControlTasks { imu, escs, reset },
+        control_tasks: ControlTasks {
+            imu,
+            escs,
+            steppers,
+            reset,
+        },
     };
     (parts, board)
 }
@@ -320,7 +416,12 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
 /// Spawns the board's tasks at the control priority (the IMU, the ESCs) and reports why the
 /// board started.
 pub fn spawn_control_tasks(spawner: SendSpawner, tasks: ControlTasks) {
-    let ControlTasks { imu, escs, reset } = tasks;
+    let ControlTasks {
+        imu,
+        escs,
+        steppers,
+        reset,
+    } = tasks;
     let severity = if reset.is_fault() {
         crate::app::autonomy::Severity::Critical
     } else {
@@ -337,6 +438,18 @@ pub fn spawn_control_tasks(spawner: SendSpawner, tasks: ControlTasks) {
     match super::escs::escs(escs) {
         Ok(token) => spawner.spawn(token),
         Err(e) => defmt::error!("ESC task not spawned: {}", e),
+    }
+    for bus in steppers {
+        match bus.map(super::steppers::steppers) {
+            Some(Ok(token)) => spawner.spawn(token),
+            Some(Err(e)) => defmt::error!("stepper task not spawned: {}", e),
+            None => {
+                let _ = crate::app::OUTBOX.try_send(crate::app::comms::report(
+                    crate::app::autonomy::Severity::Critical,
+                    format_args!("a stepper bus UART refused its configuration"),
+                ));
+            }
+        }
     }
 }
 

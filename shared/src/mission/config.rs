@@ -5,6 +5,7 @@ use crate::control::allocation::MixerKind;
 use crate::estimation::EstimatorOptions;
 use crate::flight::{AdaptConfig, FlightConfig};
 use crate::liftoff::LiftoffConfig;
+use crate::mission::hardware::HardwareConfig;
 use crate::rail::stepper::MotionLimits;
 
 /// Default standard deviation of a lift reading, N (see [`MissionConfig::lift_noise_sigma`]).
@@ -45,6 +46,8 @@ pub struct MissionConfig {
     pub confirmations: u32,
     /// Time armed on the ground before take-off, s.
     pub arm_time: f32,
+    /// The drivers' settings (not used by the mission itself).
+    pub hardware: HardwareConfig,
 }
 
 impl MissionConfig {
@@ -62,6 +65,7 @@ impl MissionConfig {
         relax_time: 2.0,
         confirmations: 1,
         arm_time: 1.0,
+        hardware: HardwareConfig::DEFAULT,
     };
 }
 

@@ -3,17 +3,20 @@
 //!
 //! - [`phases`]: the phases and the reasons of each transition.
 //! - [`config`]: the mission's tuning.
+//! - [`hardware`]: the drivers' settings (ESCs, thrust map, steppers).
 //! - [`machine`]: the tick side, stepped at 400 Hz.
 //! - [`jobs`]: the long computations the tick side hands off, and the planner that runs them.
 //! - [`params`]: the tunables as named parameters (the ground link serves them).
 
 pub mod config;
+pub mod hardware;
 pub mod jobs;
 pub mod machine;
 pub mod params;
 pub mod phases;
 
 pub use config::{DETECTOR_SIGMA, MissionConfig};
+pub use hardware::HardwareConfig;
 pub use jobs::{FormationPlan, JobRequest, JobResult, LiftPlan, MissionPlanner};
 pub use machine::{CommandRefusal, CommandReply, Mission, OperatorCommand, TickInput, TickOutput};
 pub use phases::{AbortReason, Phase, Reason, Transition};

@@ -6,9 +6,9 @@
 //!
 //! A value is accepted only when it is finite, inside `[min, max]` and, for a parameter marked
 //! integer, a whole number ([`check`]). The ranges bound what the mission has been shown to
-//! tolerate or what is physically sensible; they are not tuning advice. Not here: the
-//! estimator's thrust-scale axis (a grid, not a number) and the ESC map (comes with the ESC
-//! driver).
+//! tolerate or what is physically sensible; they are not tuning advice. The drivers' settings
+//! ([`super::hardware`]: ESC protocol, thrust map, steppers) are parameters too. Not here: the
+//! estimator's thrust-scale axis (a grid, not a number).
 
 use crate::control::allocation::MixerKind;
 use crate::mission::config::MissionConfig;
@@ -75,7 +75,7 @@ macro_rules! param {
 }
 
 /// Number of parameters.
-pub const COUNT: usize = 73;
+pub const COUNT: usize = 84;
 
 /// Every parameter, in the order the protocol numbers them (`param_index`).
 pub static TABLE: [ParamSpec; COUNT] = [
@@ -687,6 +687,107 @@ pub static TABLE: [ParamSpec; COUNT] = [
         "largest difference of the window's halves for a steady trim",
         |c| c.adapt.trim.steadiness
     ),
+    // The drivers (mission::hardware): ESCs, thrust map, steppers.
+    ParamSpec {
+        name: "ESC_PROTOCOL",
+        unit: "-",
+        min: 0.0,
+        max: 2.0,
+        integer: true,
+        #[cfg(feature = "docs")]
+        doc: "ESC protocol on the FMU outputs: 0 DShot600, 1 PWM, 2 OneShot125 (taken while disarmed)",
+        get: |c| f32::from(c.hardware.esc_protocol),
+        set: |c, v| c.hardware.esc_protocol = v as u8,
+    },
+    param!(
+        "THR_MAP_20",
+        "-",
+        0.001,
+        0.999,
+        "thrust at 20 % ESC command, fraction of full thrust (a bench calibration; rising with the command)",
+        |c| c.hardware.thrust_map[0]
+    ),
+    param!(
+        "THR_MAP_40",
+        "-",
+        0.001,
+        0.999,
+        "thrust at 40 % ESC command, fraction of full thrust",
+        |c| c.hardware.thrust_map[1]
+    ),
+    param!(
+        "THR_MAP_60",
+        "-",
+        0.001,
+        0.999,
+        "thrust at 60 % ESC command, fraction of full thrust",
+        |c| c.hardware.thrust_map[2]
+    ),
+    param!(
+        "THR_MAP_80",
+        "-",
+        0.001,
+        0.999,
+        "thrust at 80 % ESC command, fraction of full thrust",
+        |c| c.hardware.thrust_map[3]
+    ),
+    ParamSpec {
+        name: "STP_STEPS_REV",
+        unit: "-",
+        min: 24.0,
+        max: 400.0,
+        integer: true,
+        #[cfg(feature = "docs")]
+        doc: "full steps per stepper revolution (200 for 1.8 deg motors)",
+        get: |c| c.hardware.drive.steps_per_rev as f32,
+        set: |c, v| c.hardware.drive.steps_per_rev = v as u32,
+    },
+    ParamSpec {
+        name: "STP_MICROSTEPS",
+        unit: "-",
+        min: 1.0,
+        max: 256.0,
+        integer: true,
+        #[cfg(feature = "docs")]
+        doc: "microsteps per full step set in the TMC2209s (a power of two)",
+        get: |c| c.hardware.drive.microsteps as f32,
+        set: |c, v| c.hardware.drive.microsteps = v as u32,
+    },
+    param!(
+        "STP_PINION_D",
+        "m",
+        0.005,
+        0.1,
+        "pitch diameter of the robots' pinions",
+        |c| c.hardware.drive.pinion_pitch_diameter
+    ),
+    param!(
+        "STP_CURRENT",
+        "A",
+        0.1,
+        2.0,
+        "stepper motor current, RMS",
+        |c| c.hardware.stepper_current
+    ),
+    param!(
+        "STP_RSENSE",
+        "ohm",
+        0.05,
+        0.5,
+        "sense resistors of the TMC2209 boards",
+        |c| c.hardware.stepper_r_sense
+    ),
+    ParamSpec {
+        name: "STP_SGTHRS",
+        unit: "-",
+        min: 0.0,
+        max: 255.0,
+        integer: true,
+        #[cfg(feature = "docs")]
+        doc: "StallGuard threshold (SGTHRS): stalled when SG_RESULT <= 2x this at speed; 0 off (tune on the bench)",
+        get: |c| f32::from(c.hardware.stall_threshold),
+        set: |c, v| c.hardware.stall_threshold = v as u8,
+    },
 ];
 
 /// Why a value was refused.

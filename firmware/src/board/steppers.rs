@@ -1,0 +1,240 @@
+//! The robots' steppers on the Pixhawk 6C (issue 13): TMC2209 drivers on two single-wire UART
+//! buses, TELEM2 (UART5, TX PC12, RX PD2) for robots 1-4 and TELEM3 (USART2, TX PD5, RX PA3)
+//! for robots 5-8, node addresses 0-3 on each (MS1/MS2), at [`BAUD`]. The wiring is the
+//! datasheet's for a standard UART: TX through 1 kOhm and RX directly to the drivers' PDN_UART
+//! line (README "The Pixhawk 6C's wiring"), so every request comes back as an echo before the
+//! reply; the echo is checked. The driver core is [`drivers::tmc2209`] and
+//! [`drivers::stepper`]; this task is its glue.
+//!
+//! Start-up (and again whenever the stepper parameters change while disarmed): each driver's
+//! version is read, then `GCONF`, `CHOPCONF` (microsteps, current range), `IHOLD_IRUN`,
+//! `TCOOLTHRS` and `SGTHRS` are written and confirmed by `IFCNT` and by reading `GCONF` and
+//! `CHOPCONF` back. Then at [`UPDATE_HZ`] each robot's axis moves by `VACTUAL` towards the
+//! position the control step commands (`shared`'s trapezoidal profiles) and its arc length is
+//! kept from the velocities commanded; `SG_RESULT` is read, and a stalled robot is stopped
+//! and reported to the ground.
+
+use core::cell::Cell;
+
+use drivers::stepper::{AxisConfig, RailAxis, StallMonitor};
+use drivers::tmc2209::{self, reg};
+use embassy_stm32::mode::Async;
+use embassy_stm32::usart::{RingBufferedUartRx, UartTx};
+use embassy_sync::blocking_mutex::Mutex;
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_time::{Duration, Ticker, with_timeout};
+use embedded_io_async::Read;
+use shared::mission::HardwareConfig;
+
+use crate::app::autonomy::Severity;
+use crate::app::comms::report;
+use crate::app::{MISSION_CONFIG, OUTBOX};
+
+/// Baud rate of the stepper buses (the TMC2209 detects it).
+pub const BAUD: u32 = 115_200;
+/// Axis updates per second.
+pub const UPDATE_HZ: u64 = 50;
+/// Drivers per bus.
+const NODES: usize = 4;
+/// Longest wait for a reply (8 bytes take 0.7 ms at 115,200 baud).
+const REPLY_TIMEOUT: Duration = Duration::from_millis(3);
+/// Low `SG_RESULT` readings in a row that make a stall (0.1 s).
+const STALL_READINGS: u8 = 5;
+/// StallGuard is trusted above this speed, microsteps/s.
+const STALL_MIN_SPEED: f32 = 400.0;
+
+/// Where the control step wants the robots, m of arc, and how many there are.
+#[derive(Clone, Copy)]
+struct RailTargets {
+    positions: [f32; 8],
+    robots: usize,
+}
+
+static TARGETS: Mutex<CriticalSectionRawMutex, Cell<Option<RailTargets>>> =
+    Mutex::new(Cell::new(None));
+
+/// Hands one control step's rail positions (m, one per robot) to the steppers.
+pub fn command(rail: &[f32]) {
+    let mut positions = [0.0; 8];
+    for (p, &r) in positions.iter_mut().zip(rail) {
+        *p = r;
+    }
+    let robots = rail.len().min(8);
+    TARGETS.lock(|t| t.set(Some(RailTargets { positions, robots })));
+}
+
+/// One stepper bus: its UART and the robot its node 0 drives.
+pub struct StepperBus {
+    /// The UART's sending half.
+    pub tx: UartTx<'static, Async>,
+    /// The UART's receiving half, on a DMA ring (the echo arrives while sending).
+    pub rx: RingBufferedUartRx<'static>,
+    /// Robot (0-based) of node 0; nodes 1-3 drive the next three.
+    pub first_robot: usize,
+    /// The bus's name for reports (`TELEM2`).
+    pub name: &'static str,
+}
+
+impl StepperBus {
+    /// Sends `request`, reads its echo and then `reply` (if any); the bus is resynchronised
+    /// (stale bytes dropped) first.
+    async fn exchange(&mut self, request: &[u8], reply: &mut [u8]) -> Result<(), &'static str> {
+        while embedded_hal_nb::serial::Read::read(&mut self.rx).is_ok() {}
+        self.tx.write(request).await.map_err(|_| "UART error")?;
+        let mut echo = [0u8; 8];
+        let echo = &mut echo[..request.len().min(8)];
+        let received = async {
+            self.rx.read_exact(echo).await?;
+            self.rx.read_exact(reply).await
+        };
+        match with_timeout(REPLY_TIMEOUT, received).await {
+            Err(_) => Err("no answer"),
+            Ok(Err(_)) => Err("UART error"),
+            Ok(Ok(())) if echo != &request[..echo.len()] => {
+                Err("echo garbled: check the 1 kOhm TX resistor")
+            }
+            Ok(Ok(())) => Ok(()),
+        }
+    }
+
+    async fn write(&mut self, node: u8, register: u8, value: u32) -> bool {
+        let datagram = tmc2209::write_datagram(node, register, value);
+        self.exchange(&datagram, &mut []).await.is_ok()
+    }
+
+    async fn read(&mut self, node: u8, register: u8) -> Result<u32, &'static str> {
+        let mut reply = [0u8; 8];
+        self.exchange(&tmc2209::read_request(node, register), &mut reply)
+            .await?;
+        tmc2209::parse_reply(&reply, register).map_err(|e| match e {
+            tmc2209::ReplyError::Crc => "bad CRC",
+            _ => "garbled reply",
+        })
+    }
+
+    /// Configures driver `node`; why not, if it cannot be.
+    async fn configure(&mut self, node: u8, hw: &HardwareConfig) -> Result<(), &'static str> {
+        let version = (self.read(node, reg::IOIN).await? >> 24) as u8;
+        if version != tmc2209::VERSION {
+            return Err("not a TMC2209");
+        }
+        let microsteps = u16::try_from(hw.drive.microsteps).unwrap_or(0);
+        let (cs, vsense) = tmc2209::current_scale(hw.stepper_current, hw.stepper_r_sense)
+            .map_err(|_| "current outside the sense resistors' range")?;
+        let chopconf = tmc2209::chopconf(tmc2209::CHOPCONF_RESET, microsteps, vsense)
+            .map_err(|_| "microsteps not a power of two up to 256")?;
+        let before = self.read(node, reg::IFCNT).await?;
+        let writes: [(u8, u32); 5] = [
+            (reg::GCONF, tmc2209::GCONF_UART),
+            (reg::CHOPCONF, chopconf),
+            (reg::IHOLD_IRUN, tmc2209::ihold_irun(cs / 2, cs, 8)),
+            // StallGuard from the lowest speeds (TSTEP below the maximum).
+            (reg::TCOOLTHRS, 0x000F_FFFF),
+            (reg::SGTHRS, u32::from(hw.stall_threshold)),
+        ];
+        for (register, value) in writes {
+            if !self.write(node, register, value).await {
+                return Err("UART error");
+            }
+        }
+        let after = self.read(node, reg::IFCNT).await?;
+        if after.wrapping_sub(before) & 0xFF != writes.len() as u32 {
+            return Err("writes not all taken (IFCNT)");
+        }
+        if self.read(node, reg::GCONF).await? & 0x3FF != tmc2209::GCONF_UART
+            || self.read(node, reg::CHOPCONF).await? != chopconf
+        {
+            return Err("settings did not read back");
+        }
+        Ok(())
+    }
+}
+
+fn axis_config(hw: &HardwareConfig) -> AxisConfig {
+    let limits = MISSION_CONFIG.lock(|c| c.get().rail_limits);
+    AxisConfig {
+        pinion_radius_m: 0.5 * hw.drive.pinion_pitch_diameter,
+        full_steps_per_rev: u16::try_from(hw.drive.steps_per_rev).unwrap_or(200),
+        microsteps: u16::try_from(hw.drive.microsteps).unwrap_or(16),
+        // A margin over the profiles' top speed, so the axis catches up.
+        max_speed_m_s: 1.5 * limits.max_speed,
+    }
+}
+
+/// Runs one stepper bus forever.
+#[embassy_executor::task(pool_size = 2)]
+pub async fn steppers(mut bus: StepperBus) {
+    let mut ticker = Ticker::every(Duration::from_micros(1_000_000 / UPDATE_HZ));
+    let dt = 1.0 / UPDATE_HZ as f32;
+    let mut hw: Option<HardwareConfig> = None;
+    let mut ready = [false; NODES];
+    let mut axes: [Option<RailAxis>; NODES] = [None; NODES];
+    let mut stalls = [StallMonitor::new(0, STALL_READINGS, STALL_MIN_SPEED); NODES];
+    let mut stalled = [false; NODES];
+    loop {
+        ticker.next().await;
+        let armed = crate::app::ARMED.load(core::sync::atomic::Ordering::Relaxed);
+        let settings = MISSION_CONFIG.lock(|c| c.get().hardware);
+        if !armed && hw != Some(settings) {
+            hw = Some(settings);
+            for node in 0..NODES {
+                let robot = bus.first_robot + node + 1;
+                ready[node] = match bus.configure(node as u8, &settings).await {
+                    Ok(()) => true,
+                    Err(why) => {
+                        let _ = OUTBOX.try_send(report(
+                            Severity::Warning,
+                            format_args!(
+                                "stepper of robot {robot} ({} node {node}): {why}",
+                                bus.name
+                            ),
+                        ));
+                        false
+                    }
+                };
+                axes[node] = None;
+                stalled[node] = false;
+                stalls[node] =
+                    StallMonitor::new(settings.stall_threshold, STALL_READINGS, STALL_MIN_SPEED);
+            }
+        }
+        let Some(settings) = hw else { continue };
+        let Some(targets) = TARGETS.lock(|t| t.get()) else {
+            continue;
+        };
+        for node in 0..NODES {
+            let robot = bus.first_robot + node;
+            if !ready[node] || robot >= targets.robots {
+                continue;
+            }
+            let target = targets.positions[robot];
+            // The arc length starts at the first position commanded (the robots' start).
+            let axis =
+                axes[node].get_or_insert_with(|| RailAxis::new(axis_config(&settings), target));
+            let vactual = if stalled[node] {
+                0
+            } else {
+                axis.update(target, dt)
+            };
+            bus.write(node as u8, reg::VACTUAL, tmc2209::vactual_register(vactual))
+                .await;
+            if settings.stall_threshold == 0 || stalled[node] {
+                continue;
+            }
+            if let Ok(sg) = bus.read(node as u8, reg::SG_RESULT).await
+                && stalls[node].update(sg, vactual)
+            {
+                stalled[node] = true;
+                axis.stop();
+                bus.write(node as u8, reg::VACTUAL, 0).await;
+                let _ = OUTBOX.try_send(report(
+                    Severity::Critical,
+                    format_args!(
+                        "robot {} stalled on the rail; its stepper stopped",
+                        robot + 1
+                    ),
+                ));
+            }
+        }
+    }
+}

@@ -1,0 +1,45 @@
+//! The vehicle's hardware settings, which the flight controller's drivers read (issue 13): the
+//! ESC protocol and the thrust map, the steppers' drive train, current and stall threshold.
+//! They are parameters like the mission's tuning ([`super::params`]), so a bench calibration
+//! replaces them without a new image; the mission itself does not use them.
+
+use crate::rail::stepper::DriveConfig;
+
+/// The hardware settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HardwareConfig {
+    /// ESC protocol on the FMU outputs: 0 DShot600, 1 PWM (1000-2000 us), 2 OneShot125.
+    pub esc_protocol: u8,
+    /// Thrust (fraction of full thrust) at 20, 40, 60 and 80 % ESC command; rising, inside
+    /// (0, 1). The default is the square law of a fixed-pitch propeller.
+    pub thrust_map: [f32; 4],
+    /// The robots' drive train (motor steps, microsteps, pinion).
+    pub drive: DriveConfig,
+    /// Stepper motor current, A RMS.
+    pub stepper_current: f32,
+    /// The stepper drivers' sense resistors, ohm.
+    pub stepper_r_sense: f32,
+    /// StallGuard threshold (TMC2209 `SGTHRS`, 0..=255): a robot whose `SG_RESULT` falls to
+    /// twice this at speed has stalled. 0 turns stall detection off; it must be tuned on the
+    /// bench for the motor and the load.
+    pub stall_threshold: u8,
+}
+
+impl HardwareConfig {
+    /// DShot600, the square law, 200-step motors at 16 microsteps on a 20 mm pinion, 0.8 A
+    /// through 0.11 ohm sense resistors (the common TMC2209 boards), stall detection off.
+    pub const DEFAULT: Self = Self {
+        esc_protocol: 0,
+        thrust_map: [0.04, 0.16, 0.36, 0.64],
+        drive: DriveConfig::DEFAULT,
+        stepper_current: 0.8,
+        stepper_r_sense: 0.11,
+        stall_threshold: 0,
+    };
+}
+
+impl Default for HardwareConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
