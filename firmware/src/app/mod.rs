@@ -92,11 +92,12 @@ static THREAD_EXECUTOR: StaticCell<raw::Executor> = StaticCell::new();
 static AUTONOMY: StaticCell<autonomy::Autonomy> = StaticCell::new();
 
 /// Starts the application on a board that is up; `control_tasks` spawns the board's tasks
-/// that run at the control priority (sensors, ESCs), `board_tasks` its thread-mode tasks
-/// (status LEDs). Never returns: thread mode then runs the jobs.
+/// that run at the control priority (sensors, ESCs; first spawner) and on the link executor
+/// (its link's own tasks; second), `board_tasks` its thread-mode tasks (status LEDs). Never
+/// returns: thread mode then runs the jobs.
 pub fn run(
     parts: Parts<Selected>,
-    control_tasks: impl FnOnce(SendSpawner),
+    control_tasks: impl FnOnce(SendSpawner, SendSpawner),
     board_tasks: impl FnOnce(Spawner),
 ) -> ! {
     let Parts {
@@ -113,7 +114,6 @@ pub fn run(
         Ok(token) => control.spawn(token),
         Err(_) => panic!("control task not spawned"),
     }
-    control_tasks(control);
 
     let comms_spawner = LINK_EXECUTOR.start(irqs.link);
     match comms::receive(link_rx, param_flash) {
@@ -124,6 +124,7 @@ pub fn run(
         Ok(token) => comms_spawner.spawn(token),
         Err(_) => panic!("link send task not spawned"),
     }
+    control_tasks(control, comms_spawner);
 
     // Thread mode: a raw executor whose pender pends the board's wake-up interrupt, so `WFI`
     // (not `WFE`, which QEMU does not halt on under -icount) wakes when a job is woken.

@@ -14,7 +14,9 @@ fn main() -> ! {
     } = board;
     firmware::app::run(
         parts,
-        move |spawner| firmware::board::pixhawk6c::spawn_control_tasks(spawner, control_tasks),
+        move |control, link| {
+            firmware::board::pixhawk6c::spawn_control_tasks(control, link, control_tasks)
+        },
         move |spawner| firmware::board::pixhawk6c::spawn_tasks(spawner, leds),
     )
 }

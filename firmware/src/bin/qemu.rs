@@ -7,5 +7,5 @@ use cortex_m_rt::entry;
 #[entry]
 fn main() -> ! {
     let parts = firmware::board::qemu::init();
-    firmware::app::run(parts, |_| {}, |_| {})
+    firmware::app::run(parts, |_, _| {}, |_| {})
 }

@@ -35,6 +35,8 @@ pub mod imu_spi;
 pub mod qemu;
 #[cfg(feature = "pixhawk6c")]
 pub mod steppers;
+#[cfg(feature = "usb-link")]
+pub mod usb_link;
 #[cfg(feature = "qemu")]
 pub use qemu::QemuMps2An500 as Selected;
 

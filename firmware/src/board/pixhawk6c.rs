@@ -9,9 +9,9 @@
 //! - LEDs: red on PD10, blue on PD11, both active low (anodes on 3.3 V).
 //! - TIM1, TIM4, TIM5 drive the eight FMU PWM outputs, TIM3 the buzzer and TIM17 the IMU
 //!   heater; the time driver therefore takes TIM2, which the board leaves free.
-//! - TELEM1 is UART7 (TX PE8, RX PE7): the MAVLink link for now, at [`LINK_BAUD`] (a HIL
-//!   bench uses a USB-serial adapter on TELEM1). The HIL link over the board's USB (CDC-ACM)
-//!   comes with the USB driver in a later issue.
+//! - The MAVLink link: TELEM1, UART7 (TX PE8, RX PE7) at [`LINK_BAUD`]. With the `usb-link`
+//!   feature (`cargo fw-usb`, the HIL bench image), USB instead when a cable powers VBUS at
+//!   start (CDC-ACM on OTG_FS, PA11/PA12, VBUS PA9; `board.h`), see `usb_link`.
 //! - Parameters: the 32 KiB FRAM on SPI2 (SCK PD3, MISO PC2, MOSI PC3, chip select PD4;
 //!   `board.h` "SPI2 is FRAM", `spi.cpp` `SPIDEV_FLASH(0)`), see [`super::fram`] (polled).
 //! - Executors on interrupt lines the board does not use: SPDIF_RX (control), CEC (link),
@@ -28,8 +28,6 @@
 //!
 //! - Steppers: TMC2209s on TELEM2 (UART5, TX PC12) and TELEM3 (USART2, TX PD5), half duplex,
 //!   see [`super::steppers`] and the README's wiring.
-//!
-//! Not yet on this board (issue 13): MAVLink over USB (CDC-ACM).
 
 use defmt_rtt as _;
 use drivers::pulse::EscProtocol;
@@ -130,8 +128,14 @@ impl Board for Pixhawk6c {
     const NAME: &'static str = "pixhawk6c";
     const TICK_COST_NAME: &'static str = "tick_cyc";
     const TICK_COST_PER_COUNT: u32 = 1;
+    #[cfg(not(feature = "usb-link"))]
     type LinkRx = BufferedUartRx<'static>;
+    #[cfg(not(feature = "usb-link"))]
     type LinkTx = BufferedUartTx<'static>;
+    #[cfg(feature = "usb-link")]
+    type LinkRx = super::usb_link::LinkRx;
+    #[cfg(feature = "usb-link")]
+    type LinkTx = super::usb_link::LinkTx;
     type Outputs = Outputs;
     type Irq = Interrupt;
     type ParamFlash = super::fram::Fram;
@@ -170,6 +174,11 @@ pub fn clock_config() -> Config {
     rcc.apb3_pre = APBPrescaler::DIV2;
     rcc.apb4_pre = APBPrescaler::DIV2;
     rcc.voltage_scale = VoltageScale::Scale0; // required above 400 MHz
+    // USB's 48 MHz from HSI48 (on by default).
+    #[cfg(feature = "usb-link")]
+    {
+        rcc.mux.usbsel = embassy_stm32::rcc::mux::Usbsel::HSI48;
+    }
     config
 }
 
@@ -215,6 +224,8 @@ pub struct BoardParts {
 
 /// The board's tasks at the control priority.
 pub struct ControlTasks {
+    #[cfg(feature = "usb-link")]
+    usb_device: Option<super::usb_link::UsbDeviceTask>,
     imu: super::imu_spi::ImuBus,
     escs: super::escs::EscTimers,
     steppers: [Option<super::steppers::StepperBus>; 2],
@@ -225,10 +236,36 @@ pub struct ControlTasks {
 const FRAM_SPI_HZ: u32 = 10_000_000;
 
 static LINK_TX_BUFFER: StaticCell<[u8; 2048]> = StaticCell::new();
+#[cfg(feature = "usb-link")]
+static USB_EP_OUT_BUFFER: StaticCell<[u8; 256]> = StaticCell::new();
 /// The stepper buses' receive rings.
 static STEPPER_RX: [ConstStaticCell<[u8; 64]>; 2] =
     [ConstStaticCell::new([0; 64]), ConstStaticCell::new([0; 64])];
 static LINK_RX_BUFFER: StaticCell<[u8; 1024]> = StaticCell::new();
+
+/// Opens TELEM1 (UART7) for MAVLink at [`LINK_BAUD`].
+fn telem1(
+    uart: embassy_stm32::Peri<'static, peripherals::UART7>,
+    rx: embassy_stm32::Peri<'static, peripherals::PE7>,
+    tx: embassy_stm32::Peri<'static, peripherals::PE8>,
+) -> (BufferedUartRx<'static>, BufferedUartTx<'static>) {
+    let mut config = usart::Config::default();
+    config.baudrate = LINK_BAUD;
+    let uart = match BufferedUart::new(
+        uart,
+        rx,
+        tx,
+        LINK_TX_BUFFER.init([0; 2048]),
+        LINK_RX_BUFFER.init([0; 1024]),
+        LinkIrqs,
+        config,
+    ) {
+        Ok(uart) => uart,
+        Err(e) => panic!("TELEM1 (UART7) configuration refused: {:?}", e),
+    };
+    let (tx, rx) = uart.split();
+    (rx, tx)
+}
 
 /// Why the MCU last reset (RCC_RSR), its flags then cleared for the next start.
 fn take_reset_reason() -> ResetReason {
@@ -256,21 +293,35 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
         red: Output::new(p.PD10, Level::High, Speed::Low),
         blue: Output::new(p.PD11, Level::High, Speed::Low),
     };
-    let mut config = usart::Config::default();
-    config.baudrate = LINK_BAUD;
-    let uart = match BufferedUart::new(
-        p.UART7,
-        p.PE7,
-        p.PE8,
-        LINK_TX_BUFFER.init([0; 2048]),
-        LINK_RX_BUFFER.init([0; 1024]),
-        LinkIrqs,
-        config,
-    ) {
-        Ok(uart) => uart,
-        Err(e) => panic!("TELEM1 (UART7) configuration refused: {:?}", e),
+    #[cfg(not(feature = "usb-link"))]
+    let (link_rx, link_tx) = telem1(p.UART7, p.PE7, p.PE8);
+    // The link: USB if a cable powers VBUS (PA9) at start, TELEM1 otherwise.
+    #[cfg(feature = "usb-link")]
+    let (link_rx, link_tx, usb_device) = {
+        use super::usb_link::{LinkRx, LinkTx};
+        use embassy_stm32::gpio::Input;
+        use embassy_stm32::usb;
+        bind_interrupts!(struct UsbIrqs {
+            OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
+        });
+        if Input::new(p.PA9, Pull::Down).is_high() {
+            let mut usb_config = usb::Config::default();
+            usb_config.vbus_detection = true;
+            let driver = usb::Driver::new_fs(
+                p.USB_OTG_FS,
+                UsbIrqs,
+                p.PA12,
+                p.PA11,
+                USB_EP_OUT_BUFFER.init([0; 256]),
+                usb_config,
+            );
+            let (device, rx, tx) = super::usb_link::open(driver);
+            (LinkRx::Usb(rx), LinkTx::Usb(tx), Some(device))
+        } else {
+            let (rx, tx) = telem1(p.UART7, p.PE7, p.PE8);
+            (LinkRx::Telem1(rx), LinkTx::Telem1(tx), None)
+        }
     };
-    let (link_tx, link_rx) = uart.split();
 
     let mut spi_config = spi::Config::default();
     spi_config.frequency = Hertz(FRAM_SPI_HZ);
@@ -404,6 +455,8 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
     let board = BoardParts {
         leds,
         control_tasks: ControlTasks {
+            #[cfg(feature = "usb-link")]
+            usb_device,
             imu,
             escs,
             steppers,
@@ -413,10 +466,12 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
     (parts, board)
 }
 
-/// Spawns the board's tasks at the control priority (the IMU, the ESCs) and reports why the
-/// board started.
-pub fn spawn_control_tasks(spawner: SendSpawner, tasks: ControlTasks) {
+/// Spawns the board's tasks at the control priority (the IMU, the ESCs, the steppers) and on
+/// the link executor (the USB device), and reports why the board started.
+pub fn spawn_control_tasks(spawner: SendSpawner, link_spawner: SendSpawner, tasks: ControlTasks) {
     let ControlTasks {
+        #[cfg(feature = "usb-link")]
+        usb_device,
         imu,
         escs,
         steppers,
@@ -431,6 +486,15 @@ pub fn spawn_control_tasks(spawner: SendSpawner, tasks: ControlTasks) {
         severity,
         format_args!("{}; disarmed", reset.describe()),
     ));
+    #[cfg(feature = "usb-link")]
+    if let Some(device) = usb_device {
+        match super::usb_link::usb_device(device) {
+            Ok(token) => link_spawner.spawn(token),
+            Err(e) => defmt::error!("USB task not spawned: {}", e),
+        }
+    }
+    #[cfg(not(feature = "usb-link"))]
+    let _ = link_spawner;
     match super::imu_spi::imu(imu) {
         Ok(token) => spawner.spawn(token),
         Err(e) => defmt::error!("IMU task not spawned: {}", e),
