@@ -6,6 +6,7 @@
 //! | module | device |
 //! |---|---|
 //! | [`dshot`] | ESC frames, DShot600 (the DShot protocol's frame and its 4-bit checksum) |
+//! | [`esc_gate`] | what the ESC outputs send: armed commands, stops, protocol changes |
 //! | [`pulse`] | ESC pulses for ESCs without DShot: PWM (1000-2000 us) and OneShot125 |
 //! | [`thrust_map`] | rotor thrust to ESC command, a table replaceable by a bench calibration |
 //! | [`icm42688`] | the ICM-42688-P IMU: registers, start-up, 20-byte FIFO packets, scaling |
@@ -20,6 +21,7 @@
 extern crate std;
 
 pub mod dshot;
+pub mod esc_gate;
 pub mod icm42688;
 pub mod imu;
 pub mod pulse;

@@ -242,6 +242,50 @@ pub fn vactual_register(vactual: i32) -> u32 {
     (vactual.clamp(-VACTUAL_MAX, VACTUAL_MAX) as u32) & 0x00FF_FFFF
 }
 
+/// Why a driver cannot be configured as the parameters ask.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SettingsError {
+    /// The current is outside what the sense resistors allow.
+    Current(BadCurrent),
+    /// The microstep resolution does not exist.
+    Microsteps(BadMicrosteps),
+}
+
+impl core::fmt::Display for SettingsError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Current(e) => e.fmt(f),
+            Self::Microsteps(e) => e.fmt(f),
+        }
+    }
+}
+
+/// The start-up writes of a driver, in order (register, value): `GCONF` for UART control,
+/// `CHOPCONF` with the microsteps and the current range, `IHOLD_IRUN` (hold at half the run
+/// current, hold delay 8), `TCOOLTHRS` at its maximum (StallGuard from the lowest speeds) and
+/// `SGTHRS`. `GCONF` and `CHOPCONF` read back; `IFCNT` counts all five.
+pub fn settings(
+    current_a: f32,
+    r_sense: f32,
+    microsteps: u16,
+    stall_threshold: u8,
+) -> Result<[(u8, u32); 5], SettingsError> {
+    let (cs, vsense) = current_scale(current_a, r_sense).map_err(SettingsError::Current)?;
+    let chop = chopconf(CHOPCONF_RESET, microsteps, vsense).map_err(SettingsError::Microsteps)?;
+    Ok([
+        (reg::GCONF, GCONF_UART),
+        (reg::CHOPCONF, chop),
+        (reg::IHOLD_IRUN, ihold_irun(cs / 2, cs, 8)),
+        (reg::TCOOLTHRS, 0x000F_FFFF),
+        (reg::SGTHRS, u32::from(stall_threshold)),
+    ])
+}
+
+/// Whether `IFCNT` read `before` and `after` a run of `writes` good writes counted them all.
+pub fn writes_counted(before: u32, after: u32, writes: usize) -> bool {
+    (after.wrapping_sub(before) & 0xFF) as usize == writes % 256
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -354,6 +398,28 @@ mod tests {
         assert!(current_scale(2.0, 0.11).is_err());
         assert!(current_scale(0.0, 0.11).is_err());
         assert!(current_scale(f32::NAN, 0.11).is_err());
+    }
+
+    /// The defaults (0.8 A, 0.11 ohm, 16 microsteps, stall detection off): CS 13 would be
+    /// coarse at 0.325 V, so 0.180 V and CS 25 (26/32 * 0.180 / 0.13 / sqrt 2 = 0.796 A).
+    #[test]
+    fn start_up_settings_by_hand() {
+        let w = settings(0.8, 0.11, 16, 0).unwrap();
+        assert_eq!(w[0], (reg::GCONF, 0x1C0));
+        assert_eq!(w[1], (reg::CHOPCONF, 0x1402_0053));
+        assert_eq!(w[2], (reg::IHOLD_IRUN, 0x0008_190C));
+        assert_eq!(w[4], (reg::SGTHRS, 0));
+        assert!(matches!(
+            settings(0.8, 0.11, 12, 0),
+            Err(SettingsError::Microsteps(_))
+        ));
+        assert!(matches!(
+            settings(3.0, 0.11, 16, 0),
+            Err(SettingsError::Current(_))
+        ));
+        assert!(writes_counted(250, 255, 5));
+        assert!(writes_counted(253, 2, 5), "IFCNT wraps at 256");
+        assert!(!writes_counted(250, 254, 5), "a write lost");
     }
 
     /// v = VACTUAL * 12 MHz / 2^24: 1000 microsteps/s is VACTUAL 1398 (0.7152 microsteps/s

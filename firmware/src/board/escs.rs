@@ -13,6 +13,7 @@
 //! when no command has come for [`FEED_TIMEOUT`]: if the control task stops, so do the rotors.
 
 use drivers::dshot::{self, BitTiming, SLOTS};
+use drivers::esc_gate::{EscCommand, EscGate};
 use drivers::pulse::{self, EscProtocol, PERIOD_400HZ_NS};
 use embassy_futures::join::join3;
 use embassy_stm32::Peri;
@@ -29,15 +30,7 @@ pub const OUTPUTS: usize = 8;
 /// No command for this long stops the rotors (10 control steps at 400 Hz).
 pub const FEED_TIMEOUT: Duration = Duration::from_millis(25);
 
-/// One control step's command to the ESCs.
-#[derive(Clone, Copy)]
-struct EscCommand {
-    protocol: EscProtocol,
-    fractions: [f32; OUTPUTS],
-    armed: bool,
-}
-
-static COMMAND: Signal<CriticalSectionRawMutex, EscCommand> = Signal::new();
+static COMMAND: Signal<CriticalSectionRawMutex, EscCommand<OUTPUTS>> = Signal::new();
 
 /// Hands one control step's commands to the ESCs: command fractions `[0, 1]` (from the thrust
 /// map), all stopped unless `armed`, in `protocol`.
@@ -120,26 +113,20 @@ fn timing<T: GeneralInstance4Channel>(pwm: &SimplePwm<'static, T>) -> BitTiming 
 #[embassy_executor::task]
 pub async fn escs(mut t: EscTimers) {
     // The timers start at DShot600's bit rate.
-    let mut protocol = EscProtocol::Dshot600;
+    let mut gate = EscGate::new(EscProtocol::Dshot600);
     let mut burst1 = [0u16; SLOTS * 4];
     let mut burst4 = [0u16; SLOTS * 2];
     let mut burst5 = [0u16; SLOTS * 2];
     loop {
-        let cmd = with_timeout(FEED_TIMEOUT, COMMAND.wait()).await.ok();
-        // A protocol change only while disarmed (and never by a missing command).
-        if let Some(c) = cmd
-            && !c.armed
-            && c.protocol != protocol
-        {
-            protocol = c.protocol;
+        let command = with_timeout(FEED_TIMEOUT, COMMAND.wait()).await.ok();
+        let update = gate.update(command.as_ref());
+        if let Some(protocol) = update.switch_to {
             set_rate(&mut t.tim1, protocol, TIM1_CHANNELS);
             set_rate(&mut t.tim4, protocol, TIM4_CHANNELS);
             set_rate(&mut t.tim5, protocol, TIM5_CHANNELS);
         }
-        let fractions = match cmd {
-            Some(c) if c.armed && c.protocol == protocol => c.fractions,
-            _ => [0.0; OUTPUTS],
-        };
+        let protocol = gate.protocol();
+        let fractions = update.fractions;
         match protocol {
             EscProtocol::Dshot600 => {
                 let frames = fractions.map(|f| dshot::frame(dshot::throttle_value(f), false));

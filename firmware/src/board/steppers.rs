@@ -119,30 +119,28 @@ impl StepperBus {
             return Err("not a TMC2209");
         }
         let microsteps = u16::try_from(hw.drive.microsteps).unwrap_or(0);
-        let (cs, vsense) = tmc2209::current_scale(hw.stepper_current, hw.stepper_r_sense)
-            .map_err(|_| "current outside the sense resistors' range")?;
-        let chopconf = tmc2209::chopconf(tmc2209::CHOPCONF_RESET, microsteps, vsense)
-            .map_err(|_| "microsteps not a power of two up to 256")?;
+        let writes = tmc2209::settings(
+            hw.stepper_current,
+            hw.stepper_r_sense,
+            microsteps,
+            hw.stall_threshold,
+        )
+        .map_err(|e| match e {
+            tmc2209::SettingsError::Current(_) => "current outside the sense resistors' range",
+            tmc2209::SettingsError::Microsteps(_) => "microsteps not a power of two up to 256",
+        })?;
         let before = self.read(node, reg::IFCNT).await?;
-        let writes: [(u8, u32); 5] = [
-            (reg::GCONF, tmc2209::GCONF_UART),
-            (reg::CHOPCONF, chopconf),
-            (reg::IHOLD_IRUN, tmc2209::ihold_irun(cs / 2, cs, 8)),
-            // StallGuard from the lowest speeds (TSTEP below the maximum).
-            (reg::TCOOLTHRS, 0x000F_FFFF),
-            (reg::SGTHRS, u32::from(hw.stall_threshold)),
-        ];
         for (register, value) in writes {
             if !self.write(node, register, value).await {
                 return Err("UART error");
             }
         }
         let after = self.read(node, reg::IFCNT).await?;
-        if after.wrapping_sub(before) & 0xFF != writes.len() as u32 {
+        if !tmc2209::writes_counted(before, after, writes.len()) {
             return Err("writes not all taken (IFCNT)");
         }
-        if self.read(node, reg::GCONF).await? & 0x3FF != tmc2209::GCONF_UART
-            || self.read(node, reg::CHOPCONF).await? != chopconf
+        if self.read(node, reg::GCONF).await? & 0x3FF != writes[0].1
+            || self.read(node, reg::CHOPCONF).await? != writes[1].1
         {
             return Err("settings did not read back");
         }
