@@ -171,6 +171,12 @@ impl ImuFrontEnd {
         self.latest = Some(out);
     }
 
+    /// The latest filtered sample, faulty or not (what a control step runs on while the
+    /// mission lands on a failed IMU).
+    pub fn latest(&self) -> Option<TickSample> {
+        self.latest
+    }
+
     /// The tick's reading: the latest filtered sample, or the fault that makes it unusable.
     pub fn tick(&mut self) -> Result<TickSample, ImuFault> {
         let samples = core::mem::take(&mut self.samples);
@@ -296,6 +302,10 @@ mod tests {
             );
         }
         assert_eq!(imu.tick(), Err(ImuFault::Stalled(STALL_TICKS)));
+        assert!(
+            imu.latest().is_some(),
+            "the last sample stays for the landing"
+        );
         imu.push([0.0; 3], [0.0, 0.0, -9.8], true);
         assert_eq!(imu.tick(), Err(ImuFault::Saturated));
         imu.push([0.0; 3], [0.0, 0.0, -9.8], false);

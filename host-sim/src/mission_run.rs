@@ -16,8 +16,8 @@ use shared::estimation::Measurement;
 use shared::flight::AdaptEvent;
 use shared::geometry::Vec2;
 use shared::mission::{
-    AbortReason, JobRequest, Mission, MissionConfig, MissionPlanner, OperatorCommand, Phase,
-    Reason, TickInput,
+    AbortReason, HardwareFaults, JobRequest, Mission, MissionConfig, MissionPlanner,
+    OperatorCommand, Phase, Reason, TickInput,
 };
 use shared::scenario::Scenario;
 
@@ -432,6 +432,7 @@ impl Autopilot for InProcess {
             imu: sensed.imu,
             mocap: sensed.mocap,
             command: sensed.command,
+            faults: HardwareFaults::NONE,
         });
         if let Some(job) = &out.job {
             // The firmware runs it off the tick; its result is taken at its deadline tick

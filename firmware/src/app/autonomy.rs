@@ -26,7 +26,7 @@ use shared::control::navigator::{ImuSample, MocapFix as Fix};
 use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
 use shared::mission::{
-    AbortReason, CommandRefusal, Mission, MissionConfig, MissionPlanner,
+    AbortReason, CommandRefusal, HardwareFaults, Mission, MissionConfig, MissionPlanner,
     OperatorCommand as Command, Phase, Reason, TickInput as MissionInput,
 };
 use shared::scenario::Scenario;
@@ -58,6 +58,8 @@ pub struct TickInput<'a> {
     pub payload: Option<(&'a Scenario, MissionConfig)>,
     /// The result of the job asked for `deadline_steps` ago, in exactly that step.
     pub job: Option<JobResult>,
+    /// What the board's drivers report failed.
+    pub faults: HardwareFaults,
 }
 
 /// How a command was taken (its `COMMAND_ACK`).
@@ -253,6 +255,7 @@ impl Autonomy {
             },
             mocap: input.mocap.as_ref().map(fix),
             command: input.command.map(command),
+            faults: input.faults,
         });
         let ack = input.command.zip(out.reply).map(|(given, reply)| {
             let result = match reply.outcome {

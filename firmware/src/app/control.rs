@@ -26,6 +26,7 @@ use super::{
     SENSOR,
 };
 use crate::board::{ActuatorOutputs, Board, Selected};
+use shared::mission::HardwareFaults;
 
 /// Steps between reports of the worst step cost (1 s at 400 Hz).
 const COST_REPORT_STEPS: u64 = 400;
@@ -90,6 +91,11 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             command: pending.map(|p| p.command),
             payload: payload.as_ref().map(|p| (&p.scenario, p.config)),
             job,
+            faults: if sample.hil {
+                HardwareFaults::NONE
+            } else {
+                <Selected as Board>::hardware_faults()
+            },
         };
         let mut out = autonomy.tick(&input);
         if late {

@@ -7,9 +7,10 @@
 //! priority: on each data-ready interrupt (two FIFO records, 1 ms at 2 kHz) the FIFO is read
 //! in one DMA burst and filtered; every 2.5 ms the latest filtered sample goes to the control
 //! step (until a HIL plant drives it instead). A stalled, saturated or wrong IMU goes to the
-//! ground as an error, once a second while it lasts.
+//! ground as an error, once a second while it lasts, and to the mission ([`FAULTED`]), which
+//! stops on the ground and lands in flight; the step goes on with the last sample meanwhile.
 
-use core::sync::atomic::Ordering;
+use core::sync::atomic::{AtomicBool, Ordering};
 
 use drivers::icm42688::{self, PACKET_LEN, READ, START, reg};
 use drivers::imu::{ImuFault, ImuFrontEnd, Mounting};
@@ -25,6 +26,9 @@ use link::hil::ImuSample;
 use crate::app::autonomy::Severity;
 use crate::app::comms::{SensorSample, report};
 use crate::app::{IN_HIL, OUTBOX, SENSOR};
+
+/// Whether the IMU is faulted now (stalled, saturated): the control step tells the mission.
+pub static FAULTED: AtomicBool = AtomicBool::new(false);
 
 /// Cut-off of the anti-alias filter before decimation to 400 Hz, Hz.
 pub const CUTOFF_HZ: f32 = 80.0;
@@ -130,27 +134,28 @@ pub async fn imu(mut bus: ImuBus) {
                 if IN_HIL.load(Ordering::Relaxed) {
                     continue;
                 }
-                match reading {
-                    Ok(tick) => {
-                        let sample = SensorSample {
-                            imu: ImuSample {
-                                time_us: Instant::now().as_micros(),
-                                gyro: tick.gyro,
-                                accel: tick.accel,
-                            },
-                            hil: false,
-                        };
-                        let _ = SENSOR.try_send(sample);
-                    }
-                    Err(fault) => {
-                        let now = Instant::now();
-                        if last_fault_report
-                            .is_none_or(|t| now.duration_since(t) >= Duration::from_secs(1))
-                        {
-                            last_fault_report = Some(now);
-                            let _ = OUTBOX
-                                .try_send(report(Severity::Critical, format_args!("{fault}")));
-                        }
+                FAULTED.store(reading.is_err(), Ordering::Relaxed);
+                // On a fault the step still runs (on the last sample): the mission sees the
+                // fault and lands, and the watchdog stays fed.
+                if let Some(tick) = front.latest() {
+                    let sample = SensorSample {
+                        imu: ImuSample {
+                            time_us: Instant::now().as_micros(),
+                            gyro: tick.gyro,
+                            accel: tick.accel,
+                        },
+                        hil: false,
+                    };
+                    let _ = SENSOR.try_send(sample);
+                }
+                if let Err(fault) = reading {
+                    let now = Instant::now();
+                    if last_fault_report
+                        .is_none_or(|t| now.duration_since(t) >= Duration::from_secs(1))
+                    {
+                        last_fault_report = Some(now);
+                        let _ =
+                            OUTBOX.try_send(report(Severity::Critical, format_args!("{fault}")));
                     }
                 }
             }

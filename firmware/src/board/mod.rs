@@ -67,6 +67,11 @@ pub trait Board: 'static {
 
     /// A free-running counter (wrapping) for measuring the control tick.
     fn cycle_count() -> u32;
+
+    /// What the board's drivers report failed now (none on a board without drivers).
+    fn hardware_faults() -> shared::mission::HardwareFaults {
+        shared::mission::HardwareFaults::NONE
+    }
 }
 
 /// The robots' actuators: each rotor's ESC and each robot's stepper. In hardware-in-the-loop

@@ -51,7 +51,7 @@ use embassy_stm32::{Config, bind_interrupts, interrupt, peripherals};
 use embassy_stm32::{dma, pac};
 use embassy_time::{Duration, Ticker};
 use panic_probe as _;
-use shared::mission::HardwareConfig;
+use shared::mission::{HardwareConfig, HardwareFaults};
 use static_cell::{ConstStaticCell, StaticCell};
 
 use super::{ActuatorOutputs, Board, ExecutorIrqs, Parts};
@@ -146,6 +146,13 @@ impl Board for Pixhawk6c {
 
     fn cycle_count() -> u32 {
         cortex_m::peripheral::DWT::cycle_count()
+    }
+
+    fn hardware_faults() -> HardwareFaults {
+        HardwareFaults {
+            imu: super::imu_spi::FAULTED.load(core::sync::atomic::Ordering::Relaxed),
+            stalled_robots: super::steppers::STALLED.load(core::sync::atomic::Ordering::Relaxed),
+        }
     }
 }
 

@@ -11,10 +11,12 @@
 //! `TCOOLTHRS` and `SGTHRS` are written and confirmed by `IFCNT` and by reading `GCONF` and
 //! `CHOPCONF` back. Then at [`UPDATE_HZ`] each robot's axis moves by `VACTUAL` towards the
 //! position the control step commands (`shared`'s trapezoidal profiles) and its arc length is
-//! kept from the velocities commanded; `SG_RESULT` is read, and a stalled robot is stopped
-//! and reported to the ground.
+//! kept from the velocities commanded; `SG_RESULT` is read, and a stalled robot is stopped,
+//! reported to the ground and to the mission ([`STALLED`]: on the ground it stops, in flight
+//! it lands).
 
 use core::cell::Cell;
+use core::sync::atomic::{AtomicU8, Ordering};
 
 use drivers::stepper::{AxisConfig, RailAxis, StallMonitor};
 use drivers::tmc2209::{self, reg};
@@ -49,6 +51,10 @@ struct RailTargets {
     positions: [f32; 8],
     robots: usize,
 }
+
+/// Robots whose steppers stalled, bit `j` for robot `j` (the control step reads it; cleared
+/// when the drivers are configured again).
+pub static STALLED: AtomicU8 = AtomicU8::new(0);
 
 static TARGETS: Mutex<CriticalSectionRawMutex, Cell<Option<RailTargets>>> =
     Mutex::new(Cell::new(None));
@@ -192,6 +198,7 @@ pub async fn steppers(mut bus: StepperBus) {
                 };
                 axes[node] = None;
                 stalled[node] = false;
+                STALLED.fetch_and(!(1u8 << (bus.first_robot + node)), Ordering::Relaxed);
                 stalls[node] =
                     StallMonitor::new(settings.stall_threshold, STALL_READINGS, STALL_MIN_SPEED);
             }
@@ -223,6 +230,7 @@ pub async fn steppers(mut bus: StepperBus) {
                 && stalls[node].update(sg, vactual)
             {
                 stalled[node] = true;
+                STALLED.fetch_or(1u8 << robot, Ordering::Relaxed);
                 axis.stop();
                 bus.write(node as u8, reg::VACTUAL, 0).await;
                 let _ = OUTBOX.try_send(report(

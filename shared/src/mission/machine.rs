@@ -75,6 +75,40 @@ pub struct CommandReply {
     pub outcome: Result<(), CommandRefusal>,
 }
 
+/// Failures the flight controller's drivers report (issue 13): what the mission must not
+/// ignore. On the ground either stops the mission; in flight it lands where it is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HardwareFaults {
+    /// The IMU is stalled, saturated or implausible (its samples are not to be trusted).
+    pub imu: bool,
+    /// Robots whose steppers stalled, bit `j` for robot `j`.
+    pub stalled_robots: u8,
+}
+
+impl HardwareFaults {
+    /// None.
+    pub const NONE: Self = Self {
+        imu: false,
+        stalled_robots: 0,
+    };
+
+    /// The abort reason of the first fault that concerns a mission with `robots` robots.
+    pub fn reason(&self, robots: usize) -> Option<AbortReason> {
+        if self.imu {
+            return Some(AbortReason::ImuFault);
+        }
+        let mask = if robots >= 8 {
+            u8::MAX
+        } else {
+            (1u8 << robots) - 1
+        };
+        let stalled = self.stalled_robots & mask;
+        (stalled != 0).then(|| AbortReason::RobotStalled {
+            robot: stalled.trailing_zeros() as u8,
+        })
+    }
+}
+
 /// What one tick takes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TickInput {
@@ -87,6 +121,8 @@ pub struct TickInput {
     pub mocap: Option<MocapFix>,
     /// An operator command that arrived since the previous tick.
     pub command: Option<OperatorCommand>,
+    /// What the drivers report failed ([`HardwareFaults::NONE`] in simulation).
+    pub faults: HardwareFaults,
 }
 
 /// What one tick commands.
@@ -362,12 +398,29 @@ impl Mission {
             Some(c) => self.command(c),
             None => (None, None),
         };
+        let mut fault_landing = false;
+        if transition.is_none()
+            && let Some(why) = input.faults.reason(self.scenario.robots.count())
+        {
+            match self.phase {
+                Phase::Idle | Phase::Disarmed | Phase::Aborted => {}
+                // In flight: land where it is, once (the reason is kept for the landing).
+                Phase::Flying(_) => {
+                    if self.abort.is_none() {
+                        self.abort = Some(why);
+                        fault_landing = true;
+                    }
+                }
+                _ => transition = Some(self.abort(why)),
+            }
+        }
         if transition.is_none() {
             let flight_command = match input.command {
                 Some(OperatorCommand::Kill) => Some(FlightCommand::Kill),
                 Some(OperatorCommand::LandNow | OperatorCommand::Abort) => {
                     Some(FlightCommand::LandNow)
                 }
+                _ if fault_landing => Some(FlightCommand::LandNow),
                 _ => None,
             };
             transition = self.advance(&nav, dt, flight_command, &mut thrusts);
@@ -646,9 +699,11 @@ impl Mission {
                     LandingCause::PositionLost => Reason::Abort(AbortReason::PositionLost),
                     LandingCause::TrackingLost => Reason::Abort(AbortReason::TrackingLost),
                     LandingCause::Operator => match self.abort {
-                        Some(AbortReason::OperatorAbort) => {
-                            Reason::Abort(AbortReason::OperatorAbort)
-                        }
+                        Some(
+                            why @ (AbortReason::OperatorAbort
+                            | AbortReason::ImuFault
+                            | AbortReason::RobotStalled { .. }),
+                        ) => Reason::Abort(why),
                         _ => Reason::LandNow,
                     },
                 };

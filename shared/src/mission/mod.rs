@@ -18,7 +18,9 @@ pub mod phases;
 pub use config::{DETECTOR_SIGMA, MissionConfig};
 pub use hardware::HardwareConfig;
 pub use jobs::{FormationPlan, JobRequest, JobResult, LiftPlan, MissionPlanner};
-pub use machine::{CommandRefusal, CommandReply, Mission, OperatorCommand, TickInput, TickOutput};
+pub use machine::{
+    CommandRefusal, CommandReply, HardwareFaults, Mission, OperatorCommand, TickInput, TickOutput,
+};
 pub use phases::{AbortReason, Phase, Reason, Transition};
 
 #[cfg(test)]

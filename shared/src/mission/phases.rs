@@ -109,6 +109,14 @@ pub enum AbortReason {
     JobOverrun,
     /// The payload description has no flight target.
     NoFlightTarget,
+    /// The IMU failed (stalled, saturated or implausible): on the ground the mission stops,
+    /// in flight it lands where it is.
+    ImuFault,
+    /// A robot's stepper stalled on the rail: the robot is not where the plan put it.
+    RobotStalled {
+        /// The robot, counted from 0.
+        robot: u8,
+    },
 }
 
 impl core::fmt::Display for AbortReason {
@@ -148,6 +156,12 @@ impl core::fmt::Display for AbortReason {
             Self::Killed => write!(f, "rotors stopped by the operator"),
             Self::JobOverrun => write!(f, "a computation did not finish by its deadline"),
             Self::NoFlightTarget => write!(f, "the payload description has no flight target"),
+            Self::ImuFault => write!(f, "IMU fault (stalled, saturated or implausible)"),
+            Self::RobotStalled { robot } => write!(
+                f,
+                "robot {} stalled on the rail: it is not where the plan put it",
+                u32::from(robot) + 1
+            ),
         }
     }
 }

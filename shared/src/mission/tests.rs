@@ -11,8 +11,8 @@ use crate::control::vector::{Quat, Vec3};
 use crate::estimation::Measurement;
 use crate::geometry::Vec2;
 use crate::mission::{
-    AbortReason, CommandRefusal, JobRequest, Mission, MissionConfig, MissionPlanner,
-    OperatorCommand, Phase, Reason, TickInput, TickOutput,
+    AbortReason, CommandRefusal, HardwareFaults, JobRequest, Mission, MissionConfig,
+    MissionPlanner, OperatorCommand, Phase, Reason, TickInput, TickOutput,
 };
 use crate::paper::{checked, rect_sim1};
 use crate::scenario::{FlightSetup, GRAVITY, Scenario, Truth};
@@ -48,6 +48,8 @@ struct World {
     mocap: bool,
     /// Highest the payload can get (an obstacle above), m.
     ceiling: f32,
+    /// What the drivers report.
+    faults: HardwareFaults,
 }
 
 impl World {
@@ -62,6 +64,7 @@ impl World {
             map_error: 1.0,
             mocap: true,
             ceiling: f32::INFINITY,
+            faults: HardwareFaults::NONE,
         }
     }
 
@@ -81,6 +84,7 @@ impl World {
                 stamp_us: time_us,
             }),
             command,
+            faults: self.faults,
         }
     }
 
@@ -675,4 +679,120 @@ fn an_unloaded_mission_refuses_to_start_and_a_loaded_one_flies() {
     for k in 0..3 {
         assert!((a.theta[k] - b.theta[k]).abs() < 1e-4, "{a:?} vs {b:?}");
     }
+}
+
+/// A stepper that stalls while the robots move to their lift: the mission stops on the ground
+/// with the robot named, rotors off.
+#[test]
+fn a_stalled_robot_on_the_ground_stops_the_mission() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    let r = run_with(
+        &s,
+        MissionConfig::default(),
+        &mut world,
+        Jobs::OnTime,
+        &[(1, OperatorCommand::Start)],
+        |_, out, w| {
+            if out.phase == Phase::MovingRobots {
+                w.faults.stalled_robots = 1 << 2;
+            }
+        },
+        200_000,
+    );
+    assert_eq!(
+        r.mission.abort_reason(),
+        Some(AbortReason::RobotStalled { robot: 2 })
+    );
+    assert_eq!(r.mission.phase(), Phase::Aborted);
+    assert!(!r.last.armed && r.last.thrusts.iter().all(|&t| t == 0.0));
+    assert!(
+        !phases(&r).contains(&Phase::Lifting),
+        "no lift with a robot off its place"
+    );
+}
+
+/// Stall bits of robots the payload does not have are no fault; the IMU comes first.
+#[test]
+fn fault_reasons_concern_the_missions_robots() {
+    let stalled = |bits| HardwareFaults {
+        imu: false,
+        stalled_robots: bits,
+    };
+    assert_eq!(stalled(0b1000_0000).reason(4), None);
+    assert_eq!(
+        stalled(0b1000_0100).reason(8),
+        Some(AbortReason::RobotStalled { robot: 2 })
+    );
+    assert_eq!(
+        HardwareFaults {
+            imu: true,
+            stalled_robots: 1
+        }
+        .reason(8),
+        Some(AbortReason::ImuFault)
+    );
+    assert_eq!(HardwareFaults::NONE.reason(8), None);
+}
+
+/// A fault while idle (before the start) that has cleared changes nothing: the mission flies.
+#[test]
+fn a_fault_cleared_before_the_start_is_no_abort() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    world.faults.imu = true;
+    let r = run_with(
+        &s,
+        MissionConfig::default(),
+        &mut world,
+        Jobs::OnTime,
+        &[(20, OperatorCommand::Start)],
+        |tick, _, w| {
+            if tick == 10 {
+                w.faults = HardwareFaults::NONE;
+            }
+        },
+        200_000,
+    );
+    assert_eq!(r.mission.abort_reason(), None);
+    assert_eq!(r.mission.phase(), Phase::Disarmed);
+}
+
+/// The IMU fails in flight: the vehicle lands where it is (never drops), then disarms, and
+/// the reason is the IMU.
+#[test]
+fn an_imu_fault_in_flight_lands() {
+    let s = scenario(3.5);
+    let at = takeoff_tick(&s) + 1200;
+    let mut world = World::new(&s);
+    let mut rotors_at_fault = 0.0;
+    let r = run_with(
+        &s,
+        MissionConfig::default(),
+        &mut world,
+        Jobs::OnTime,
+        &[(1, OperatorCommand::Start)],
+        |tick, out, w| {
+            if tick == at {
+                w.faults.imu = true;
+                rotors_at_fault = out.thrusts.iter().sum();
+            }
+        },
+        200_000,
+    );
+    assert!(rotors_at_fault > 0.0, "flying when the IMU failed");
+    let landing = r
+        .transitions
+        .iter()
+        .find(|(_, reason, _)| *reason == Reason::Abort(AbortReason::ImuFault))
+        .expect("a landing for the IMU");
+    assert_eq!(landing.2, Phase::Flying(FlightPhase::Land));
+    assert!(
+        landing.0 <= at + 2,
+        "at once: tick {} for a fault at {at}",
+        landing.0
+    );
+    assert_eq!(r.mission.phase(), Phase::Disarmed, "landed, then disarmed");
+    assert_eq!(r.mission.abort_reason(), Some(AbortReason::ImuFault));
+    assert!(world.height < 0.05);
 }
