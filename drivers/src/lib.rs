@@ -16,6 +16,7 @@
 //! | [`reset`] | why the STM32H7 last reset (RCC_RSR), for the start-up report |
 #![no_std]
 #![forbid(unsafe_code)]
+#![deny(missing_docs)]
 
 #[cfg(test)]
 extern crate std;

@@ -20,6 +20,7 @@
 //! `embedded` in the firmware, never both).
 #![no_std]
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 
 #[cfg(all(feature = "std", feature = "embedded"))]
 compile_error!("link: enable `std` (host) or `embedded` (firmware), not both");

@@ -9,6 +9,7 @@
 //! same functions.
 #![no_std]
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 
 // Tests may print and format; the library itself never uses std.
 #[cfg(test)]
