@@ -34,7 +34,7 @@ pub fn throttle_value(fraction: f32) -> u16 {
         return STOP;
     }
     let span = f32::from(MAX_THROTTLE - MIN_THROTTLE);
-    let scaled = libm::roundf(fraction.min(1.0) * span) as u16;
+    let scaled = shared::math::round(fraction.min(1.0) * span) as u16;
     MIN_THROTTLE + scaled.min(MAX_THROTTLE - MIN_THROTTLE)
 }
 

@@ -9,14 +9,14 @@
 //! or invalid-sample marks; with the image 6 KiB under its flash budget this core (a table of
 //! writes and a packet parser, tested against hand-built packets) is used instead.
 
+use shared::scenario::GRAVITY;
+
 /// `WHO_AM_I` of an ICM-42688-P.
 pub const WHO_AM_I_VALUE: u8 = 0x47;
 /// Set on the register address of an SPI read.
 pub const READ: u8 = 0x80;
 /// Bytes of a FIFO packet in high-resolution mode.
 pub const PACKET_LEN: usize = 20;
-/// Standard gravity, m/s^2.
-pub const G: f32 = 9.806_65;
 /// Accelerometer sensitivity of the 20-bit FIFO data at +-16 g: 2^19 / 16 LSB per g.
 pub const ACCEL_LSB_PER_G: f32 = 32_768.0;
 /// Gyro sensitivity of the 20-bit FIFO data at +-2000 deg/s: 2^19 / 2000 LSB per deg/s.
@@ -173,7 +173,7 @@ pub fn parse_packet(p: &[u8; PACKET_LEN]) -> Result<RawSample, PacketError> {
 impl RawSample {
     /// Accelerometer, m/s^2, sensor axes.
     pub fn accel_m_s2(&self) -> [f32; 3] {
-        self.accel.map(|c| c as f32 * (G / ACCEL_LSB_PER_G))
+        self.accel.map(|c| c as f32 * (GRAVITY / ACCEL_LSB_PER_G))
     }
 
     /// Gyro, rad/s, sensor axes.
@@ -228,7 +228,7 @@ mod tests {
         assert_eq!(s.temperature, 132);
         assert_eq!(s.timestamp, 0xBEEF);
         let a = s.accel_m_s2();
-        assert!((a[0] - G).abs() < 1e-5);
+        assert!((a[0] - GRAVITY).abs() < 1e-5);
         let w = s.gyro_rad_s();
         assert!((w[0] - 1000f32.to_radians()).abs() < 1e-4);
         assert!((w[1] + 1000f32.to_radians()).abs() < 1e-4);

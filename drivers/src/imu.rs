@@ -3,6 +3,9 @@
 //! second-order Butterworth anti-alias filter at the sample rate, decimation to the 400 Hz
 //! tick, and the IMU's health: a stalled, saturated or implausible IMU is a fault with a name.
 
+use shared::control::vector::Vec3;
+use shared::scenario::GRAVITY;
+
 /// How the IMU sits on the board: a yaw about the body's z axis (PX4's `ROTATION_YAW_*`,
 /// applied as PX4 does: body = R * sensor). The Pixhawk 6C's ICM-42688-P is yaw 270 deg
 /// (`rc.board_sensors`: `icm42688p -R 6`), its BMI088 yaw 180 deg (`-R 4`).
@@ -49,7 +52,7 @@ impl LowPass {
                 state: [0.0; 2],
             };
         }
-        let k = libm::tanf(core::f32::consts::PI * cutoff_hz / sample_hz);
+        let k = shared::math::tan(core::f32::consts::PI * cutoff_hz / sample_hz);
         let q = core::f32::consts::FRAC_1_SQRT_2;
         let norm = 1.0 / (1.0 + k / q + k * k);
         let b0 = k * k * norm;
@@ -201,10 +204,9 @@ impl ImuFrontEnd {
 /// The pre-flight check of a resting vehicle: the specific force within 10 % of 1 g and no
 /// rotation above 0.1 rad/s (3 x the ICM-42688-P's worst zero-rate offset at 2000 deg/s).
 pub fn plausible_at_rest(sample: &TickSample) -> Result<(), ImuFault> {
-    let norm = |v: [f32; 3]| libm::sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    let g = crate::icm42688::G;
+    let norm = |[x, y, z]: [f32; 3]| Vec3::new(x, y, z).norm();
     let a = norm(sample.accel);
-    if (a - g).abs() <= 0.1 * g && norm(sample.gyro) <= 0.1 {
+    if (a - GRAVITY).abs() <= 0.1 * GRAVITY && norm(sample.gyro) <= 0.1 {
         Ok(())
     } else {
         Err(ImuFault::Implausible)
@@ -231,7 +233,7 @@ mod tests {
         let mut lp = LowPass::new(80.0, 2000.0);
         let mut peak = 0.0f32;
         for n in 0..4000 {
-            let y = lp.apply(libm::sinf(
+            let y = lp.apply(shared::math::sin(
                 2.0 * core::f32::consts::PI * freq * n as f32 / 2000.0,
             ));
             if n > 2000 {

@@ -49,7 +49,7 @@ impl EscProtocol {
         if fraction.is_nan() || fraction <= 0.0 {
             return stop;
         }
-        stop + libm::roundf(fraction.min(1.0) * span as f32) as u32
+        stop + shared::math::round(fraction.min(1.0) * span as f32) as u32
     }
 
     /// Pulses per second the outputs run at, for a control step of `tick_hz`.

@@ -4,27 +4,19 @@
 //! velocities it actually commanded, as the driver has no position counter over UART. A
 //! StallGuard monitor turns a run of low `SG_RESULT` readings at speed into a stall.
 
+use shared::math;
+use shared::rail::stepper::DriveConfig;
+
 use crate::tmc2209;
 
-/// The mechanics of an axis.
+/// An axis: its drive train (`shared`'s, which turns metres into microsteps) and its top
+/// speed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AxisConfig {
-    /// Pitch radius of the pinion, m.
-    pub pinion_radius_m: f32,
-    /// Full steps per motor revolution (200 for a 1.8 degree motor).
-    pub full_steps_per_rev: u16,
-    /// Microsteps per full step (`CHOPCONF.MRES`).
-    pub microsteps: u16,
+    /// Motor steps, microsteps and pinion.
+    pub drive: DriveConfig,
     /// Fastest the axis may move, m/s.
     pub max_speed_m_s: f32,
-}
-
-impl AxisConfig {
-    /// Microsteps per metre of arc.
-    pub fn microsteps_per_m(&self) -> f32 {
-        f32::from(self.full_steps_per_rev) * f32::from(self.microsteps)
-            / (2.0 * core::f32::consts::PI * self.pinion_radius_m)
-    }
 }
 
 /// A robot's axis: where it is (by the commanded velocities) and what to command next.
@@ -65,11 +57,9 @@ impl RailAxis {
             self.vactual = 0;
             return 0;
         }
-        let per_m = self.config.microsteps_per_m();
-        // min/max, not `f32::clamp`: that one panics on a bad range (and its message pulls
-        // float formatting, 14 KB, into the firmware).
-        let limit = libm::fabsf(self.config.max_speed_m_s);
-        let speed = ((target_m - self.position_m) / dt).max(-limit).min(limit);
+        let per_m = self.config.drive.steps_per_metre();
+        let limit = math::abs(self.config.max_speed_m_s);
+        let speed = math::clamp((target_m - self.position_m) / dt, -limit, limit);
         self.vactual = tmc2209::vactual(speed * per_m);
         self.position_m += tmc2209::velocity_of(self.vactual) / per_m * dt;
         self.vactual
@@ -105,7 +95,7 @@ impl StallMonitor {
 
     /// One `SG_RESULT` reading taken while the axis runs at `vactual`: whether it is stalled.
     pub fn update(&mut self, sg_result: u32, vactual: i32) -> bool {
-        let fast = libm::fabsf(tmc2209::velocity_of(vactual)) >= self.min_microsteps_per_s;
+        let fast = math::abs(tmc2209::velocity_of(vactual)) >= self.min_microsteps_per_s;
         if fast && sg_result <= 2 * u32::from(self.threshold) {
             self.run = self.run.saturating_add(1);
         } else {
@@ -119,17 +109,19 @@ impl StallMonitor {
 mod tests {
     use super::*;
 
-    /// 200 steps, 16 microsteps, a 10 mm pinion: 3200 microsteps per 62.83 mm of arc.
+    /// 200 steps, 16 microsteps, a 20 mm pinion: 3200 microsteps per 62.83 mm of arc.
     const CONFIG: AxisConfig = AxisConfig {
-        pinion_radius_m: 0.010,
-        full_steps_per_rev: 200,
-        microsteps: 16,
+        drive: DriveConfig {
+            steps_per_rev: 200,
+            microsteps: 16,
+            pinion_pitch_diameter: 0.020,
+        },
         max_speed_m_s: 0.2,
     };
 
     #[test]
     fn microsteps_per_metre_by_hand() {
-        assert!((CONFIG.microsteps_per_m() - 50_929.58).abs() < 0.1);
+        assert!((CONFIG.drive.steps_per_metre() - 50_929.58).abs() < 0.1);
     }
 
     /// A trapezoid of 0.3 m (accelerate 0.5 m/s^2 to 0.1 m/s), sampled at 50 Hz: the axis's
@@ -154,7 +146,7 @@ mod tests {
             1.0 + s
         };
         let dt = 0.02;
-        let microstep = 1.0 / CONFIG.microsteps_per_m();
+        let microstep = 1.0 / CONFIG.drive.steps_per_metre();
         for k in 1..=250 {
             let t = k as f32 * dt;
             axis.update(profile(t), dt);
@@ -175,7 +167,7 @@ mod tests {
     fn speed_is_limited_and_bad_targets_stop() {
         let mut axis = RailAxis::new(CONFIG, 0.0);
         let v = axis.update(5.0, 0.02);
-        let expected = tmc2209::vactual(0.2 * CONFIG.microsteps_per_m());
+        let expected = tmc2209::vactual(0.2 * CONFIG.drive.steps_per_metre());
         assert_eq!(v, expected);
         assert!((axis.position_m() - 0.004).abs() < 1e-5);
         assert_eq!(axis.update(f32::NAN, 0.02), 0);

@@ -208,12 +208,12 @@ pub fn current_scale(rms_a: f32, r_sense: f32) -> Result<(u8, bool), BadCurrent>
     if !(rms_a > 0.0 && rms_a <= max_a * 1.0001 && r_sense > 0.0) {
         return Err(BadCurrent { rms_a, max_a });
     }
-    let cs_low = libm::floorf(rms_a * per_volt / 0.325 + 1e-4) - 1.0;
+    let cs_low = shared::math::floor(rms_a * per_volt / 0.325 + 1e-4) - 1.0;
     if cs_low >= 16.0 {
         return Ok((cs_low.min(31.0) as u8, false));
     }
-    let cs_high = libm::floorf(rms_a * per_volt / 0.180 + 1e-4) - 1.0;
-    Ok((cs_high.clamp(0.0, 31.0) as u8, true))
+    let cs_high = shared::math::floor(rms_a * per_volt / 0.180 + 1e-4) - 1.0;
+    Ok((shared::math::clamp(cs_high, 0.0, 31.0) as u8, true))
 }
 
 /// The RMS current a setting gives, A.
@@ -228,8 +228,8 @@ pub fn vactual(microsteps_per_s: f32) -> i32 {
     if !microsteps_per_s.is_finite() {
         return 0;
     }
-    let units = libm::roundf(microsteps_per_s * (16_777_216.0 / F_CLK_HZ));
-    units.clamp(-(VACTUAL_MAX as f32), VACTUAL_MAX as f32) as i32
+    let units = shared::math::round(microsteps_per_s * (16_777_216.0 / F_CLK_HZ));
+    shared::math::clamp(units, -(VACTUAL_MAX as f32), VACTUAL_MAX as f32) as i32
 }
 
 /// The velocity a `VACTUAL` value runs at, microsteps per second.

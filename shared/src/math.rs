@@ -71,6 +71,12 @@ pub fn cos(x: f32) -> f32 {
     libm::cosf(x)
 }
 
+/// Tangent (radians).
+#[inline]
+pub fn tan(x: f32) -> f32 {
+    libm::tanf(x)
+}
+
 /// `x` limited to `[lo, hi]` (NaN stays NaN). Unlike `f32::clamp` it never panics: a limit
 /// that came out NaN or inverted (`lo > hi`, then `lo` wins) must not stop a flight
 /// controller, and the panic's message would pull `core`'s float formatting into the image.

@@ -157,9 +157,7 @@ impl StepperBus {
 fn axis_config(hw: &HardwareConfig) -> AxisConfig {
     let limits = MISSION_CONFIG.lock(|c| c.get().rail_limits);
     AxisConfig {
-        pinion_radius_m: 0.5 * hw.drive.pinion_pitch_diameter,
-        full_steps_per_rev: u16::try_from(hw.drive.steps_per_rev).unwrap_or(200),
-        microsteps: u16::try_from(hw.drive.microsteps).unwrap_or(16),
+        drive: hw.drive,
         // A margin over the profiles' top speed, so the axis catches up.
         max_speed_m_s: 1.5 * limits.max_speed,
     }
