@@ -191,35 +191,14 @@ impl Mission {
 
     /// A mission with no payload description, idle: a constant, so the flight controller can
     /// place it in a static; [`Self::load`] gives it its payload.
-    pub const UNLOADED: Self = Self {
-        scenario: NO_SCENARIO,
-        config: MissionConfig::DEFAULT,
-        navigator: Navigator::new(),
-        clock: LoopMonitor::at_rate(CONTROL_RATE_HZ),
-        tick: 0,
-        phase: Phase::Idle,
-        phase_time: 0.0,
-        robots: Positions::new(),
-        rail_move: None,
-        lift_plan: None,
-        lift: None,
-        pending: None,
-        outgoing: None,
-        latest: None,
-        converged_in_a_row: 0,
-        estimate: None,
-        formation: None,
-        flight: None,
-        adapter: None,
-        adaptation: None,
-        abort: None,
-    };
+    pub const UNLOADED: Self = Self::unloaded();
 
-    /// [`Self::UNLOADED`], built at run time field by field. A static initialised from the
-    /// constant keeps the whole 18 KB value in the flight controller's flash (its few non-zero
-    /// bytes put it in `.data`); built here into a zeroed static it costs a few stores.
+    /// [`Self::UNLOADED`]; called at run time it builds the value field by field. A static
+    /// initialised from the constant keeps the whole 18 KB value in the flight controller's
+    /// flash (its few non-zero bytes put it in `.data`); built at start into a zeroed static
+    /// it costs a few stores.
     #[inline(never)]
-    pub fn unloaded() -> Self {
+    pub const fn unloaded() -> Self {
         Self {
             scenario: NO_SCENARIO,
             config: MissionConfig::DEFAULT,
