@@ -59,6 +59,20 @@ macro_rules! param {
     ($name:literal, $unit:literal, $min:expr, $max:expr, $doc:literal, |$c:ident| $field:expr) => {
         param!(@ $name, $unit, $min, $max, false, $doc, |$c| $field)
     };
+    // A whole-number field (a count or a choice, of any integer type).
+    (whole $name:literal, $unit:literal, $min:expr, $max:expr, $doc:literal, |$c:ident| $field:expr) => {
+        ParamSpec {
+            name: $name,
+            unit: $unit,
+            min: $min,
+            max: $max,
+            integer: true,
+            #[cfg(feature = "docs")]
+            doc: $doc,
+            get: |$c: &MissionConfig| $field as f32,
+            set: |$c: &mut MissionConfig, v: f32| $field = v as _,
+        }
+    };
     (@ $name:literal, $unit:literal, $min:expr, $max:expr, $int:expr, $doc:literal, |$c:ident| $field:expr) => {
         ParamSpec {
             name: $name,
@@ -131,17 +145,14 @@ pub static TABLE: [ParamSpec; COUNT] = [
         "hold at the start and at maximum thrust of a lift",
         |c| c.liftoff.settle_time
     ),
-    ParamSpec {
-        name: "MIS_CONFIRM",
-        unit: "-",
-        min: 1.0,
-        max: 5.0,
-        integer: true,
-        #[cfg(feature = "docs")]
-        doc: "consecutive lifts the stopping rule must hold for (1: the paper's rule)",
-        get: |c| c.confirmations as f32,
-        set: |c, v| c.confirmations = v as u32,
-    },
+    param!(
+        whole "MIS_CONFIRM",
+        "-",
+        1.0,
+        5.0,
+        "consecutive lifts the stopping rule must hold for (1: the paper's rule)",
+        |c| c.confirmations
+    ),
     // Rail.
     param!(
         "RAIL_SPEED",
@@ -688,17 +699,14 @@ pub static TABLE: [ParamSpec; COUNT] = [
         |c| c.adapt.trim.steadiness
     ),
     // The drivers (mission::hardware): ESCs, thrust map, steppers.
-    ParamSpec {
-        name: "ESC_PROTOCOL",
-        unit: "-",
-        min: 0.0,
-        max: 2.0,
-        integer: true,
-        #[cfg(feature = "docs")]
-        doc: "ESC protocol on the FMU outputs: 0 DShot600, 1 PWM, 2 OneShot125 (taken while disarmed)",
-        get: |c| f32::from(c.hardware.esc_protocol),
-        set: |c, v| c.hardware.esc_protocol = v as u8,
-    },
+    param!(
+        whole "ESC_PROTOCOL",
+        "-",
+        0.0,
+        2.0,
+        "ESC protocol on the FMU outputs: 0 DShot600, 1 PWM, 2 OneShot125 (taken while disarmed)",
+        |c| c.hardware.esc_protocol
+    ),
     param!(
         "THR_MAP_20",
         "-",
@@ -731,28 +739,22 @@ pub static TABLE: [ParamSpec; COUNT] = [
         "thrust at 80 % ESC command, fraction of full thrust",
         |c| c.hardware.thrust_map[3]
     ),
-    ParamSpec {
-        name: "STP_STEPS_REV",
-        unit: "-",
-        min: 24.0,
-        max: 400.0,
-        integer: true,
-        #[cfg(feature = "docs")]
-        doc: "full steps per stepper revolution (200 for 1.8 deg motors)",
-        get: |c| c.hardware.drive.steps_per_rev as f32,
-        set: |c, v| c.hardware.drive.steps_per_rev = v as u32,
-    },
-    ParamSpec {
-        name: "STP_MICROSTEPS",
-        unit: "-",
-        min: 1.0,
-        max: 256.0,
-        integer: true,
-        #[cfg(feature = "docs")]
-        doc: "microsteps per full step set in the TMC2209s (a power of two)",
-        get: |c| c.hardware.drive.microsteps as f32,
-        set: |c, v| c.hardware.drive.microsteps = v as u32,
-    },
+    param!(
+        whole "STP_STEPS_REV",
+        "-",
+        24.0,
+        400.0,
+        "full steps per stepper revolution (200 for 1.8 deg motors)",
+        |c| c.hardware.drive.steps_per_rev
+    ),
+    param!(
+        whole "STP_MICROSTEPS",
+        "-",
+        1.0,
+        256.0,
+        "microsteps per full step set in the TMC2209s (a power of two)",
+        |c| c.hardware.drive.microsteps
+    ),
     param!(
         "STP_PINION_D",
         "m",
@@ -777,17 +779,14 @@ pub static TABLE: [ParamSpec; COUNT] = [
         "sense resistors of the TMC2209 boards",
         |c| c.hardware.stepper_r_sense
     ),
-    ParamSpec {
-        name: "STP_SGTHRS",
-        unit: "-",
-        min: 0.0,
-        max: 255.0,
-        integer: true,
-        #[cfg(feature = "docs")]
-        doc: "StallGuard threshold (SGTHRS): stalled when SG_RESULT <= 2x this at speed; 0 off (tune on the bench)",
-        get: |c| f32::from(c.hardware.stall_threshold),
-        set: |c, v| c.hardware.stall_threshold = v as u8,
-    },
+    param!(
+        whole "STP_SGTHRS",
+        "-",
+        0.0,
+        255.0,
+        "StallGuard threshold (SGTHRS): stalled when SG_RESULT <= 2x this at speed; 0 off (tune on the bench)",
+        |c| c.hardware.stall_threshold
+    ),
 ];
 
 /// Why a value was refused.
