@@ -84,8 +84,11 @@ impl Outputs {
     /// Takes the ESC protocol and the thrust map from the parameters, while disarmed; says
     /// what it refuses.
     fn follow_parameters(&mut self, armed: bool) {
+        if armed {
+            return;
+        }
         let settings = crate::app::MISSION_CONFIG.lock(|c| c.get().hardware);
-        if armed || settings == self.settings {
+        if settings == self.settings {
             return;
         }
         self.settings = settings;
