@@ -96,6 +96,33 @@ fn main() -> ! {
         report("multiply-add (timer overhead)", n);
     }
 
+    // Cost of a mission text with three numbers (the steps that write one are the tick's
+    // worst): shared::numbers instead of core's float formatting.
+    {
+        use core::fmt::Write;
+        use core::hint::black_box;
+        use shared::numbers::{Fixed, Num, Sci};
+        let (x, y, m) = (
+            black_box(0.0123f32),
+            black_box(-0.0456f32),
+            black_box(1.234f32),
+        );
+        let mut text = TextSink(0);
+        let (n, _) = timer.instructions(|| {
+            write!(
+                text,
+                "phase: LIFT: COM ({}, {}) m, mass {} kg",
+                Fixed(x, 3),
+                Fixed(y, 3),
+                Num(m)
+            )
+        });
+        report("text with Fixed, Fixed, Num", n);
+        let (n, _) = timer.instructions(|| write!(text, "det {}", Sci(black_box(0.0036f32), 3)));
+        report("text with Sci", n);
+        black_box(text.0);
+    }
+
     let l_shape = paper::checked(paper::l_sim1());
     let rect = paper::checked(paper::rect_sim1());
 
@@ -237,4 +264,14 @@ fn finish(success: bool) -> ! {
 fn panic(info: &core::panic::PanicInfo) -> ! {
     hprintln!("panic: {}", info);
     finish(false)
+}
+
+/// Counts the bytes written to it (a text's cost without a buffer's).
+struct TextSink(usize);
+
+impl core::fmt::Write for TextSink {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        self.0 += core::hint::black_box(s).len();
+        Ok(())
+    }
 }
