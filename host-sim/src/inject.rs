@@ -2,12 +2,15 @@
 //! began; repeatable). Each kind is parsed and range-checked here, with an error that names
 //! the flag and what is wrong; the plant loop ([`crate::mission_run`]) applies it.
 //!
-//! Kinds: `load-shift:DX,DY` (the payload's COM moves by (DX, DY) m over half a second, a
-//! load sliding on the plate: the in-flight adaptation's test).
+//! Kinds (robots numbered from 1, as the mission's texts number them): `load-shift:DX,DY@T` (the payload's COM moves by (DX, DY) m over half a second, a
+//! load sliding on the plate: the in-flight adaptation's test); `stepper-stall:J` (robot J's
+//! stepper stalls halfway through the rearrangement before take-off and its driver reports it,
+//! as StallGuard does on the board: issue 15; it takes no time).
 
 use std::fmt;
 
 use shared::geometry::Vec2;
+use shared::scenario::MAX_ROBOTS;
 
 /// Largest load shift, m: beyond the paper's payloads (1.76 m long at most).
 pub const MAX_LOAD_SHIFT: f32 = 1.0;
@@ -19,6 +22,9 @@ pub const MAX_INJECT_TIME: f32 = crate::mission_run::MISSION_TIME_LIMIT;
 pub enum Fault {
     /// The payload's COM moves by this much, body frame, m.
     LoadShift(Vec2),
+    /// This robot's stepper (index from 0; the command line numbers robots from 1, as the
+    /// mission's texts do) stalls halfway through the rearrangement.
+    StepperStall(usize),
 }
 
 /// One injection: a fault at a time.
@@ -34,6 +40,7 @@ impl fmt::Display for Injection {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.fault {
             Fault::LoadShift(d) => write!(f, "load-shift:{},{}@{}", d.x, d.y, self.after),
+            Fault::StepperStall(robot) => write!(f, "stepper-stall:{}", robot + 1),
         }
     }
 }
@@ -53,6 +60,20 @@ fn number(text: &str, what: &str) -> Result<f32, String> {
 impl Injection {
     /// Parses `KIND@SECONDS` (clap's value parser for `--inject`).
     pub fn parse(text: &str) -> Result<Self, String> {
+        if let Some(robot) = text.strip_prefix("stepper-stall:") {
+            let robot: usize = robot.trim().parse().map_err(|_| {
+                format!("`{text}`: stepper-stall takes a robot's number (1, 2, ...) and no time")
+            })?;
+            if !(1..=MAX_ROBOTS).contains(&robot) {
+                return Err(format!(
+                    "`{text}`: robots are numbered 1 to {MAX_ROBOTS} at most"
+                ));
+            }
+            return Ok(Self {
+                fault: Fault::StepperStall(robot - 1),
+                after: 0.0,
+            });
+        }
         let (kind, at) = text
             .rsplit_once('@')
             .ok_or_else(|| format!("`{text}`: expected KIND@SECONDS, e.g. load-shift:0.15,0@11"))?;
@@ -79,7 +100,7 @@ impl Injection {
             }
             other => {
                 return Err(format!(
-                    "`{text}`: unknown fault `{other}` (known: load-shift:DX,DY)"
+                    "`{text}`: unknown fault `{other}` (known: load-shift:DX,DY@T, stepper-stall:J)"
                 ));
             }
         };
@@ -97,6 +118,9 @@ mod tests {
         assert_eq!(i.fault, Fault::LoadShift(Vec2::new(0.15, -0.05)));
         assert_eq!(i.after, 11.0);
         assert_eq!(i.to_string(), "load-shift:0.15,-0.05@11");
+        let stall = Injection::parse("stepper-stall:2").expect("valid");
+        assert_eq!(stall.fault, Fault::StepperStall(1));
+        assert_eq!(stall.to_string(), "stepper-stall:2");
         for (bad, says) in [
             ("load-shift:0.15,0", "KIND@SECONDS"),
             ("load-shift:0.15@3", "DX,DY"),
@@ -104,6 +128,10 @@ mod tests {
             ("load-shift:5,0@3", "beyond"),
             ("load-shift:0.1,0@-1", "from 0"),
             ("rotor-gone@3", "unknown fault"),
+            ("stepper-stall:x", "robot's number"),
+            ("stepper-stall:2@3", "no time"),
+            ("stepper-stall:99", "numbered 1 to"),
+            ("stepper-stall:0", "numbered 1 to"),
         ] {
             let err = Injection::parse(bad).expect_err(bad);
             assert!(err.contains(says), "{bad}: {err}");

@@ -14,7 +14,7 @@ use shared::control::navigator::{ImuSample, MocapFix};
 use shared::control::vector::Vec3;
 use shared::estimation::Measurement;
 use shared::flight::AdaptEvent;
-use shared::geometry::Vec2;
+use shared::geometry::{Rail, Vec2};
 use shared::mission::{
     AbortReason, HardwareFaults, JobRequest, Mission, MissionConfig, MissionPlanner,
     OperatorCommand, Phase, Reason, TickInput,
@@ -48,6 +48,9 @@ pub struct MissionSetup {
     pub time_limit: f32,
     /// Failure injection: the payload's COM moves in flight.
     pub load_shift: Option<LoadShift>,
+    /// Failure injection: this robot's stepper stalls halfway through the rearrangement and
+    /// its driver says so (StallGuard on the board).
+    pub stepper_stall: Option<usize>,
 }
 
 /// A load that shifts in flight: the payload's true COM moves by `offset` over
@@ -109,6 +112,7 @@ impl Default for MissionSetup {
             commands: Vec::new(),
             time_limit: MISSION_TIME_LIMIT,
             load_shift: None,
+            stepper_stall: None,
         }
     }
 }
@@ -124,6 +128,8 @@ pub struct Sensed {
     pub mocap: Option<MocapFix>,
     /// An operator command.
     pub command: Option<OperatorCommand>,
+    /// What the board's drivers report failed (the plant stands in for them).
+    pub faults: HardwareFaults,
 }
 
 /// Something the autopilot reported this tick.
@@ -142,6 +148,8 @@ pub enum Event {
     LiftRead(Option<f32>),
     /// The in-flight adaptation did something.
     Adapted(AdaptEvent),
+    /// The formation the robots move to before take-off, arc lengths, m.
+    FormationChosen(Vec<f32>),
 }
 
 /// What the autopilot commands each tick.
@@ -253,6 +261,8 @@ pub fn fly(
     let mut command = Some(OperatorCommand::Start);
     let mut group = 0usize;
     let mut shift_from = truth.com;
+    let mut stall = setup.stepper_stall.map(StepperStall::new);
+    let mut faults = HardwareFaults::NONE;
     loop {
         let t = plant.time();
         if t >= limit {
@@ -286,6 +296,7 @@ pub fn fly(
             imu,
             mocap,
             command: command.take(),
+            faults,
         })?;
         record.ticks += 1;
         record.armed |= out.armed;
@@ -338,9 +349,19 @@ pub fn fly(
                     }
                 }
                 Event::Adapted(_) => {}
+                Event::FormationChosen(target) => {
+                    if let Some(stall) = &mut stall {
+                        stall.formation_chosen(&record.final_rail, target);
+                    }
+                }
             }
         }
-        let wanted: Vec<f32> = out.rail.iter().take(n).map(|&p| rail.wrap(p)).collect();
+        let mut wanted: Vec<f32> = out.rail.iter().take(n).map(|&p| rail.wrap(p)).collect();
+        if let Some(stall) = &mut stall
+            && stall.hold(rail, &record.final_rail, &mut wanted)
+        {
+            faults.stalled_robots |= 1 << stall.robot;
+        }
         if wanted.len() == n && wanted != record.final_rail {
             record.final_rail = wanted;
             plant.set_rotor_points(&rotor_points(&record.final_rail));
@@ -394,6 +415,71 @@ pub fn fly(
     Ok(record)
 }
 
+/// An injected stepper stall: the robot stops once it has covered half of its move to the
+/// formation (its move is one trapezoid in one direction, so half the travel is half the way).
+#[derive(Clone, Copy, Debug)]
+struct StepperStall {
+    robot: usize,
+    /// Its move's length along the rail, both ways round (forward, backward), m; set when the
+    /// formation is chosen.
+    gaps: Option<(f32, f32)>,
+    /// Travel so far since the formation was chosen, signed, m.
+    travelled: f32,
+    /// Where it stopped.
+    stopped_at: Option<f32>,
+}
+
+impl StepperStall {
+    fn new(robot: usize) -> Self {
+        Self {
+            robot,
+            gaps: None,
+            travelled: 0.0,
+            stopped_at: None,
+        }
+    }
+
+    fn formation_chosen(&mut self, now: &[f32], target: &[f32]) {
+        if let (Some(&from), Some(&to)) = (now.get(self.robot), target.get(self.robot)) {
+            self.gaps = Some((to - from, from - to));
+        }
+    }
+
+    /// Holds the robot where it stalled (changing `wanted`); true once it has.
+    fn hold(&mut self, rail: &Rail, now: &[f32], wanted: &mut [f32]) -> bool {
+        let (Some((forward, backward)), Some(&from), Some(next)) =
+            (self.gaps, now.get(self.robot), wanted.get_mut(self.robot))
+        else {
+            return false;
+        };
+        if self.stopped_at.is_none() {
+            // One tick's move is short: the shorter way round is the way it went.
+            let step = rail.forward_gap(from, *next);
+            let step = if step > rail.perimeter() / 2.0 {
+                step - rail.perimeter()
+            } else {
+                step
+            };
+            self.travelled += step;
+            let gap = if self.travelled >= 0.0 {
+                rail.wrap(forward)
+            } else {
+                rail.wrap(backward)
+            };
+            if gap > 0.0 && self.travelled.abs() >= gap / 2.0 {
+                self.stopped_at = Some(from);
+            }
+        }
+        match self.stopped_at {
+            Some(at) => {
+                *next = at;
+                true
+            }
+            None => false,
+        }
+    }
+}
+
 /// `shared`'s mission in this process: the tick side and the planner, each job run in line
 /// and taken at its deadline tick, as the firmware takes it.
 pub struct InProcess {
@@ -432,7 +518,7 @@ impl Autopilot for InProcess {
             imu: sensed.imu,
             mocap: sensed.mocap,
             command: sensed.command,
-            faults: HardwareFaults::NONE,
+            faults: sensed.faults,
         });
         if let Some(job) = &out.job {
             // The firmware runs it off the tick; its result is taken at its deadline tick
@@ -443,6 +529,11 @@ impl Autopilot for InProcess {
         let mut events = Vec::new();
         if let Some(tr) = out.transition {
             self.reasons.push(tr.reason);
+            if tr.to == Phase::Rearranging
+                && let Some(positions) = self.mission.formation()
+            {
+                events.push(Event::FormationChosen(positions.to_vec()));
+            }
             events.push(Event::Phase {
                 name: tr.to.name().to_string(),
                 reason: tr.reason.to_string(),
@@ -502,6 +593,8 @@ pub struct MissionOutcome {
     pub flew: bool,
     /// Thrust of every rotor at the end, N.
     pub final_thrusts: Vec<f32>,
+    /// Where each robot is on the rail at the end, arc length, m.
+    pub final_rail: Vec<f32>,
     /// Simulated time, s.
     pub simulated_s: f32,
     /// Control ticks.
@@ -548,6 +641,7 @@ pub fn run(
         armed: record.armed,
         flew: record.flew,
         final_thrusts: record.final_thrusts,
+        final_rail: record.final_rail,
         simulated_s: record.simulated_s,
         ticks: record.ticks,
         max_tilt_deg: record.max_tilt_deg,
@@ -557,4 +651,52 @@ pub fn run(
         series: record.series,
     };
     Ok((outcome, autopilot))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A square rail of perimeter 4 m.
+    fn rail() -> Rail {
+        Rail::new(&[
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ])
+        .expect("a square")
+    }
+
+    /// Moves robot 1 of two from `from` by `step` per tick for `ticks` ticks with a stall
+    /// injected; where it ends up.
+    fn stall_run(from: f32, to: f32, step: f32, ticks: usize) -> (f32, bool) {
+        let rail = rail();
+        let mut stall = StepperStall::new(1);
+        let mut now = vec![3.0, from];
+        stall.formation_chosen(&now, &[3.0, to]);
+        let mut stalled = false;
+        for k in 1..=ticks {
+            let mut wanted = vec![3.0, rail.wrap(from + step * k as f32)];
+            stalled |= stall.hold(&rail, &now, &mut wanted);
+            now = wanted;
+        }
+        (now[1], stalled)
+    }
+
+    #[test]
+    fn a_stalled_stepper_stops_halfway() {
+        // Forward 0.2 -> 0.6 in 1 cm steps: stops at 0.4.
+        let (at, stalled) = stall_run(0.2, 0.6, 0.01, 40);
+        assert!(stalled);
+        assert!((at - 0.4).abs() < 0.011, "stopped at {at}");
+        // Backward across the rail's start, 0.1 -> 3.7 (0.4 m back): stops at 3.9.
+        let (at, stalled) = stall_run(0.1, 3.7, -0.01, 40);
+        assert!(stalled);
+        assert!((at - 3.9).abs() < 0.011, "stopped at {at}");
+        // Short of halfway it keeps going.
+        let (at, stalled) = stall_run(0.2, 0.6, 0.01, 15);
+        assert!(!stalled);
+        assert!((at - 0.35).abs() < 1e-4, "at {at}");
+    }
 }

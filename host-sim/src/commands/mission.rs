@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Args;
 use serde_json::json;
 use shared::estimation::{EstimatorOptions, ThrustScaleAxis};
@@ -63,7 +63,8 @@ pub struct MissionArgs {
     #[arg(long, value_enum, default_value = "equal-split")]
     mixer: MixerArg,
     /// Failure injection, seconds after take-off began: `load-shift:DX,DY@T` moves the
-    /// payload's COM by (DX, DY) m over half a second (repeatable: the last one of a kind
+    /// payload's COM by (DX, DY) m over half a second; `stepper-stall:J` (no time) stalls robot
+    /// J's (from 1) stepper halfway through the rearrangement (repeatable: the last one of a kind
     /// counts).
     #[arg(long, value_name = "KIND@SECONDS", value_parser = Injection::parse)]
     inject: Vec<Injection>,
@@ -105,6 +106,14 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
         Some(path) => scenario_file::load(path)?,
         None => scenario_file::parse(RECT_EX1, std::path::Path::new("rect-ex1 (built in)"))?,
     };
+    let robots = loaded.scenario.robots.count();
+    for i in &args.inject {
+        if let Fault::StepperStall(robot) = i.fault
+            && robot >= robots
+        {
+            bail!("--inject {i}: {} has robots 1 to {robots}", loaded.name);
+        }
+    }
     // A reading's noise beyond the rotors' whole range would carry no information.
     let max_thrust = f64::from(loaded.scenario.robots.max_thrust);
     let lift_sigma = args
@@ -135,11 +144,20 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
         load_shift: args
             .inject
             .iter()
-            .map(|i| match i.fault {
-                Fault::LoadShift(offset) => LoadShift {
+            .filter_map(|i| match i.fault {
+                Fault::LoadShift(offset) => Some(LoadShift {
                     offset,
                     after: i.after,
-                },
+                }),
+                _ => None,
+            })
+            .next_back(),
+        stepper_stall: args
+            .inject
+            .iter()
+            .filter_map(|i| match i.fault {
+                Fault::StepperStall(robot) => Some(robot),
+                _ => None,
             })
             .next_back(),
         ..MissionSetup::default()
