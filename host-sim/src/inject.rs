@@ -2,10 +2,11 @@
 //! began; repeatable). Each kind is parsed and range-checked here, with an error that names
 //! the flag and what is wrong; the plant loop ([`crate::mission_run`]) applies it.
 //!
-//! Kinds (robots numbered from 1, as the mission's texts number them): `load-shift:DX,DY@T` (the payload's COM moves by (DX, DY) m over half a second, a
-//! load sliding on the plate: the in-flight adaptation's test); `stepper-stall:J` (robot J's
-//! stepper stalls halfway through the rearrangement before take-off and its driver reports it,
-//! as StallGuard does on the board: issue 15; it takes no time).
+//! Kinds (robots numbered from 1, as the mission's texts number them):
+//! - `load-shift:DX,DY@T`: the payload's COM moves by (DX, DY) m over half a second, a load
+//!   sliding on the plate (the in-flight adaptation's test);
+//! - `stepper-stall:J`: robot J's stepper stalls halfway through the rearrangement before
+//!   take-off and its driver reports it, as StallGuard does on the board (issue 15; no time).
 
 use std::fmt;
 

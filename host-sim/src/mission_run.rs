@@ -351,7 +351,7 @@ pub fn fly(
                 Event::Adapted(_) => {}
                 Event::FormationChosen(target) => {
                     if let Some(stall) = &mut stall {
-                        stall.formation_chosen(&record.final_rail, target);
+                        stall.formation_chosen(rail, &record.final_rail, target);
                     }
                 }
             }
@@ -420,7 +420,7 @@ pub fn fly(
 #[derive(Clone, Copy, Debug)]
 struct StepperStall {
     robot: usize,
-    /// Its move's length along the rail, both ways round (forward, backward), m; set when the
+    /// Its move's length along the rail going forward and going backward, m; set when the
     /// formation is chosen.
     gaps: Option<(f32, f32)>,
     /// Travel so far since the formation was chosen, signed, m.
@@ -439,9 +439,9 @@ impl StepperStall {
         }
     }
 
-    fn formation_chosen(&mut self, now: &[f32], target: &[f32]) {
+    fn formation_chosen(&mut self, rail: &Rail, now: &[f32], target: &[f32]) {
         if let (Some(&from), Some(&to)) = (now.get(self.robot), target.get(self.robot)) {
-            self.gaps = Some((to - from, from - to));
+            self.gaps = Some((rail.forward_gap(from, to), rail.forward_gap(to, from)));
         }
     }
 
@@ -462,9 +462,9 @@ impl StepperStall {
             };
             self.travelled += step;
             let gap = if self.travelled >= 0.0 {
-                rail.wrap(forward)
+                forward
             } else {
-                rail.wrap(backward)
+                backward
             };
             if gap > 0.0 && self.travelled.abs() >= gap / 2.0 {
                 self.stopped_at = Some(from);
@@ -674,7 +674,7 @@ mod tests {
         let rail = rail();
         let mut stall = StepperStall::new(1);
         let mut now = vec![3.0, from];
-        stall.formation_chosen(&now, &[3.0, to]);
+        stall.formation_chosen(&rail, &now, &[3.0, to]);
         let mut stalled = false;
         for k in 1..=ticks {
             let mut wanted = vec![3.0, rail.wrap(from + step * k as f32)];
