@@ -11,7 +11,8 @@
 //!
 //! Arming by command is refused (the mission arms itself); any other command is unsupported.
 
-use crate::msg::{COMMAND_ACK_DATA, COMMAND_LONG_DATA, MavCmd, MavResult};
+use crate::command_wire::{CommandAck, CommandId, CommandLong};
+use crate::msg::{COMMAND_LONG_DATA, MavCmd, MavResult};
 
 /// Magic number of a forced disarm (MAVLink `MAV_CMD_COMPONENT_ARM_DISARM`, param2).
 pub const FORCE_DISARM_MAGIC: f32 = 21196.0;
@@ -39,6 +40,11 @@ impl OperatorCommand {
             Self::Kill => MavCmd::MAV_CMD_DO_FLIGHTTERMINATION,
         }
     }
+
+    /// The number of [`Self::mav_cmd`].
+    pub fn command_id(self) -> CommandId {
+        CommandId::of(self.mav_cmd())
+    }
 }
 
 impl OperatorCommand {
@@ -65,32 +71,33 @@ pub enum Request {
 }
 
 /// What `command` asks for.
-pub fn classify(command: &COMMAND_LONG_DATA) -> Request {
-    match command.command {
-        MavCmd::MAV_CMD_MISSION_START => Request::Operator(OperatorCommand::Start),
-        MavCmd::MAV_CMD_NAV_LAND => Request::Operator(OperatorCommand::LandNow),
-        MavCmd::MAV_CMD_DO_FLIGHTTERMINATION if command.param1 > 0.5 => {
+pub fn classify(command: &CommandLong) -> Request {
+    let id = CommandId(command.command);
+    let [param1, param2, ..] = command.params;
+    if id.is(MavCmd::MAV_CMD_MISSION_START) {
+        Request::Operator(OperatorCommand::Start)
+    } else if id.is(MavCmd::MAV_CMD_NAV_LAND) {
+        Request::Operator(OperatorCommand::LandNow)
+    } else if id.is(MavCmd::MAV_CMD_DO_FLIGHTTERMINATION) && param1 > 0.5 {
+        Request::Operator(OperatorCommand::Kill)
+    } else if id.is(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM) {
+        if param1 != 0.0 {
+            Request::Refused(MavResult::MAV_RESULT_DENIED)
+        } else if param2 == FORCE_DISARM_MAGIC {
             Request::Operator(OperatorCommand::Kill)
+        } else {
+            Request::Operator(OperatorCommand::Abort)
         }
-        MavCmd::MAV_CMD_COMPONENT_ARM_DISARM if command.param1 == 0.0 => {
-            if command.param2 == FORCE_DISARM_MAGIC {
-                Request::Operator(OperatorCommand::Kill)
-            } else {
-                Request::Operator(OperatorCommand::Abort)
-            }
-        }
-        MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => Request::Refused(MavResult::MAV_RESULT_DENIED),
-        MavCmd::MAV_CMD_REQUEST_MESSAGE if command.param1.is_finite() && command.param1 >= 0.0 => {
-            Request::Message(command.param1 as u32)
-        }
-        _ => Request::Refused(MavResult::MAV_RESULT_UNSUPPORTED),
+    } else if id.is(MavCmd::MAV_CMD_REQUEST_MESSAGE) && param1.is_finite() && param1 >= 0.0 {
+        Request::Message(param1 as u32)
+    } else {
+        Request::Refused(MavResult::MAV_RESULT_UNSUPPORTED)
     }
 }
 
-/// The acknowledgement of `command` with `result` (its extension fields, progress and
-/// target, are left out: a ground station matches acknowledgements by command).
-pub fn ack(command: MavCmd, result: MavResult) -> COMMAND_ACK_DATA {
-    COMMAND_ACK_DATA { command, result }
+/// The acknowledgement of `command` with `result`.
+pub fn ack(command: CommandId, result: MavResult) -> CommandAck {
+    CommandAck { command, result }
 }
 
 /// A `COMMAND_LONG` of `command` to the vehicle with `param1` and `param2` (the ground side).
@@ -108,6 +115,18 @@ pub fn command_long(command: MavCmd, param1: f32, param2: f32) -> COMMAND_LONG_D
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mavlink::{MavlinkVersion, MessageData};
+
+    /// What the vehicle reads of what a ground station sends (through the wire bytes).
+    fn received(sent: &COMMAND_LONG_DATA) -> CommandLong {
+        let mut bytes = [0u8; 255];
+        let n = sent.ser(MavlinkVersion::V2, &mut bytes);
+        CommandLong::deser(MavlinkVersion::V2, &bytes[..n]).expect("a COMMAND_LONG decodes")
+    }
+
+    fn classify(sent: &COMMAND_LONG_DATA) -> Request {
+        super::classify(&received(sent))
+    }
 
     #[test]
     fn each_operator_command_is_read_back_from_what_a_ground_station_sends() {

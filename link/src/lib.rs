@@ -7,6 +7,7 @@
 //!   `HIL_ACTUATOR_CONTROLS` (and `ACTUATOR_OUTPUT_STATUS` past 8 robots) out, with the channel
 //!   map, and the lockstep bookkeeping of both sides.
 //! - [`command`]: `COMMAND_LONG` to the operator's commands, and their `COMMAND_ACK`s.
+//! - [`command_wire`]: those two messages with the command as its number.
 //! - [`ftp`]: MAVLink FTP: the vehicle's minimal server (one writable file, the payload
 //!   description) and the ground side's upload.
 //! - [`param`]: MAVLink's parameter protocol over the mission's parameter table.
@@ -29,6 +30,7 @@ compile_error!("link: enable `std` (host) or `embedded` (firmware), not both");
 extern crate std;
 
 pub mod command;
+pub mod command_wire;
 pub mod frame;
 pub mod ftp;
 pub mod hil;

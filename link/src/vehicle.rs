@@ -5,13 +5,14 @@
 use mavlink::MessageData;
 
 use crate::command::{Request, classify};
+use crate::command_wire::{CommandId, CommandLong};
 use crate::frame::{Frame, Integrity};
 use crate::ftp::{FtpMessage, PAYLOAD_LEN};
 use crate::hil::{HilError, ImuSample, MocapFix};
 use crate::msg::{
     ACTUATOR_OUTPUT_STATUS_DATA, ATT_POS_MOCAP_DATA, AUTOPILOT_VERSION_DATA, COMMAND_ACK_DATA,
     COMMAND_LONG_DATA, FILE_TRANSFER_PROTOCOL_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA,
-    HIL_SENSOR_DATA, MISSION_COUNT_DATA, MISSION_REQUEST_LIST_DATA, MavCmd, NAMED_VALUE_FLOAT_DATA,
+    HIL_SENSOR_DATA, MISSION_COUNT_DATA, MISSION_REQUEST_LIST_DATA, NAMED_VALUE_FLOAT_DATA,
     NAMED_VALUE_INT_DATA, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA,
     PARAM_VALUE_DATA, STATUSTEXT_DATA,
 };
@@ -72,7 +73,7 @@ pub enum Inbound {
     /// `COMMAND_LONG` addressed to the vehicle, classified.
     Command {
         /// The command as sent (for its acknowledgement).
-        command: MavCmd,
+        command: CommandId,
         /// What it asks for.
         request: Request,
         /// Its sender (the acknowledgement's target).
@@ -141,9 +142,9 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
                 Err(e) => Inbound::Invalid(e),
             }
         }),
-        COMMAND_LONG_DATA::ID => match frame.decode::<COMMAND_LONG_DATA>() {
+        COMMAND_LONG_DATA::ID => match frame.decode::<CommandLong>() {
             Some(c) if for_us(c.target_system, c.target_component) => Inbound::Command {
-                command: c.command,
+                command: CommandId(c.command),
                 request: classify(&c),
                 from,
             },
@@ -195,6 +196,7 @@ mod tests {
     use crate::command::{OperatorCommand, command_long};
     use crate::frame::{Encoder, Parser};
     use crate::ftp::Opcode;
+    use crate::msg::MavCmd;
 
     fn through_the_wire<M: MessageData>(m: &M) -> Inbound {
         let mut enc = Encoder::new(crate::PLANT_SYSTEM_ID, crate::PLANT_COMPONENT_ID);
@@ -208,6 +210,26 @@ mod tests {
             }
         }
         out.expect("one frame")
+    }
+
+    #[test]
+    fn a_command_the_dialect_does_not_list_is_refused_with_its_number() {
+        let unknown = CommandLong {
+            command: 0xfffe,
+            target_system: crate::VEHICLE_SYSTEM_ID,
+            ..Default::default()
+        };
+        assert_eq!(
+            through_the_wire(&unknown),
+            Inbound::Command {
+                command: CommandId(0xfffe),
+                request: Request::Refused(crate::msg::MavResult::MAV_RESULT_UNSUPPORTED),
+                from: Sender {
+                    system: crate::PLANT_SYSTEM_ID,
+                    component: crate::PLANT_COMPONENT_ID,
+                },
+            }
+        );
     }
 
     #[test]

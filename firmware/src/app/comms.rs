@@ -16,6 +16,7 @@ use embassy_time::{Duration, Instant, Timer};
 use embedded_io_async::{Read, Write};
 use link::MessageData;
 use link::command::{Request, ack};
+use link::command_wire::CommandId;
 use link::frame::{Encoder, Frame, Parser};
 use link::ftp::{FileEvent, FtpMessage, Server};
 use link::hil::{Actuators, ImuSample};
@@ -63,7 +64,7 @@ pub struct PendingCommand {
     /// The command.
     pub command: OperatorCommand,
     /// The MAVLink command it came as.
-    pub mav_cmd: MavCmd,
+    pub mav_cmd: CommandId,
     /// Who sent it.
     pub from: Sender,
 }
@@ -96,7 +97,7 @@ pub enum Outbound {
     /// A command's acknowledgement decided by the link itself.
     Ack {
         /// The command.
-        command: MavCmd,
+        command: CommandId,
         /// The result.
         result: MavResult,
     },
@@ -240,12 +241,12 @@ async fn handle_param(request: ParamRequest, params: &mut ParamService, store: &
     }
 }
 
-async fn refuse(command: MavCmd, result: MavResult, why: &str) {
+async fn refuse(command: CommandId, result: MavResult, why: &str) {
     OUTBOX.send(Outbound::Ack { command, result }).await;
     OUTBOX
         .send(report(
             Severity::Warning,
-            format_args!("command {} refused: {why}", command as u32),
+            format_args!("command {} refused: {why}", command.0),
         ))
         .await;
 }
@@ -294,7 +295,7 @@ async fn handle(
                 refuse(command, result, "that message is not sent on request").await;
             }
             Request::Refused(result) => {
-                let why = if command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM {
+                let why = if command.is(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM) {
                     "the mission arms the rotors itself, at take-off"
                 } else {
                     "not supported"
