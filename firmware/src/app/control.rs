@@ -81,7 +81,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             None
         };
 
-        let payload = PAYLOAD.try_take();
+        let payload = PAYLOAD.try_receive().ok();
         let pending = COMMANDS.try_receive().ok();
         let input = TickInput {
             time_us: step.time_us,

@@ -21,7 +21,7 @@ use static_cell::{ConstStaticCell, StaticCell};
 use super::autonomy::{Report, Severity, run_job};
 use super::comms::{Outbound, Received};
 use super::{
-    JOB_REQUESTS, JOB_RESULTS, LoadedPayload, MISSION_CONFIG, MISSION_STATE, OUTBOX, PAYLOAD,
+    JOB_REQUESTS, JOB_RESULTS, LoadedPayload, MISSION_CONFIG, MISSION_STATE, OUTBOX, offer_payload,
     RELOAD, TO_LOAD,
 };
 
@@ -56,7 +56,7 @@ pub async fn jobs() {
                                 grid.axis_len(2)
                             ),
                         );
-                        PAYLOAD.signal(LoadedPayload {
+                        offer_payload(LoadedPayload {
                             scenario: received.scenario.clone(),
                             config,
                         });
@@ -81,7 +81,7 @@ pub async fn jobs() {
                                 Severity::Info,
                                 format_args!("params applied to payload {}", received.name),
                             );
-                            PAYLOAD.signal(LoadedPayload {
+                            offer_payload(LoadedPayload {
                                 scenario: received.scenario.clone(),
                                 config,
                             });

@@ -46,8 +46,17 @@ pub static COMMANDS: Channel<Cs, comms::PendingCommand, 4> = Channel::new();
 /// A payload description received and checked, for the job task to load the planner with.
 pub static TO_LOAD: Channel<Cs, comms::Received, 1> = Channel::new();
 /// A payload description loaded into the planner, for the autonomy, with the configuration
-/// the planner was loaded with (the mission takes the same).
-pub static PAYLOAD: Signal<Cs, LoadedPayload> = Signal::new();
+/// the planner was loaded with (the mission takes the same). Only the newest counts: see
+/// [`offer_payload`]. (A channel, not a `Signal`: a `Signal` of this type starts from a
+/// non-zero bit pattern, so its 1.7 KB would be a `.data` image in flash.)
+pub static PAYLOAD: Channel<Cs, LoadedPayload, 1> = Channel::new();
+
+/// Hands `payload` to the autonomy in place of any the control task has not taken yet.
+pub fn offer_payload(payload: LoadedPayload) {
+    PAYLOAD.clear();
+    // The job task is the only sender and the channel was just emptied: this cannot be full.
+    let _ = PAYLOAD.try_send(payload);
+}
 /// The mission configuration the parameters make now (set by the link task from the stored
 /// parameters and each accepted `PARAM_SET`; taken when a payload description is loaded).
 pub static MISSION_CONFIG: Mutex<Cs, Cell<MissionConfig>> =

@@ -245,7 +245,10 @@ pub struct ControlTasks {
 /// SPI clock of the FRAM: 10 MHz, well inside the part's 40 MHz.
 const FRAM_SPI_HZ: u32 = 10_000_000;
 
-static LINK_TX_BUFFER: StaticCell<[u8; 2048]> = StaticCell::new();
+/// TELEM1's transmit ring: a control step's messages are at most ~1.3 KB (three texts in
+/// chunks, six values, the acknowledgement, the heartbeat, the actuators), 12 ms at 921,600
+/// baud; the send task waits on a full ring, so a larger one only buys latency slack.
+static LINK_TX_BUFFER: StaticCell<[u8; 1024]> = StaticCell::new();
 #[cfg(feature = "usb-link")]
 static USB_EP_OUT_BUFFER: StaticCell<[u8; 256]> = StaticCell::new();
 /// The stepper buses' receive rings.
@@ -265,7 +268,7 @@ fn telem1(
         uart,
         rx,
         tx,
-        LINK_TX_BUFFER.init([0; 2048]),
+        LINK_TX_BUFFER.init([0; 1024]),
         LINK_RX_BUFFER.init([0; 1024]),
         LinkIrqs,
         config,
