@@ -21,8 +21,8 @@ use static_cell::{ConstStaticCell, StaticCell};
 use super::autonomy::{Report, Severity, run_job};
 use super::comms::{Outbound, Received};
 use super::{
-    JOB_REQUESTS, JOB_RESULTS, LoadedPayload, MISSION_CONFIG, MISSION_STATE, OUTBOX, offer_payload,
-    RELOAD, TO_LOAD,
+    JOB_REQUESTS, JOB_RESULTS, LoadedPayload, MISSION_CONFIG, MISSION_STATE, OUTBOX, RELOAD,
+    TO_LOAD, offer_payload,
 };
 
 static PLANNER: ConstStaticCell<MissionPlanner> = ConstStaticCell::new(MissionPlanner::UNLOADED);

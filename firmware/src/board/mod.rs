@@ -35,7 +35,7 @@ pub mod imu_spi;
 pub mod qemu;
 #[cfg(feature = "pixhawk6c")]
 pub mod steppers;
-#[cfg(feature = "usb-link")]
+#[cfg(feature = "pixhawk6c")]
 pub mod usb_link;
 #[cfg(feature = "qemu")]
 pub use qemu::QemuMps2An500 as Selected;

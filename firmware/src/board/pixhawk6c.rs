@@ -9,9 +9,9 @@
 //! - LEDs: red on PD10, blue on PD11, both active low (anodes on 3.3 V).
 //! - TIM1, TIM4, TIM5 drive the eight FMU PWM outputs, TIM3 the buzzer and TIM17 the IMU
 //!   heater; the time driver therefore takes TIM2, which the board leaves free.
-//! - The MAVLink link: TELEM1, UART7 (TX PE8, RX PE7) at [`LINK_BAUD`]. With the `usb-link`
-//!   feature (`cargo fw-usb`, the HIL bench image), USB instead when a cable powers VBUS at
-//!   start (CDC-ACM on OTG_FS, PA11/PA12, VBUS PA9; `board.h`), see `usb_link`.
+//! - The MAVLink link: USB when a cable powers VBUS at start (CDC-ACM on OTG_FS, PA11/PA12,
+//!   VBUS PA9; `board.h`), see [`super::usb_link`]; TELEM1 otherwise, UART7 (TX PE8, RX PE7)
+//!   at [`LINK_BAUD`].
 //! - Parameters: the 32 KiB FRAM on SPI2 (SCK PD3, MISO PC2, MOSI PC3, chip select PD4;
 //!   `board.h` "SPI2 is FRAM", `spi.cpp` `SPIDEV_FLASH(0)`), see [`super::fram`] (polled).
 //! - Executors on interrupt lines the board does not use: SPDIF_RX (control), CEC (link),
@@ -131,13 +131,7 @@ impl Board for Pixhawk6c {
     const NAME: &'static str = "pixhawk6c";
     const TICK_COST_NAME: &'static str = "tick_cyc";
     const TICK_COST_PER_COUNT: u32 = 1;
-    #[cfg(not(feature = "usb-link"))]
-    type LinkRx = BufferedUartRx<'static>;
-    #[cfg(not(feature = "usb-link"))]
-    type LinkTx = BufferedUartTx<'static>;
-    #[cfg(feature = "usb-link")]
     type LinkRx = super::usb_link::LinkRx;
-    #[cfg(feature = "usb-link")]
     type LinkTx = super::usb_link::LinkTx;
     type Outputs = Outputs;
     type Irq = Interrupt;
@@ -185,10 +179,7 @@ pub fn clock_config() -> Config {
     rcc.apb4_pre = APBPrescaler::DIV2;
     rcc.voltage_scale = VoltageScale::Scale0; // required above 400 MHz
     // USB's 48 MHz from HSI48 (on by default).
-    #[cfg(feature = "usb-link")]
-    {
-        rcc.mux.usbsel = embassy_stm32::rcc::mux::Usbsel::HSI48;
-    }
+    rcc.mux.usbsel = embassy_stm32::rcc::mux::Usbsel::HSI48;
     config
 }
 
@@ -234,7 +225,6 @@ pub struct BoardParts {
 
 /// The board's tasks at the control priority.
 pub struct ControlTasks {
-    #[cfg(feature = "usb-link")]
     usb_device: Option<super::usb_link::UsbDeviceTask>,
     imu: super::imu_spi::ImuBus,
     escs: super::escs::EscTimers,
@@ -249,7 +239,6 @@ const FRAM_SPI_HZ: u32 = 10_000_000;
 /// chunks, six values, the acknowledgement, the heartbeat, the actuators), 12 ms at 921,600
 /// baud; the send task waits on a full ring, so a larger one only buys latency slack.
 static LINK_TX_BUFFER: StaticCell<[u8; 1024]> = StaticCell::new();
-#[cfg(feature = "usb-link")]
 static USB_EP_OUT_BUFFER: StaticCell<[u8; 256]> = StaticCell::new();
 /// The stepper buses' receive rings.
 static STEPPER_RX: [ConstStaticCell<[u8; 64]>; 2] =
@@ -306,10 +295,7 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
         red: Output::new(p.PD10, Level::High, Speed::Low),
         blue: Output::new(p.PD11, Level::High, Speed::Low),
     };
-    #[cfg(not(feature = "usb-link"))]
-    let (link_rx, link_tx) = telem1(p.UART7, p.PE7, p.PE8);
     // The link: USB if a cable powers VBUS (PA9) at start, TELEM1 otherwise.
-    #[cfg(feature = "usb-link")]
     let (link_rx, link_tx, usb_device) = {
         use super::usb_link::{LinkRx, LinkTx};
         use embassy_stm32::gpio::Input;
@@ -468,7 +454,6 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
     let board = BoardParts {
         leds,
         control_tasks: ControlTasks {
-            #[cfg(feature = "usb-link")]
             usb_device,
             imu,
             escs,
@@ -483,7 +468,6 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
 /// the link executor (the USB device), and reports why the board started.
 pub fn spawn_control_tasks(spawner: SendSpawner, link_spawner: SendSpawner, tasks: ControlTasks) {
     let ControlTasks {
-        #[cfg(feature = "usb-link")]
         usb_device,
         imu,
         escs,
@@ -499,15 +483,12 @@ pub fn spawn_control_tasks(spawner: SendSpawner, link_spawner: SendSpawner, task
         severity,
         format_args!("{}; disarmed", reset.describe()),
     ));
-    #[cfg(feature = "usb-link")]
     if let Some(device) = usb_device {
         match super::usb_link::usb_device(device) {
             Ok(token) => link_spawner.spawn(token),
             Err(e) => defmt::error!("USB task not spawned: {}", e),
         }
     }
-    #[cfg(not(feature = "usb-link"))]
-    let _ = link_spawner;
     match super::imu_spi::imu(imu) {
         Ok(token) => spawner.spawn(token),
         Err(e) => defmt::error!("IMU task not spawned: {}", e),
