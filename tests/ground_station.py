@@ -12,6 +12,9 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
 
 1. connect (HEARTBEAT from component 1, MAV_AUTOPILOT_GENERIC), AUTOPILOT_VERSION through
    MAV_CMD_REQUEST_MESSAGE (MAVLink 2 and parameter-encoding capabilities), MISSION_COUNT 0,
+   telemetry (SYS_STATUS, ATTITUDE_QUATERNION, LOCAL_POSITION_NED streamed; a stream stopped
+   and restarted by MAV_CMD_SET_MESSAGE_INTERVAL, a bad interval and an unstreamed message
+   refused, SYS_STATUS sent once on MAV_CMD_REQUEST_MESSAGE),
    every parameter (count and indices consistent, read back by name and by index), arming
    refused with its COMMAND_ACK and a STATUSTEXT, bad values refused (PARAM_VALUE with the old
    value and a STATUSTEXT), one good value set; then the power is cut (host-sim and QEMU
@@ -146,6 +149,57 @@ class Vehicle:
         return {values[i][0]: (i, values[i][1]) for i in range(count)}
 
 
+def telemetry_checks(v):
+    """The streams, and their rates set as MAVLink's message interval protocol has it."""
+    status = v.expect(["SYS_STATUS"], 10, "SYS_STATUS")
+    imu = mavlink.MAV_SYS_STATUS_SENSOR_3D_GYRO | mavlink.MAV_SYS_STATUS_SENSOR_3D_ACCEL
+    if status.onboard_control_sensors_present & imu != imu:
+        raise Failure(f"SYS_STATUS sensors present {status.onboard_control_sensors_present:#x}")
+    if status.onboard_control_sensors_health & imu != imu:
+        raise Failure(f"SYS_STATUS: the IMU is not healthy "
+                      f"({status.onboard_control_sensors_health:#x})")
+    q = v.expect(["ATTITUDE_QUATERNION"], 10, "ATTITUDE_QUATERNION")
+    norm = (q.q1 ** 2 + q.q2 ** 2 + q.q3 ** 2 + q.q4 ** 2) ** 0.5
+    if abs(norm - 1.0) > 1e-3:
+        raise Failure(f"ATTITUDE_QUATERNION of norm {norm}")
+    v.expect(["LOCAL_POSITION_NED"], 10, "LOCAL_POSITION_NED")
+    print("telemetry: SYS_STATUS (IMU present and healthy), ATTITUDE_QUATERNION (unit), "
+          "LOCAL_POSITION_NED")
+
+    attitude = mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION
+    ack = v.command(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, attitude, -1)
+    if ack.result != mavlink.MAV_RESULT_ACCEPTED:
+        raise Failure(f"SET_MESSAGE_INTERVAL(ATTITUDE_QUATERNION, off) acknowledged {ack.result}")
+    # What was already on its way may still come; after that, nothing for 3 s.
+    v.recv(["NONE"], 1.0)
+    if v.recv(["ATTITUDE_QUATERNION"], 3.0) is not None:
+        raise Failure("ATTITUDE_QUATERNION still streamed after its interval was set to -1")
+    if v.recv(["LOCAL_POSITION_NED"], 3.0) is None:
+        raise Failure("LOCAL_POSITION_NED stopped with ATTITUDE_QUATERNION")
+    ack = v.command(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, attitude, 20000)
+    if ack.result != mavlink.MAV_RESULT_ACCEPTED:
+        raise Failure(f"SET_MESSAGE_INTERVAL(ATTITUDE_QUATERNION, 20 ms) acknowledged {ack.result}")
+    v.expect(["ATTITUDE_QUATERNION"], 10, "ATTITUDE_QUATERNION after its interval was set")
+    ack = v.command(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, attitude, 10)
+    if ack.result != mavlink.MAV_RESULT_DENIED:
+        raise Failure(f"a 10 us interval acknowledged {ack.result}, expected DENIED")
+    v.text_matching("interval must be", 10)
+    ack = v.command(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, mavlink.MAVLINK_MSG_ID_GPS_RAW_INT, 0)
+    if ack.result != mavlink.MAV_RESULT_UNSUPPORTED:
+        raise Failure(f"an unstreamed message's interval acknowledged {ack.result}")
+    ack = v.command(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, mavlink.MAVLINK_MSG_ID_SYS_STATUS, -1)
+    if ack.result != mavlink.MAV_RESULT_ACCEPTED:
+        raise Failure(f"SET_MESSAGE_INTERVAL(SYS_STATUS, off) acknowledged {ack.result}")
+    v.recv(["NONE"], 1.5)
+    ack = v.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_SYS_STATUS)
+    if ack.result != mavlink.MAV_RESULT_ACCEPTED:
+        raise Failure(f"REQUEST_MESSAGE(SYS_STATUS) acknowledged {ack.result}")
+    v.expect(["SYS_STATUS"], 10, "SYS_STATUS on request")
+    v.command(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, mavlink.MAVLINK_MSG_ID_SYS_STATUS, 0)
+    print("SET_MESSAGE_INTERVAL: off, 20 ms, a bad interval DENIED, an unstreamed message "
+          "UNSUPPORTED; REQUEST_MESSAGE(SYS_STATUS) sent once")
+
+
 def start_hil(args, port, extra):
     cmd = [args.host_sim, "hil", "--scenario", args.scenario, "--qemu", args.elf,
            "--storage", args.storage, "--gcs", f"udp:127.0.0.1:{port}", "--ground-start",
@@ -184,6 +238,7 @@ def first_run(args, port):
         if count.count != 0:
             raise Failure(f"MISSION_COUNT {count.count}, expected 0")
         print("AUTOPILOT_VERSION and MISSION_COUNT 0 as QGroundControl expects")
+        telemetry_checks(v)
 
         params = v.all_params()
         print(f"{len(params)} parameters, indices 0..{len(params) - 1}")

@@ -8,6 +8,7 @@
 //! | `MAV_CMD_COMPONENT_ARM_DISARM`, param1 = 0 | [`OperatorCommand::Abort`] (the mission stops in a safe way) |
 //! | the same with param2 = 21196 (forced), or `MAV_CMD_DO_FLIGHTTERMINATION` param1 > 0.5 | [`OperatorCommand::Kill`]: rotors off now |
 //! | `MAV_CMD_REQUEST_MESSAGE` | [`Request::Message`] (the link answers it) |
+//! | `MAV_CMD_SET_MESSAGE_INTERVAL` | [`Request::SetInterval`] (the link's telemetry schedule) |
 //!
 //! Arming by command is refused (the mission arms itself); any other command is unsupported.
 
@@ -66,6 +67,14 @@ pub enum Request {
     Operator(OperatorCommand),
     /// `MAV_CMD_REQUEST_MESSAGE` of this message id.
     Message(u32),
+    /// `MAV_CMD_SET_MESSAGE_INTERVAL`: param1 and param2 as sent (checked by
+    /// [`crate::telemetry::Schedule::set_interval`]).
+    SetInterval {
+        /// The message id.
+        message_id: f32,
+        /// The interval, us (-1 off, 0 the default).
+        interval_us: f32,
+    },
     /// Refused at once with this result.
     Refused(MavResult),
 }
@@ -90,6 +99,11 @@ pub fn classify(command: &CommandLong) -> Request {
         }
     } else if id.is(MavCmd::MAV_CMD_REQUEST_MESSAGE) && param1.is_finite() && param1 >= 0.0 {
         Request::Message(param1 as u32)
+    } else if id.is(MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL) {
+        Request::SetInterval {
+            message_id: param1,
+            interval_us: param2,
+        }
     } else {
         Request::Refused(MavResult::MAV_RESULT_UNSUPPORTED)
     }
@@ -198,5 +212,13 @@ mod tests {
     fn message_requests_carry_the_message_id() {
         let req = command_long(MavCmd::MAV_CMD_REQUEST_MESSAGE, 148.0, 0.0);
         assert_eq!(classify(&req), Request::Message(148));
+        let rate = command_long(MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL, 31.0, 20_000.0);
+        assert_eq!(
+            classify(&rate),
+            Request::SetInterval {
+                message_id: 31.0,
+                interval_us: 20_000.0
+            }
+        );
     }
 }

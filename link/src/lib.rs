@@ -13,6 +13,7 @@
 //! - [`param`]: MAVLink's parameter protocol over the mission's parameter table.
 //! - [`store`]: the parameters' storage (`sequential-storage` on NOR flash), power-cut safe.
 //! - [`status`]: `STATUSTEXT` (long texts in chunks, and their reassembly) and named values.
+//! - [`telemetry`]: `SYS_STATUS`, `ATTITUDE_QUATERNION`, `LOCAL_POSITION_NED` at set rates.
 //! - [`vehicle`]: the vehicle's dispatch of received frames.
 //!
 //! Nothing here does I/O, allocates or panics on input: the firmware runs it under embassy on
@@ -37,6 +38,7 @@ pub mod hil;
 pub mod param;
 pub mod status;
 pub mod store;
+pub mod telemetry;
 pub mod vehicle;
 
 /// The trait of every message type (its id, `CRC_EXTRA`, encoding).

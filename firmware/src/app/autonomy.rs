@@ -22,6 +22,7 @@ pub use link::command::OperatorCommand;
 pub use link::hil::{MAX_ROBOTS, MocapFix};
 pub use link::status::MissionState;
 use link::status::Text;
+use link::telemetry::VehicleSnapshot;
 use shared::control::navigator::{ImuSample, MocapFix as Fix};
 use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
@@ -176,6 +177,9 @@ pub struct TickOutput {
     pub job: Option<JobRequest>,
     /// Texts and values.
     pub report: Report,
+    /// The state estimate after the step, for telemetry (time, IMU health and load are the
+    /// control task's to fill).
+    pub telemetry: VehicleSnapshot,
 }
 
 /// The autonomy: the mission's tick side. Its job side, the [`MissionPlanner`], lives with
@@ -263,7 +267,7 @@ impl Autonomy {
                 Err(why) => {
                     report.text(
                         Severity::Error,
-                        format_args!("command {:?} refused: {why}", reply.command),
+                        format_args!("command {} refused: {why}", reply.command.name()),
                     );
                     match why {
                         CommandRefusal::AlreadyStarted => CommandResult::TemporarilyRejected,
@@ -320,11 +324,31 @@ impl Autonomy {
             thrust[j] = (out.thrusts[j] / max_thrust).clamp(0.0, 1.0);
             rail[j] = out.robots[j];
         }
+        let (attitude, position) = (&out.nav.attitude, &out.nav.position);
+        let q = attitude.attitude;
+        let telemetry = VehicleSnapshot {
+            attitude: [q.w, q.x, q.y, q.z],
+            rates: [attitude.rate.x, attitude.rate.y, attitude.rate.z],
+            position: [
+                position.position.x,
+                position.position.y,
+                position.position.z,
+            ],
+            velocity: [
+                position.velocity.x,
+                position.velocity.y,
+                position.velocity.z,
+            ],
+            position_valid: position.valid,
+            armed: out.armed,
+            ..VehicleSnapshot::START
+        };
         TickOutput {
             robots,
             thrust,
             rail,
             armed: out.armed,
+            telemetry,
             state: self.state(),
             ack,
             job: out.job.map(|work| JobRequest {

@@ -11,7 +11,7 @@
 
 use core::sync::atomic::Ordering;
 
-use embassy_futures::select::{Either, select};
+use embassy_futures::select::{Either3, select3};
 use embassy_time::{Duration, Instant, Timer};
 use embedded_io_async::{Read, Write};
 use link::MessageData;
@@ -27,6 +27,7 @@ use link::msg::{
 use link::param::{ParamRequest, ParamService, Values, value_message};
 use link::status::{MissionState, Text, chunks, heartbeat, named_float, named_int};
 use link::store::ParamStore;
+use link::telemetry::Stream;
 use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
 use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, TABLE};
 use shared::scenario::Scenario;
@@ -35,7 +36,8 @@ use static_cell::StaticCell;
 
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
 use super::{
-    ARMED, COMMANDS, IN_HIL, MISSION_CONFIG, MISSION_STATE, MOCAP, OUTBOX, RELOAD, SENSOR, TO_LOAD,
+    ARMED, COMMANDS, IN_HIL, MISSION_CONFIG, MISSION_STATE, MOCAP, OUTBOX, RELOAD, SENSOR,
+    TELEMETRY_CHANGED, TO_LOAD, VEHICLE, telemetry,
 };
 use crate::board::{Board, Selected};
 
@@ -290,9 +292,39 @@ async fn handle(
                 OUTBOX.send(Outbound::Ack { command, result }).await;
                 OUTBOX.send(Outbound::Identity).await;
             }
-            Request::Message(_) => {
-                let result = MavResult::MAV_RESULT_UNSUPPORTED;
-                refuse(command, result, "that message is not sent on request").await;
+            Request::Message(id) => {
+                if telemetry(|t| t.request_once(id)) {
+                    TELEMETRY_CHANGED.signal(());
+                    let result = MavResult::MAV_RESULT_ACCEPTED;
+                    OUTBOX.send(Outbound::Ack { command, result }).await;
+                } else {
+                    let result = MavResult::MAV_RESULT_UNSUPPORTED;
+                    refuse(command, result, "that message is not sent on request").await;
+                }
+            }
+            Request::SetInterval {
+                message_id,
+                interval_us,
+            } => {
+                let now = Instant::now().as_micros();
+                let result = telemetry(|t| t.set_interval(message_id, interval_us, now));
+                match result {
+                    MavResult::MAV_RESULT_ACCEPTED => {
+                        TELEMETRY_CHANGED.signal(());
+                        OUTBOX.send(Outbound::Ack { command, result }).await;
+                    }
+                    MavResult::MAV_RESULT_UNSUPPORTED => {
+                        refuse(command, result, "that message is not streamed").await;
+                    }
+                    _ => {
+                        refuse(
+                            command,
+                            result,
+                            "the interval must be -1, 0 or 5,000 us to 1 hour",
+                        )
+                        .await;
+                    }
+                }
             }
             Request::Refused(result) => {
                 let why = if command.is(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM) {
@@ -387,8 +419,14 @@ struct Sending<W> {
 }
 
 impl<W: Write> Sending<W> {
-    async fn put<M: MessageData>(&mut self, message: &M) {
+    /// Encodes `message` into the frame; [`Self::flush`] sends it. (Two steps, so that the
+    /// asynchronous part is one function for every message type, not one per type.)
+    fn encode<M: MessageData>(&mut self, message: &M) {
         self.encoder.encode(message, &mut self.frame);
+    }
+
+    /// Sends the frame.
+    async fn flush(&mut self) {
         // A board link cannot fail in a way the firmware could mend; the bytes are dropped.
         let _ = self.tx.write_all(self.frame.bytes()).await;
     }
@@ -397,7 +435,7 @@ impl<W: Write> Sending<W> {
         self.text_id = self.text_id.wrapping_add(1).max(1);
         for chunk in chunks(text, mav_severity(severity), self.text_id) {
             chunk.encode(&mut self.encoder, &mut self.frame);
-            let _ = self.tx.write_all(self.frame.bytes()).await;
+            self.flush().await;
         }
     }
 
@@ -407,9 +445,10 @@ impl<W: Write> Sending<W> {
         }
         for v in &report.values {
             match v.value {
-                Value::Float(x) => self.put(&named_float(v.name, x, time_ms)).await,
-                Value::Int(x) => self.put(&named_int(v.name, x, time_ms)).await,
+                Value::Float(x) => self.encode(&named_float(v.name, x, time_ms)),
+                Value::Int(x) => self.encode(&named_int(v.name, x, time_ms)),
             }
+            self.flush().await;
         }
     }
 
@@ -422,7 +461,22 @@ impl<W: Write> Sending<W> {
             ARMED.load(Ordering::Relaxed),
             IN_HIL.load(Ordering::Relaxed),
         );
-        self.put(&beat).await;
+        self.encode(&beat);
+        self.flush().await;
+    }
+
+    /// Every telemetry stream due now, from the last control step's state.
+    async fn telemetry(&mut self) {
+        let now = Instant::now().as_micros();
+        while let Some(stream) = telemetry(|t| t.take_due(now)) {
+            let vehicle = VEHICLE.lock(|v| v.get());
+            match stream {
+                Stream::SysStatus => self.encode(&vehicle.sys_status()),
+                Stream::AttitudeQuaternion => self.encode(&vehicle.attitude_quaternion()),
+                Stream::LocalPositionNed => self.encode(&vehicle.local_position_ned()),
+            }
+            self.flush().await;
+        }
     }
 
     async fn identity(&mut self) {
@@ -433,7 +487,8 @@ impl<W: Write> Sending<W> {
             flight_sw_version: 0x0001_0000,
             ..Default::default()
         };
-        self.put(&version).await;
+        self.encode(&version);
+        self.flush().await;
         let mut text = Text::new();
         let _ = core::fmt::write(
             &mut text,
@@ -448,7 +503,8 @@ impl<W: Write> Sending<W> {
     }
 }
 
-/// Sends what the other tasks queue, and a heartbeat every second, forever.
+/// Sends what the other tasks queue, a heartbeat every second and the telemetry streams at
+/// their rates, forever.
 #[embassy_executor::task]
 pub async fn send(tx: <Selected as Board>::LinkTx) {
     let mut out = Sending {
@@ -461,8 +517,13 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
     let mut state = MissionState::Idle;
     let mut next_beat = Instant::now();
     loop {
-        match select(OUTBOX.receive(), Timer::at(next_beat)).await {
-            Either::First(message) => match message {
+        let telemetry_due = telemetry(|t| t.next_due());
+        let wake = match telemetry_due {
+            Some(due) => next_beat.min(Instant::from_micros(due)),
+            None => next_beat,
+        };
+        match select3(OUTBOX.receive(), Timer::at(wake), TELEMETRY_CHANGED.wait()).await {
+            Either3::First(message) => match message {
                 Outbound::Step {
                     time_us,
                     report,
@@ -472,7 +533,8 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
                 } => {
                     out.report(&report, (time_us / 1000) as u32).await;
                     if let Some((pending, result)) = step_ack {
-                        out.put(&ack(pending.mav_cmd, mav_result(result))).await;
+                        out.encode(&ack(pending.mav_cmd, mav_result(result)));
+                        out.flush().await;
                     }
                     if now != state {
                         state = now;
@@ -481,18 +543,16 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
                     if let Some(actuators) = actuators {
                         let messages = actuators.to_messages();
                         if let Some(status) = &messages.status {
-                            out.put(status).await;
+                            out.encode(status);
+                            out.flush().await;
                         }
-                        out.put(&messages.controls).await;
+                        out.encode(&messages.controls);
+                        out.flush().await;
                     }
                 }
                 Outbound::Report(report) => {
                     out.report(&report, Instant::now().as_millis() as u32).await;
                 }
-                Outbound::Ftp { message, to } => {
-                    out.put(&message.to_message(to.system, to.component)).await;
-                }
-                Outbound::Ack { command, result } => out.put(&ack(command, result)).await,
                 Outbound::Identity => out.identity().await,
                 Outbound::Params { values, which } => {
                     let range = match which {
@@ -502,23 +562,37 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
                     };
                     for i in range {
                         if let Some(m) = value_message(&values, i) {
-                            out.put(&m).await;
+                            out.encode(&m);
+                            out.flush().await;
                         }
                     }
                 }
+                Outbound::Ftp { message, to } => {
+                    out.encode(&message.to_message(to.system, to.component));
+                    out.flush().await;
+                }
+                Outbound::Ack { command, result } => {
+                    out.encode(&ack(command, result));
+                    out.flush().await;
+                }
                 Outbound::MissionCount { to } => {
-                    let count = MISSION_COUNT_DATA {
+                    out.encode(&MISSION_COUNT_DATA {
                         count: 0,
                         target_system: to.system,
                         target_component: to.component,
-                    };
-                    out.put(&count).await;
+                    });
+                    out.flush().await;
                 }
             },
-            Either::Second(()) => {
-                out.heartbeat().await;
-                next_beat = Instant::now() + Duration::from_secs(1);
+            Either3::Second(()) => {
+                if Instant::now() >= next_beat {
+                    out.heartbeat().await;
+                    next_beat = Instant::now() + Duration::from_secs(1);
+                }
+                out.telemetry().await;
             }
+            // The schedule changed: the next wake is worked out again.
+            Either3::Third(()) => {}
         }
     }
 }

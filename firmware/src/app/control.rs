@@ -23,7 +23,7 @@ use super::autonomy::{Autonomy, CommandResult, JobResult, Severity, TickInput, T
 use super::comms::{Outbound, SensorSample};
 use super::{
     ARMED, COMMANDS, IN_HIL, JOB_REQUESTS, JOB_RESULTS, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD,
-    SENSOR,
+    SENSOR, VEHICLE,
 };
 use crate::board::{ActuatorOutputs, Board, Selected};
 use shared::mission::HardwareFaults;
@@ -37,6 +37,9 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
     let mut clock = VehicleClock::new();
     let mut deadline = JobDeadline::new();
     let mut worst_cost: u32 = 0;
+    // The worst step of this second, and of the last (the load `SYS_STATUS` reports).
+    let mut second_worst: u32 = 0;
+    let mut load_permille: u16 = 0;
     let mut holds: u32 = 0;
     // Steps whose messages found the link's queue full (off HIL only).
     let mut dropped_reports: u32 = 0;
@@ -97,6 +100,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 <Selected as Board>::hardware_faults()
             },
         };
+        let imu_failed = input.faults.imu;
         let mut out = autonomy.tick(&input);
         if late {
             out.report
@@ -133,6 +137,20 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             .wrapping_sub(held_counts)
             .saturating_mul(<Selected as Board>::TICK_COST_PER_COUNT);
         worst_cost = worst_cost.max(cost);
+        second_worst = second_worst.max(cost);
+        if step.index % COST_REPORT_STEPS == 0 {
+            let period = u64::from(<Selected as Board>::TICK_PERIOD_COST.max(1));
+            load_permille = (u64::from(second_worst) * 1000 / period).min(1000) as u16;
+            second_worst = 0;
+        }
+        VEHICLE.lock(|v| {
+            v.set(link::telemetry::VehicleSnapshot {
+                time_us: step.time_us,
+                imu_healthy: !imu_failed,
+                load_permille,
+                ..out.telemetry
+            })
+        });
         if held_counts > 0 {
             out.report.value("job_holds", Value::Int(holds as i32));
         }
@@ -207,5 +225,6 @@ fn idle_output() -> TickOutput {
         ack: None,
         job: None,
         report: Default::default(),
+        telemetry: link::telemetry::VehicleSnapshot::START,
     }
 }

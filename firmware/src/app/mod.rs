@@ -24,6 +24,7 @@ use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
+use link::telemetry::{Schedule, VehicleSnapshot};
 use shared::mission::MissionConfig;
 use shared::scenario::Scenario;
 use static_cell::StaticCell;
@@ -79,6 +80,26 @@ pub static JOB_REQUESTS: Channel<Cs, (u32, autonomy::JobRequest), 1> = Channel::
 pub static JOB_RESULTS: Channel<Cs, (u32, autonomy::JobResult), 2> = Channel::new();
 /// What goes out on the link, in order.
 pub static OUTBOX: Channel<Cs, comms::Outbound, 4> = Channel::new();
+
+/// The vehicle's state after the last control step, for telemetry.
+pub static VEHICLE: Mutex<Cs, Cell<VehicleSnapshot>> =
+    Mutex::new(Cell::new(VehicleSnapshot::START));
+/// When each telemetry stream is next due (the send task sends them; the receive task sets
+/// their rates from `MAV_CMD_SET_MESSAGE_INTERVAL`), on the board's clock
+/// (`embassy_time::Instant`, us).
+pub static TELEMETRY: Mutex<Cs, Cell<Schedule>> = Mutex::new(Cell::new(Schedule::new()));
+
+/// Changes the telemetry schedule with `change`, returning what it returns.
+pub fn telemetry<R>(change: impl FnOnce(&mut Schedule) -> R) -> R {
+    TELEMETRY.lock(|cell| {
+        let mut schedule = cell.get();
+        let result = change(&mut schedule);
+        cell.set(schedule);
+        result
+    })
+}
+/// The telemetry schedule changed: the send task looks at it again.
+pub static TELEMETRY_CHANGED: Signal<Cs, ()> = Signal::new();
 
 /// The mission state as last reported by the control task (for the heartbeat).
 pub static MISSION_STATE: AtomicU8 = AtomicU8::new(0);

@@ -48,6 +48,9 @@ pub trait Board: 'static {
     const TICK_COST_NAME: &'static str;
     /// Units of [`Board::TICK_COST_NAME`] per count of [`Board::cycle_count`].
     const TICK_COST_PER_COUNT: u32;
+    /// A whole control period (2.5 ms) in units of [`Board::TICK_COST_NAME`]: the control
+    /// loop's load in `SYS_STATUS` is the worst step's share of it.
+    const TICK_PERIOD_COST: u32;
 
     /// The link's receiving half.
     type LinkRx: embedded_io_async::Read + Send + 'static;

@@ -131,6 +131,8 @@ impl Board for Pixhawk6c {
     const NAME: &'static str = "pixhawk6c";
     const TICK_COST_NAME: &'static str = "tick_cyc";
     const TICK_COST_PER_COUNT: u32 = 1;
+    /// 2.5 ms of the 480 MHz core clock.
+    const TICK_PERIOD_COST: u32 = CORE_HZ / 400;
     type LinkRx = super::usb_link::LinkRx;
     type LinkTx = super::usb_link::LinkTx;
     type Outputs = Outputs;
@@ -263,7 +265,7 @@ fn telem1(
         config,
     ) {
         Ok(uart) => uart,
-        Err(e) => panic!("TELEM1 (UART7) configuration refused: {:?}", e),
+        Err(e) => defmt::panic!("TELEM1 (UART7) configuration refused: {}", e),
     };
     let (tx, rx) = uart.split();
     (rx, tx)

@@ -42,6 +42,18 @@ pub enum OperatorCommand {
     Kill,
 }
 
+impl OperatorCommand {
+    /// The command's name for people: `start`, `abort`, `land now`, `kill`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Start => "start",
+            Self::Abort => "abort",
+            Self::LandNow => "land now",
+            Self::Kill => "kill",
+        }
+    }
+}
+
 /// Why a command was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CommandRefusal {

@@ -76,6 +76,8 @@ impl Board for QemuMps2An500 {
     const NAME: &'static str = "qemu-mps2-an500";
     const TICK_COST_NAME: &'static str = "tick_insn";
     const TICK_COST_PER_COUNT: u32 = 40;
+    /// `-icount shift=0`: one instruction per virtual nanosecond.
+    const TICK_PERIOD_COST: u32 = 2_500_000;
     type LinkRx = uart::UartRx;
     type LinkTx = uart::UartTx;
     type Outputs = NoOutputs;

@@ -1,0 +1,432 @@
+//! Telemetry at set rates (issue 14): `SYS_STATUS`, `ATTITUDE_QUATERNION` and
+//! `LOCAL_POSITION_NED`, each on its own interval that a ground station sets with
+//! `MAV_CMD_SET_MESSAGE_INTERVAL` (or asks for once with `MAV_CMD_REQUEST_MESSAGE`), as
+//! MAVLink's message interval protocol has it; and the three messages built from a
+//! [`VehicleSnapshot`], the vehicle's state after its last control step.
+//!
+//! The schedule is plain logic over the vehicle's microsecond clock: the firmware's send task
+//! asks [`Schedule::next_due`] when to wake and [`Schedule::take_due`] what to send.
+
+use crate::MessageData;
+use crate::msg::{
+    ATTITUDE_QUATERNION_DATA, LOCAL_POSITION_NED_DATA, MavResult, MavSysStatusSensor,
+    SYS_STATUS_DATA,
+};
+
+/// A message the vehicle streams.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stream {
+    /// `SYS_STATUS`: sensors present, enabled and healthy; the control loop's load.
+    SysStatus = 0,
+    /// `ATTITUDE_QUATERNION`: attitude and body rates.
+    AttitudeQuaternion = 1,
+    /// `LOCAL_POSITION_NED`: position and velocity from the take-off point.
+    LocalPositionNed = 2,
+}
+
+/// How many streams there are.
+pub const STREAMS: usize = 3;
+
+impl Stream {
+    /// Every stream, in the order of their index.
+    pub const ALL: [Stream; STREAMS] = [
+        Stream::SysStatus,
+        Stream::AttitudeQuaternion,
+        Stream::LocalPositionNed,
+    ];
+
+    /// The MAVLink message id.
+    pub const fn message_id(self) -> u32 {
+        match self {
+            Self::SysStatus => SYS_STATUS_DATA::ID,
+            Self::AttitudeQuaternion => ATTITUDE_QUATERNION_DATA::ID,
+            Self::LocalPositionNed => LOCAL_POSITION_NED_DATA::ID,
+        }
+    }
+
+    /// The stream of a message id, if the vehicle streams it.
+    pub fn of_message(id: u32) -> Option<Self> {
+        Self::ALL.into_iter().find(|s| s.message_id() == id)
+    }
+
+    /// The interval at start and after a request for the default (interval 0), us: 1 Hz for
+    /// the status, 10 Hz for attitude and position.
+    pub const fn default_interval_us(self) -> u32 {
+        match self {
+            Self::SysStatus => 1_000_000,
+            Self::AttitudeQuaternion | Self::LocalPositionNed => 100_000,
+        }
+    }
+}
+
+/// Shortest interval a ground station may set: 5 ms (200 Hz, half the control rate).
+pub const MIN_INTERVAL_US: u32 = 5_000;
+/// Longest interval a ground station may set: 1 hour.
+pub const MAX_INTERVAL_US: u32 = 3_600_000_000;
+
+/// When each stream is next due.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Schedule {
+    /// Interval of each stream, us; `None`: off.
+    interval_us: [Option<u32>; STREAMS],
+    /// When each stream is next due, us (vehicle time).
+    next_us: [u64; STREAMS],
+    /// Sent once at the next chance, on or off (`MAV_CMD_REQUEST_MESSAGE`).
+    once: [bool; STREAMS],
+}
+
+impl Default for Schedule {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Schedule {
+    /// Every stream at its default interval, all due at once.
+    pub const fn new() -> Self {
+        Self {
+            interval_us: [
+                Some(Stream::SysStatus.default_interval_us()),
+                Some(Stream::AttitudeQuaternion.default_interval_us()),
+                Some(Stream::LocalPositionNed.default_interval_us()),
+            ],
+            next_us: [0; STREAMS],
+            once: [false; STREAMS],
+        }
+    }
+
+    /// `MAV_CMD_SET_MESSAGE_INTERVAL` (param1 the message id, param2 the interval in us: -1
+    /// off, 0 the default) at vehicle time `now_us`. The result is the `COMMAND_ACK`'s:
+    /// `UNSUPPORTED` for a message the vehicle does not stream, `DENIED` for an interval
+    /// outside [`MIN_INTERVAL_US`] to [`MAX_INTERVAL_US`] or not a number (nothing changes
+    /// then).
+    pub fn set_interval(&mut self, message_id: f32, interval_us: f32, now_us: u64) -> MavResult {
+        let Some(stream) = stream_of(message_id) else {
+            return MavResult::MAV_RESULT_UNSUPPORTED;
+        };
+        let interval = if interval_us == -1.0 {
+            None
+        } else if interval_us == 0.0 {
+            Some(stream.default_interval_us())
+        } else if interval_us >= MIN_INTERVAL_US as f32 && interval_us <= MAX_INTERVAL_US as f32 {
+            Some(interval_us as u32)
+        } else {
+            return MavResult::MAV_RESULT_DENIED;
+        };
+        let i = stream as usize;
+        self.interval_us[i] = interval;
+        self.next_us[i] = now_us;
+        MavResult::MAV_RESULT_ACCEPTED
+    }
+
+    /// `MAV_CMD_REQUEST_MESSAGE` of `message_id`: sent once at the next chance. `false` if the
+    /// vehicle does not stream that message.
+    pub fn request_once(&mut self, message_id: u32) -> bool {
+        match Stream::of_message(message_id) {
+            Some(stream) => {
+                self.once[stream as usize] = true;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The interval of `stream` now, us (`None`: off).
+    pub fn interval_us(&self, stream: Stream) -> Option<u32> {
+        self.interval_us[stream as usize]
+    }
+
+    /// When the next stream is due, us; `None` when every stream is off.
+    pub fn next_due(&self) -> Option<u64> {
+        (0..STREAMS)
+            .filter_map(|i| {
+                if self.once[i] {
+                    Some(0)
+                } else {
+                    self.interval_us[i].map(|_| self.next_us[i])
+                }
+            })
+            .min()
+    }
+
+    /// A stream due at `now_us`, if any (the one due earliest), its next time set one interval
+    /// on. A vehicle that fell behind by more than one interval skips what it missed rather
+    /// than sending a burst.
+    pub fn take_due(&mut self, now_us: u64) -> Option<Stream> {
+        if let Some(i) = (0..STREAMS).find(|&i| self.once[i]) {
+            self.once[i] = false;
+            return Some(Stream::ALL[i]);
+        }
+        let i = (0..STREAMS)
+            .filter(|&i| self.interval_us[i].is_some() && self.next_us[i] <= now_us)
+            .min_by_key(|&i| self.next_us[i])?;
+        let interval = u64::from(self.interval_us[i].unwrap_or(MAX_INTERVAL_US));
+        let next = self.next_us[i] + interval;
+        self.next_us[i] = if next <= now_us {
+            now_us + interval
+        } else {
+            next
+        };
+        Some(Stream::ALL[i])
+    }
+}
+
+/// The stream of a message id sent as a command's float parameter.
+fn stream_of(message_id: f32) -> Option<Stream> {
+    if message_id.is_finite() && message_id >= 0.0 && message_id == (message_id as u32) as f32 {
+        Stream::of_message(message_id as u32)
+    } else {
+        None
+    }
+}
+
+/// The vehicle's state after its last control step, for telemetry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VehicleSnapshot {
+    /// Vehicle time of the step, us.
+    pub time_us: u64,
+    /// Attitude, body (FRD) to NED, `[w, x, y, z]`.
+    pub attitude: [f32; 4],
+    /// Body rates, rad/s (roll, pitch, yaw).
+    pub rates: [f32; 3],
+    /// Position from the take-off point, NED, m.
+    pub position: [f32; 3],
+    /// Velocity, NED, m/s.
+    pub velocity: [f32; 3],
+    /// The position is from a recent motion-capture fix.
+    pub position_valid: bool,
+    /// The IMU works (no driver fault).
+    pub imu_healthy: bool,
+    /// The rotors may spin.
+    pub armed: bool,
+    /// The control loop's load: the worst step since the last `SYS_STATUS`, in thousandths
+    /// of the step's period.
+    pub load_permille: u16,
+}
+
+impl VehicleSnapshot {
+    /// Before the first control step: level, at rest, nothing valid.
+    pub const START: Self = Self {
+        time_us: 0,
+        attitude: [1.0, 0.0, 0.0, 0.0],
+        rates: [0.0; 3],
+        position: [0.0; 3],
+        velocity: [0.0; 3],
+        position_valid: false,
+        imu_healthy: true,
+        armed: false,
+        load_permille: 0,
+    };
+
+    fn time_boot_ms(&self) -> u32 {
+        (self.time_us / 1000) as u32
+    }
+
+    /// `SYS_STATUS`: gyro, accelerometer, motion capture (as vision position) and the motor
+    /// outputs; health clear for a failed IMU or no recent fix. No battery is measured yet
+    /// (voltage `u16::MAX`, current and remaining -1, as MAVLink marks unknown values).
+    pub fn sys_status(&self) -> SYS_STATUS_DATA {
+        let imu = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_GYRO
+            | MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_ACCEL;
+        let mocap = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_VISION_POSITION;
+        let motors = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS;
+        let present = imu | mocap | motors;
+        let mut enabled = imu | mocap;
+        if self.armed {
+            enabled |= motors;
+        }
+        let mut health = motors;
+        if self.imu_healthy {
+            health |= imu;
+        }
+        if self.position_valid {
+            health |= mocap;
+        }
+        SYS_STATUS_DATA {
+            onboard_control_sensors_present: present,
+            onboard_control_sensors_enabled: enabled,
+            onboard_control_sensors_health: health,
+            load: self.load_permille.min(1000),
+            voltage_battery: u16::MAX,
+            current_battery: -1,
+            battery_remaining: -1,
+            ..Default::default()
+        }
+    }
+
+    /// `ATTITUDE_QUATERNION`.
+    pub fn attitude_quaternion(&self) -> ATTITUDE_QUATERNION_DATA {
+        let [w, x, y, z] = self.attitude;
+        ATTITUDE_QUATERNION_DATA {
+            time_boot_ms: self.time_boot_ms(),
+            q1: w,
+            q2: x,
+            q3: y,
+            q4: z,
+            rollspeed: self.rates[0],
+            pitchspeed: self.rates[1],
+            yawspeed: self.rates[2],
+        }
+    }
+
+    /// `LOCAL_POSITION_NED`.
+    pub fn local_position_ned(&self) -> LOCAL_POSITION_NED_DATA {
+        LOCAL_POSITION_NED_DATA {
+            time_boot_ms: self.time_boot_ms(),
+            x: self.position[0],
+            y: self.position[1],
+            z: self.position[2],
+            vx: self.velocity[0],
+            vy: self.velocity[1],
+            vz: self.velocity[2],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ATT: f32 = ATTITUDE_QUATERNION_DATA::ID as f32;
+
+    /// The streams sent over `[0, until_us)` when the sender wakes at every due time.
+    fn sent(s: &mut Schedule, until_us: u64) -> std::vec::Vec<(u64, Stream)> {
+        let mut out = std::vec::Vec::new();
+        while let Some(t) = s.next_due() {
+            if t >= until_us {
+                break;
+            }
+            while let Some(stream) = s.take_due(t) {
+                out.push((t, stream));
+            }
+        }
+        out
+    }
+
+    fn count(log: &[(u64, Stream)], stream: Stream) -> usize {
+        log.iter().filter(|(_, s)| *s == stream).count()
+    }
+
+    #[test]
+    fn the_defaults_stream_at_their_rates() {
+        let mut s = Schedule::new();
+        let log = sent(&mut s, 2_000_000);
+        assert_eq!(count(&log, Stream::SysStatus), 2);
+        assert_eq!(count(&log, Stream::AttitudeQuaternion), 20);
+        assert_eq!(count(&log, Stream::LocalPositionNed), 20);
+    }
+
+    #[test]
+    fn a_set_interval_changes_the_rate_and_minus_one_stops_it() {
+        let mut s = Schedule::new();
+        assert_eq!(
+            s.set_interval(ATT, 20_000.0, 0),
+            MavResult::MAV_RESULT_ACCEPTED
+        );
+        let log = sent(&mut s, 1_000_000);
+        assert_eq!(count(&log, Stream::AttitudeQuaternion), 50);
+        assert_eq!(
+            s.set_interval(ATT, -1.0, 1_000_000),
+            MavResult::MAV_RESULT_ACCEPTED
+        );
+        assert_eq!(s.interval_us(Stream::AttitudeQuaternion), None);
+        let log = sent(&mut s, 2_000_000);
+        assert_eq!(count(&log, Stream::AttitudeQuaternion), 0);
+        assert_eq!(count(&log, Stream::LocalPositionNed), 10);
+        // 0: back to the default.
+        assert_eq!(s.set_interval(ATT, 0.0, 0), MavResult::MAV_RESULT_ACCEPTED);
+        assert_eq!(s.interval_us(Stream::AttitudeQuaternion), Some(100_000));
+    }
+
+    #[test]
+    fn bad_requests_are_refused_and_change_nothing() {
+        let mut s = Schedule::new();
+        let before = s;
+        for (id, interval, result) in [
+            (0.0, 20_000.0, MavResult::MAV_RESULT_UNSUPPORTED), // HEARTBEAT: not a stream
+            (f32::NAN, 20_000.0, MavResult::MAV_RESULT_UNSUPPORTED),
+            (ATT + 0.5, 20_000.0, MavResult::MAV_RESULT_UNSUPPORTED),
+            (ATT, 100.0, MavResult::MAV_RESULT_DENIED), // 10 kHz
+            (ATT, -2.0, MavResult::MAV_RESULT_DENIED),
+            (ATT, f32::INFINITY, MavResult::MAV_RESULT_DENIED),
+            (ATT, f32::NAN, MavResult::MAV_RESULT_DENIED),
+        ] {
+            assert_eq!(s.set_interval(id, interval, 5), result, "{id} {interval}");
+            assert_eq!(s, before);
+        }
+    }
+
+    #[test]
+    fn a_request_sends_once_even_when_off() {
+        let mut s = Schedule::new();
+        assert_eq!(
+            s.set_interval(SYS_STATUS_DATA::ID as f32, -1.0, 0),
+            MavResult::MAV_RESULT_ACCEPTED
+        );
+        let _ = sent(&mut s, 1_000_000);
+        assert!(s.request_once(SYS_STATUS_DATA::ID));
+        assert!(!s.request_once(0));
+        assert_eq!(s.next_due(), Some(0));
+        assert_eq!(s.take_due(1_000_000), Some(Stream::SysStatus));
+        let log = sent(&mut s, 3_000_000);
+        assert_eq!(count(&log, Stream::SysStatus), 0);
+    }
+
+    #[test]
+    fn a_late_sender_skips_rather_than_bursts() {
+        let mut s = Schedule::new();
+        let _ = sent(&mut s, 1);
+        // Woken 1 s late: each stream once, then on its interval from now.
+        let mut late = std::vec::Vec::new();
+        while let Some(stream) = s.take_due(1_000_000) {
+            late.push(stream);
+        }
+        assert_eq!(late.len(), 3);
+        assert_eq!(s.next_due(), Some(1_100_000));
+    }
+
+    #[test]
+    fn every_stream_off_means_nothing_due() {
+        let mut s = Schedule::new();
+        for stream in Stream::ALL {
+            s.set_interval(stream.message_id() as f32, -1.0, 0);
+        }
+        assert_eq!(s.next_due(), None);
+        assert_eq!(s.take_due(u64::MAX / 2), None);
+    }
+
+    #[test]
+    fn the_messages_carry_the_snapshot() {
+        let snap = VehicleSnapshot {
+            time_us: 12_345_678,
+            attitude: [0.5, 0.5, -0.5, 0.5],
+            rates: [0.1, -0.2, 0.3],
+            position: [1.0, 2.0, -3.0],
+            velocity: [0.5, 0.0, -0.25],
+            position_valid: true,
+            imu_healthy: false,
+            armed: true,
+            load_permille: 1500,
+        };
+        let q = snap.attitude_quaternion();
+        assert_eq!(q.time_boot_ms, 12_345);
+        assert_eq!([q.q1, q.q2, q.q3, q.q4], snap.attitude);
+        assert_eq!([q.rollspeed, q.pitchspeed, q.yawspeed], snap.rates);
+        let p = snap.local_position_ned();
+        assert_eq!(
+            [p.x, p.y, p.z, p.vx, p.vy, p.vz],
+            [1.0, 2.0, -3.0, 0.5, 0.0, -0.25]
+        );
+        let st = snap.sys_status();
+        let gyro = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_GYRO;
+        let vision = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_VISION_POSITION;
+        assert!(st.onboard_control_sensors_present.contains(gyro));
+        assert!(!st.onboard_control_sensors_health.contains(gyro));
+        assert!(st.onboard_control_sensors_health.contains(vision));
+        assert_eq!(st.load, 1000);
+        assert_eq!(st.voltage_battery, u16::MAX);
+        let resting = VehicleSnapshot::START.sys_status();
+        assert!(resting.onboard_control_sensors_health.contains(gyro));
+        assert!(!resting.onboard_control_sensors_health.contains(vision));
+    }
+}
