@@ -14,7 +14,7 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
    MAV_CMD_REQUEST_MESSAGE (MAVLink 2 and parameter-encoding capabilities), MISSION_COUNT 0,
    telemetry (SYS_STATUS, ATTITUDE_QUATERNION, LOCAL_POSITION_NED streamed; a stream stopped
    and restarted by MAV_CMD_SET_MESSAGE_INTERVAL, a bad interval and an unstreamed message
-   refused, SYS_STATUS sent once on MAV_CMD_REQUEST_MESSAGE),
+   refused, SYS_STATUS sent once on MAV_CMD_REQUEST_MESSAGE), TIMESYNC answered and asked,
    every parameter (count and indices consistent, read back by name and by index), arming
    refused with its COMMAND_ACK and a STATUSTEXT, bad values refused (PARAM_VALUE with the old
    value and a STATUSTEXT), one good value set; then the power is cut (host-sim and QEMU
@@ -200,6 +200,18 @@ def telemetry_checks(v):
           "UNSUPPORTED; REQUEST_MESSAGE(SYS_STATUS) sent once")
 
 
+def timesync_checks(v):
+    """TIMESYNC both ways: the vehicle answers a request with its time and the request's,
+    and asks once a second itself (answered here as a motion-capture computer would)."""
+    v.conn.mav.timesync_send(0, 123456789)
+    answer = v.expect(["TIMESYNC"], 10, "TIMESYNC answer",
+                      lambda m: m.tc1 != 0 and m.ts1 == 123456789)
+    request = v.expect(["TIMESYNC"], 10, "TIMESYNC request from the vehicle",
+                       lambda m: m.tc1 == 0 and m.ts1 > 0)
+    v.conn.mav.timesync_send(time.monotonic_ns(), request.ts1)
+    print(f"TIMESYNC: answered (vehicle time {answer.tc1} ns); the vehicle asks too")
+
+
 def start_hil(args, port, extra):
     cmd = [args.host_sim, "hil", "--scenario", args.scenario, "--qemu", args.elf,
            "--storage", args.storage, "--gcs", f"udp:127.0.0.1:{port}", "--ground-start",
@@ -239,6 +251,7 @@ def first_run(args, port):
             raise Failure(f"MISSION_COUNT {count.count}, expected 0")
         print("AUTOPILOT_VERSION and MISSION_COUNT 0 as QGroundControl expects")
         telemetry_checks(v)
+        timesync_checks(v)
 
         params = v.all_params()
         print(f"{len(params)} parameters, indices 0..{len(params) - 1}")

@@ -6,6 +6,7 @@
 //! - [`hil`]: PX4's simulator MAVLink API: `HIL_SENSOR` and `ATT_POS_MOCAP` in,
 //!   `HIL_ACTUATOR_CONTROLS` (and `ACTUATOR_OUTPUT_STATUS` past 8 robots) out, with the channel
 //!   map, and the lockstep bookkeeping of both sides.
+//! - [`odometry`]: `ODOMETRY` from motion capture, as a fix.
 //! - [`command`]: `COMMAND_LONG` to the operator's commands, and their `COMMAND_ACK`s.
 //! - [`command_wire`]: those two messages with the command as its number.
 //! - [`ftp`]: MAVLink FTP: the vehicle's minimal server (one writable file, the payload
@@ -14,6 +15,7 @@
 //! - [`store`]: the parameters' storage (`sequential-storage` on NOR flash), power-cut safe.
 //! - [`status`]: `STATUSTEXT` (long texts in chunks, and their reassembly) and named values.
 //! - [`telemetry`]: `SYS_STATUS`, `ATTITUDE_QUATERNION`, `LOCAL_POSITION_NED` at set rates.
+//! - [`timesync`]: `TIMESYNC`: the motion-capture computer's clock on the vehicle's.
 //! - [`vehicle`]: the vehicle's dispatch of received frames.
 //!
 //! Nothing here does I/O, allocates or panics on input: the firmware runs it under embassy on
@@ -35,10 +37,12 @@ pub mod command_wire;
 pub mod frame;
 pub mod ftp;
 pub mod hil;
+pub mod odometry;
 pub mod param;
 pub mod status;
 pub mod store;
 pub mod telemetry;
+pub mod timesync;
 pub mod vehicle;
 
 /// The trait of every message type (its id, `CRC_EXTRA`, encoding).

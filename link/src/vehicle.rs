@@ -14,8 +14,8 @@ use crate::msg::{
     AUTOPILOT_VERSION_DATA, COMMAND_ACK_DATA, COMMAND_LONG_DATA, FILE_TRANSFER_PROTOCOL_DATA,
     HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA, HIL_SENSOR_DATA, LOCAL_POSITION_NED_DATA,
     MISSION_COUNT_DATA, MISSION_REQUEST_LIST_DATA, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA,
-    PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA, PARAM_VALUE_DATA,
-    STATUSTEXT_DATA, SYS_STATUS_DATA,
+    ODOMETRY_DATA, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA,
+    PARAM_VALUE_DATA, STATUSTEXT_DATA, SYS_STATUS_DATA, TIMESYNC_DATA,
 };
 use crate::param::ParamRequest;
 
@@ -53,6 +53,8 @@ crc_extras!(
     SYS_STATUS_DATA,
     ATTITUDE_QUATERNION_DATA,
     LOCAL_POSITION_NED_DATA,
+    ODOMETRY_DATA,
+    TIMESYNC_DATA,
 );
 
 /// Who sent a frame.
@@ -72,8 +74,17 @@ pub struct Sender {
 pub enum Inbound {
     /// `HIL_SENSOR`: a control step in lockstep.
     Sensor(ImuSample),
-    /// `ATT_POS_MOCAP`.
+    /// A motion-capture fix: `ATT_POS_MOCAP`, or `ODOMETRY` from motion capture, stamped
+    /// with the sender's clock.
     Mocap(MocapFix),
+    /// `TIMESYNC` (a request to answer, or an answer to the vehicle's): for
+    /// [`crate::timesync::TimeSync::receive`].
+    TimeSync {
+        /// `tc1` (0: a request).
+        tc1: i64,
+        /// `ts1`.
+        ts1: i64,
+    },
     /// `COMMAND_LONG` addressed to the vehicle, classified.
     Command {
         /// The command as sent (for its acknowledgement).
@@ -154,6 +165,27 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
             },
             _ => ignored,
         },
+        ODOMETRY_DATA::ID => match crate::odometry::mocap_fix(frame.payload()) {
+            Ok(Some(f)) => Inbound::Mocap(f),
+            Ok(None) => ignored,
+            Err(e) => Inbound::Invalid(e),
+        },
+        TIMESYNC_DATA::ID => match frame.decode::<TIMESYNC_DATA>() {
+            // The extension fields `target_system`, `target_component` follow the base fields
+            // (absent: 0, everyone).
+            Some(t) => {
+                let target = frame.payload().get(TIMESYNC_DATA::ENCODED_LEN).copied();
+                if for_us(target.unwrap_or(0), 0) {
+                    Inbound::TimeSync {
+                        tc1: t.tc1,
+                        ts1: t.ts1,
+                    }
+                } else {
+                    ignored
+                }
+            }
+            None => ignored,
+        },
         FILE_TRANSFER_PROTOCOL_DATA::ID => match frame.decode::<FILE_TRANSFER_PROTOCOL_DATA>() {
             Some(f) if for_us(f.target_system, f.target_component) => {
                 let payload: &[u8; PAYLOAD_LEN] = &f.payload;
@@ -233,6 +265,44 @@ mod tests {
                     component: crate::PLANT_COMPONENT_ID,
                 },
             }
+        );
+    }
+
+    #[test]
+    fn time_sync_and_motion_capture_odometry_reach_the_vehicle() {
+        let request = TIMESYNC_DATA { tc1: 0, ts1: 42 };
+        assert_eq!(
+            through_the_wire(&request),
+            Inbound::TimeSync { tc1: 0, ts1: 42 }
+        );
+        let odometry = ODOMETRY_DATA {
+            time_usec: 77,
+            x: 1.0,
+            q: [1.0, 0.0, 0.0, 0.0],
+            frame_id: crate::msg::MavFrame::MAV_FRAME_LOCAL_NED,
+            ..Default::default()
+        };
+        let mocap = crate::msg::MavEstimatorType::MAV_ESTIMATOR_TYPE_MOCAP as u8;
+        let mut f = Frame::default();
+        Encoder::new(crate::PLANT_SYSTEM_ID, crate::PLANT_COMPONENT_ID).encode_extended(
+            &odometry,
+            &[0, mocap],
+            &mut f,
+        );
+        let mut p = Parser::new(crc_extra);
+        let mut got = None;
+        for &b in f.bytes() {
+            if let Some((frame, integrity)) = p.push(b) {
+                got = Some(dispatch(frame, integrity));
+            }
+        }
+        assert_eq!(
+            got,
+            Some(Inbound::Mocap(MocapFix {
+                stamp_us: 77,
+                position: [1.0, 0.0, 0.0],
+                attitude: [1.0, 0.0, 0.0, 0.0],
+            }))
         );
     }
 

@@ -22,12 +22,13 @@ use link::ftp::{FileEvent, FtpMessage, Server};
 use link::hil::{Actuators, ImuSample};
 use link::msg::{
     AUTOPILOT_VERSION_DATA, MISSION_COUNT_DATA, MavCmd, MavProtocolCapability, MavResult,
-    MavSeverity,
+    MavSeverity, TIMESYNC_DATA,
 };
 use link::param::{ParamRequest, ParamService, Values, value_message};
 use link::status::{MissionState, Text, chunks, heartbeat, named_float, named_int};
 use link::store::ParamStore;
 use link::telemetry::Stream;
+use link::timesync::Received as SyncReceived;
 use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
 use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, TABLE};
 use shared::scenario::Scenario;
@@ -37,7 +38,7 @@ use static_cell::StaticCell;
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
 use super::{
     ARMED, COMMANDS, IN_HIL, MISSION_CONFIG, MISSION_STATE, MOCAP, OUTBOX, RELOAD, SENSOR,
-    TELEMETRY_CHANGED, TO_LOAD, VEHICLE, telemetry,
+    TELEMETRY_CHANGED, TO_LOAD, VEHICLE, telemetry, timesync,
 };
 use crate::board::{Board, Selected};
 
@@ -112,6 +113,13 @@ pub enum Outbound {
         /// Which to send.
         which: Values,
     },
+    /// `TIMESYNC`: an answer to a request.
+    TimeSync {
+        /// The vehicle's time, ns.
+        tc1: i64,
+        /// The request's time.
+        ts1: i64,
+    },
     /// `MISSION_COUNT` 0 (the vehicle plans its own mission: no items).
     MissionCount {
         /// To whom.
@@ -121,6 +129,10 @@ pub enum Outbound {
 
 /// The parameters' store on this board.
 type Store = ParamStore<<Selected as Board>::ParamFlash>;
+
+/// Oldest a motion-capture fix may be when it arrives for its own stamp to be used, us (the
+/// attitude estimator keeps 160 ms of history to compensate a fix's latency).
+const MAX_FIX_AGE_US: u64 = 150_000;
 
 /// Largest payload description file the vehicle takes.
 const FILE_CAPACITY: usize = MAX_ENCODED_LEN;
@@ -261,6 +273,8 @@ async fn handle(
 ) {
     match inbound {
         Inbound::Sensor(imu) => {
+            // Known here already, so a fix right behind the first sample is taken as HIL's.
+            IN_HIL.store(true, Ordering::Relaxed);
             if SENSOR.try_send(SensorSample { imu, hil: true }).is_err() {
                 OUTBOX
                     .send(report(
@@ -270,7 +284,27 @@ async fn handle(
                     .await;
             }
         }
-        Inbound::Mocap(fix) => MOCAP.signal(fix),
+        Inbound::Mocap(mut fix) => {
+            // In HIL the plant's clock is the vehicle's (lockstep); a real motion-capture
+            // computer's stamp is mapped to the vehicle's clock (or the arrival is used).
+            if !IN_HIL.load(Ordering::Relaxed) {
+                let arrival_us = Instant::now().as_micros();
+                fix.stamp_us = timesync(|t| t.stamp(fix.stamp_us, arrival_us, MAX_FIX_AGE_US));
+            }
+            MOCAP.signal(fix)
+        }
+        Inbound::TimeSync { tc1, ts1 } => {
+            let now_ns = Instant::now().as_micros().saturating_mul(1000) as i64;
+            let message = TIMESYNC_DATA { tc1, ts1 };
+            if let SyncReceived::Answer(a) = timesync(|t| t.receive(&message, now_ns)) {
+                OUTBOX
+                    .send(Outbound::TimeSync {
+                        tc1: a.tc1,
+                        ts1: a.ts1,
+                    })
+                    .await;
+            }
+        }
         Inbound::Command {
             command,
             request,
@@ -575,6 +609,10 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
                     out.encode(&ack(command, result));
                     out.flush().await;
                 }
+                Outbound::TimeSync { tc1, ts1 } => {
+                    out.encode(&TIMESYNC_DATA { tc1, ts1 });
+                    out.flush().await;
+                }
                 Outbound::MissionCount { to } => {
                     out.encode(&MISSION_COUNT_DATA {
                         count: 0,
@@ -587,6 +625,10 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
             Either3::Second(()) => {
                 if Instant::now() >= next_beat {
                     out.heartbeat().await;
+                    // A time-sync request with every heartbeat (as PX4 asks once a second).
+                    let now_ns = Instant::now().as_micros().saturating_mul(1000) as i64;
+                    out.encode(&timesync(|t| t.request(now_ns)));
+                    out.flush().await;
                     next_beat = Instant::now() + Duration::from_secs(1);
                 }
                 out.telemetry().await;

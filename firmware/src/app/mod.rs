@@ -25,6 +25,7 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
 use link::telemetry::{Schedule, VehicleSnapshot};
+use link::timesync::TimeSync;
 use shared::mission::MissionConfig;
 use shared::scenario::Scenario;
 use static_cell::StaticCell;
@@ -100,6 +101,20 @@ pub fn telemetry<R>(change: impl FnOnce(&mut Schedule) -> R) -> R {
 }
 /// The telemetry schedule changed: the send task looks at it again.
 pub static TELEMETRY_CHANGED: Signal<Cs, ()> = Signal::new();
+
+/// The estimate of the motion-capture computer's clock (`TIMESYNC`): the send task sends the
+/// requests, the receive task takes the answers and stamps the fixes.
+pub static TIMESYNC: Mutex<Cs, Cell<TimeSync>> = Mutex::new(Cell::new(TimeSync::new()));
+
+/// Changes the time synchronisation with `change`, returning what it returns.
+pub fn timesync<R>(change: impl FnOnce(&mut TimeSync) -> R) -> R {
+    TIMESYNC.lock(|cell| {
+        let mut sync = cell.get();
+        let result = change(&mut sync);
+        cell.set(sync);
+        result
+    })
+}
 
 /// The mission state as last reported by the control task (for the heartbeat).
 pub static MISSION_STATE: AtomicU8 = AtomicU8::new(0);
