@@ -9,9 +9,12 @@
 //! Newton method ([`crate::formation::face`]), first to balance, then to the best `det`.
 //! An assignment whose robots cannot reach balance, or whose upper bound on `det`
 //! ([`crate::formation::bound`]) is no better than the best formation found so far, is skipped
-//! unsolved. The best formation is polished onto the balance constraints and checked against
-//! every constraint exactly as stated. Deterministic and bounded: a fixed enumeration order,
-//! at most [`MAX_ASSIGNMENTS`] assignments, a capped iteration count per solve, no allocation.
+//! unsolved. The starts of one assignment can all end at local maxima below its best one, a
+//! neighbouring vertex of the polytope; so from the best of them the solver climbs edges that
+//! lead higher ([`Face::climb_edge`]). The best formation is polished onto the balance
+//! constraints and checked against every constraint exactly as stated. Deterministic and
+//! bounded: a fixed enumeration order, at most [`MAX_ASSIGNMENTS`] assignments, a capped
+//! iteration count per solve and climb, no allocation.
 //!
 //! When no assignment balances, the refusal reports the formation closest to balance (the
 //! global minimum of `|sum r|` over every assignment, a convex problem on each).
@@ -35,6 +38,9 @@ pub const MAX_ASSIGNMENTS: u32 = 20_000;
 const STARTS: [f32; 3] = [0.5, 0.0, 1.0];
 /// Relative margin an assignment's bound must beat the best `det(S)` by to be solved.
 const PRUNE_MARGIN: f32 = 1e-4;
+/// Most edges climbed from an assignment's best start ([`Face::climb_edge`]); 300 random
+/// rails needed at most 4.
+const MAX_CLIMBS: u32 = 4;
 
 /// Arc lengths of a formation, in rail order.
 pub type Positions = Vec<f32, MAX_ROBOTS>;
@@ -233,6 +239,41 @@ fn score(problem: &FormationProblem<'_>, positions: &[f32]) -> (f32, BoundShape)
     (m.schur_det(), BoundShape::at(s, Vec2::new(m.vx, m.vy), n))
 }
 
+/// Takes a solved face whose `det(S)` is `value` as the best formation if it beats `best`
+/// once polished onto the balance constraints (within `tolerance`) and checked against every
+/// constraint.
+fn offer(
+    problem: &FormationProblem<'_>,
+    layout: &Layout,
+    face: &Face<'_>,
+    value: f32,
+    tolerance: f32,
+    best: &mut Option<(f32, Positions)>,
+    shape: &mut BoundShape,
+) {
+    if best.as_ref().is_some_and(|(b, _)| value <= *b) {
+        return;
+    }
+    let rail = problem.rail;
+    let mut positions = positions_of(rail, layout, face);
+    // The steps keep the balance sums in exact arithmetic; polish away the rounding.
+    if !project_to_balance(
+        rail,
+        problem.com,
+        problem.min_spacing,
+        tolerance,
+        &mut positions,
+    ) || !satisfies_constraints(problem, &positions)
+    {
+        return;
+    }
+    let (value, at) = score(problem, &positions);
+    if best.as_ref().is_none_or(|(b, _)| value > *b) {
+        *best = Some((value, positions));
+        *shape = at;
+    }
+}
+
 /// Positions by robot from a solved face.
 fn positions_of(rail: &Rail, layout: &Layout, face: &Face<'_>) -> Positions {
     let n = layout.n;
@@ -296,6 +337,8 @@ pub fn solve(problem: &FormationProblem<'_>) -> Result<Formation, FormationError
                 continue;
             }
         }
+        // The best local maximum the starts reach on this assignment.
+        let mut top: Option<(f32, Face<'_>)> = None;
         for lean in STARTS {
             let Some(mut face) = Face::start(&layout, lean) else {
                 continue;
@@ -309,25 +352,37 @@ pub fn solve(problem: &FormationProblem<'_>) -> Result<Formation, FormationError
             seeds_balanced += 1;
             let outcome = face.solve(Goal::Det, tolerance, max_iterations);
             sweeps += outcome.iterations;
-            if best.as_ref().is_some_and(|(b, _)| outcome.value <= *b) {
-                continue;
-            }
-            let mut positions = positions_of(rail, &layout, &face);
-            // The steps keep the balance sums in exact arithmetic; polish away the rounding.
-            if !project_to_balance(
-                rail,
-                problem.com,
-                problem.min_spacing,
+            offer(
+                problem,
+                &layout,
+                &face,
+                outcome.value,
                 tolerance,
-                &mut positions,
-            ) || !satisfies_constraints(problem, &positions)
-            {
-                continue;
+                &mut best,
+                &mut shape,
+            );
+            if top.as_ref().is_none_or(|(v, _)| outcome.value > *v) {
+                top = Some((outcome.value, face));
             }
-            let (value, at) = score(problem, &positions);
-            if best.as_ref().is_none_or(|(b, _)| value > *b) {
-                best = Some((value, positions));
-                shape = at;
+        }
+        // A neighbouring vertex of that maximum can be higher than any start reached: climb
+        // edges from it while one leads higher, at most `MAX_CLIMBS` edges within half a
+        // solve's iterations.
+        if let Some((_, mut face)) = top {
+            let mut budget = max_iterations / 2;
+            let mut climbs = 0;
+            let mut climbed = None;
+            while climbs < MAX_CLIMBS && budget > 0 && face.climb_edge() {
+                climbs += 1;
+                let outcome = face.solve(Goal::Det, tolerance, budget);
+                sweeps += outcome.iterations;
+                budget = budget.saturating_sub(outcome.iterations.max(1));
+                climbed = Some(outcome.value);
+            }
+            if let Some(value) = climbed {
+                offer(
+                    problem, &layout, &face, value, tolerance, &mut best, &mut shape,
+                );
             }
         }
     }
@@ -507,6 +562,34 @@ mod tests {
                 spin.len()
             );
         }
+    }
+
+    /// proptest's case `cc 4182fe14` of the independent comparison (a convex quadrilateral):
+    /// every start of the best assignment ends at a vertex with `det(B B^T)` 2.1452e-3; the
+    /// best formation (2.1563e-3) is one edge away from it (robot 2 off its segment's start,
+    /// the last robot closing up on the first), below in between.
+    #[test]
+    fn climbs_to_the_best_vertex_on_a_quadrilateral() {
+        let vertices = [
+            Vec2::new(-0.133_316_02, 0.557_831_6),
+            Vec2::new(-0.823_304, 0.018_687_957),
+            Vec2::new(-0.686_145_8, -0.312_799_12),
+            Vec2::new(0.374_331_3, -0.503_547_4),
+        ];
+        let rail = Rail::new(&vertices).expect("a rail");
+        let spin = [1i8, -1, 1, -1, 1, -1, 1, -1];
+        let problem = FormationProblem {
+            rail: &rail,
+            spin: &spin,
+            min_spacing: 0.25,
+            com: Vec2::new(-0.070_398_54, -0.081_124_86),
+            torque_per_thrust: 0.016,
+            balance_eps: 1e-4,
+            current: None,
+        };
+        let f = solve(&problem).expect("a formation");
+        assert!(satisfies_constraints(&problem, &f.positions));
+        assert!(f.figures.det >= 2.156e-3, "{f:?}");
     }
 
     #[test]
