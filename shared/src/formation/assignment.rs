@@ -215,22 +215,36 @@ impl Layout {
         if i != n {
             return None;
         }
-        // Reachable ranges: forward and backward passes of the spacing.
+        // Reachable ranges: forward passes of the spacing for the lower ends, backward passes
+        // for the upper ends. The closed rail also ties the last robot to the first
+        // (`x_0 + perimeter - x_{n-1} >= spacing`): a second lap carries that gap round, after
+        // which the ranges are exact (a lap adds `n spacing - perimeter <= 0`, so a third
+        // changes nothing). Then the robots all at the lower ends (or all at the upper ends,
+        // or any mix of the two) stand apart, and every start of the face solver is feasible.
         for i in 0..n {
-            let lo = if i == 0 {
+            layout.reach[i].0 = if i == 0 {
                 layout.lo[0]
             } else {
                 layout.lo[i].max(layout.reach[i - 1].0 + spacing)
             };
-            layout.reach[i].0 = lo;
         }
         for i in (0..n).rev() {
-            let hi = if i + 1 == n {
+            layout.reach[i].1 = if i + 1 == n {
                 layout.hi[i]
             } else {
                 layout.hi[i].min(layout.reach[i + 1].1 - spacing)
             };
-            layout.reach[i].1 = hi;
+        }
+        if n >= 2 {
+            let wrap = layout.perimeter - spacing;
+            layout.reach[0].0 = layout.reach[0].0.max(layout.reach[n - 1].0 - wrap);
+            for i in 1..n {
+                layout.reach[i].0 = layout.reach[i].0.max(layout.reach[i - 1].0 + spacing);
+            }
+            layout.reach[n - 1].1 = layout.reach[n - 1].1.min(layout.reach[0].1 + wrap);
+            for i in (0..n - 1).rev() {
+                layout.reach[i].1 = layout.reach[i].1.min(layout.reach[i + 1].1 - spacing);
+            }
         }
         let wraps =
             n < 2 || layout.reach[n - 1].0 - layout.reach[0].1 <= layout.perimeter - spacing;

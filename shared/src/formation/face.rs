@@ -188,7 +188,7 @@ pub struct Face<'a> {
 impl<'a> Face<'a> {
     /// A feasible start on `layout`: each robot at fraction `lean` (0: earliest packing, 1:
     /// latest) of the range it can reach, with the constraints it touches active; `None` if
-    /// that point breaks the wrap-around gap.
+    /// that point breaks the wrap-around gap (the ranges account for it: only by rounding).
     pub fn start(layout: &'a Layout, lean: f32) -> Option<Self> {
         let n = layout.n;
         let mut x = [0.0f32; N];

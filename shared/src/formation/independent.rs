@@ -15,6 +15,7 @@ use std::vec::Vec;
 use cobyla::{Func, RhoBeg, StopTols, minimize};
 use proptest::prelude::*;
 
+use crate::formation::search::SPACING_MARGIN;
 use crate::formation::{FormationError, FormationProblem, solve};
 use crate::geometry::{Rail, Vec2};
 
@@ -185,6 +186,68 @@ impl Stated<'_> {
     }
 }
 
+impl Stated<'_> {
+    /// Smallest `|sum b|` over `starts` random formations polished by COBYLA towards balance,
+    /// keeping order and `spacing` (the eps and det play no part).
+    fn closest(&self, starts: usize, seed: u64) -> f64 {
+        let n = self.spin.len();
+        let length = self.rail.length();
+        let room = length - n as f64 * self.spacing;
+        let mut rng = SplitMix(seed);
+        let mut best = f64::INFINITY;
+        let objective = |s: &[f64], _: &mut ()| {
+            let h = self.det_and_balance(s).1;
+            1e3 * (h[0] * h[0] + h[1] * h[1])
+        };
+        let mut constraints: Vec<Box<dyn Func<()> + '_>> = Vec::new();
+        for j in 0..n {
+            constraints.push(Box::new(move |s: &[f64], _: &mut ()| {
+                let gap = if j + 1 < n {
+                    s[j + 1] - s[j]
+                } else {
+                    s[0] + length - s[n - 1]
+                };
+                gap - self.spacing
+            }));
+        }
+        let bounds = vec![(-length, 3.0 * length); n];
+        for _ in 0..starts {
+            let mut share: Vec<f64> = (0..n).map(|_| -rng.uniform().ln()).collect();
+            let total: f64 = share.iter().sum();
+            share.iter_mut().for_each(|w| *w *= 0.999 * room / total);
+            let mut s = vec![rng.uniform() * length];
+            for j in 1..n {
+                s.push(s[j - 1] + self.spacing + share[j - 1]);
+            }
+            let stop = StopTols {
+                xtol_abs: vec![1e-9; n],
+                ..StopTols::default()
+            };
+            let polished = match minimize(
+                objective,
+                &s,
+                &bounds,
+                &constraints,
+                (),
+                1500,
+                RhoBeg::All(0.1),
+                Some(stop),
+            ) {
+                Ok((_, x, _)) | Err((_, x, _)) => x,
+            };
+            if self
+                .gaps(&polished)
+                .iter()
+                .all(|&g| g >= self.spacing - 1e-9)
+            {
+                let h = self.det_and_balance(&polished).1;
+                best = best.min(h[0].hypot(h[1]));
+            }
+        }
+        best
+    }
+}
+
 /// SplitMix64: uniform numbers for the random starts, reproducible from a seed.
 struct SplitMix(u64);
 
@@ -253,7 +316,25 @@ fn compare(vertices: &[[f64; 2]], com: [f64; 2], eps: f64, starts: usize) -> Res
             }
             Ok(())
         }
-        (Err(FormationError::Unbalanceable { .. }), None) => Ok(()),
+        (Err(FormationError::Unbalanceable { closest, .. }), None) => {
+            // The refusal must tell the truth: the closest balance it reports is no farther
+            // from zero than the independent search gets at the solver's spacing (`min_spacing`
+            // plus its margin, which the report is taken at).
+            let reported = f64::from(closest[0]).hypot(f64::from(closest[1]));
+            let at_solver_spacing = Stated {
+                spacing: 0.25 + f64::from(SPACING_MARGIN),
+                last: RefCell::new(None),
+                ..stated
+            };
+            let independent = at_solver_spacing.closest(CLOSEST_STARTS, 11);
+            if reported > independent * 1.001 + 1e-5 {
+                return Err(format!(
+                    "the refusal reports a closest balance |sum b| = {reported:.6e} where the \
+                     independent search reaches {independent:.6e} (COM {com:?}, rail {vertices:?})"
+                ));
+            }
+            Ok(())
+        }
         (Err(e), best) => Err(format!(
             "solver refused ({e}) where the independent search found {:?} (COM {com:?})",
             best.map(|(det, _)| det)
@@ -273,6 +354,8 @@ const L_RAIL: [[f64; 2]; 6] = [
 
 /// Starts of the independent search per payload.
 const STARTS: usize = 1000;
+/// Starts of the independent search for the closest balance, when the solver refuses.
+const CLOSEST_STARTS: usize = 300;
 
 #[test]
 fn the_paper_cases_reach_the_independent_optimum() {
@@ -353,6 +436,68 @@ fn convex_regression_4182fe14() {
         ],
     );
     let com = com_in_box(&rail, 0.6286600377342274, 0.39799403808617234);
+    if let Err(e) = compare(&rail, com, 1e-4, STARTS) {
+        panic!("{e}");
+    }
+}
+
+/// The rail of proptest's case `cc 89deb478` (`proptest-regressions/formation/independent.txt`):
+/// a convex pentagon whose first vertex has a short segment (0.137 m) behind it.
+fn rail_89deb478() -> Vec<[f64; 2]> {
+    convex_rail(
+        0.7198313286383888,
+        0.5730618955053353,
+        &[
+            0.02026902550288104,
+            3.4508551482318452,
+            2.1314586186553734,
+            6.0638019024847285,
+            3.170981187753376,
+        ],
+    )
+}
+
+/// proptest's case `cc 89deb478`: the solver refused (`Unbalanceable`, reporting a closest
+/// balance of 3.88e-3 m) where the independent search found a balanced formation with
+/// `det(B B^T)` 2.1833e-4. Its best formation puts five robots on the first segment and the
+/// last robot on the short segment before the first vertex, so the gap that wraps round the
+/// rail is tight; the assignment's reachable ranges ignored that gap, every start of the face
+/// solver broke it and the assignment was skipped (here and in the closest-balance search).
+#[test]
+fn convex_regression_89deb478() {
+    let rail = rail_89deb478();
+    let com = com_in_box(&rail, 0.6727286910824352, 0.4599253876349734);
+    if let Err(e) = compare(&rail, com, 1e-4, STARTS) {
+        panic!("{e}");
+    }
+}
+
+/// The same rail with the COM just beyond the robots' reach: the solver refuses, and the
+/// closest balance it reports is the one the independent search reaches (the formation
+/// closest to balance needs the assignment that wraps round the first vertex).
+#[test]
+fn refusal_reports_the_closest_balance_89deb478() {
+    let rail = rail_89deb478();
+    let near = com_in_box(&rail, 0.6727286910824352, 0.4599253876349734);
+    let com = [near[0] + 0.003, near[1] + 0.003];
+    let rail_f32: Vec<Vec2> = rail
+        .iter()
+        .map(|v| Vec2::new(v[0] as f32, v[1] as f32))
+        .collect();
+    let problem = FormationProblem {
+        rail: &Rail::new(&rail_f32).expect("a rail"),
+        spin: &[1, -1, 1, -1, 1, -1, 1, -1],
+        min_spacing: 0.25,
+        com: Vec2::new(com[0] as f32, com[1] as f32),
+        torque_per_thrust: 0.016,
+        balance_eps: 1e-4,
+        current: None,
+    };
+    let refusal = solve(&problem);
+    assert!(
+        matches!(refusal, Err(FormationError::Unbalanceable { .. })),
+        "{refusal:?}"
+    );
     if let Err(e) = compare(&rail, com, 1e-4, STARTS) {
         panic!("{e}");
     }

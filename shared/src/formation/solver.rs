@@ -99,7 +99,8 @@ pub enum FormationError {
         /// The COM asked for.
         com: Vec2,
         /// The balance sums `[sum b1, sum b2]` (m) of the formation closest to balance: the
-        /// smallest `|sum b|` the rail allows.
+        /// smallest `|sum b|` the rail allows (with the robots `min_spacing` plus the solver's
+        /// 20 um margin apart).
         closest: [f32; 2],
     },
 }
@@ -590,6 +591,78 @@ mod tests {
         let f = solve(&problem).expect("a formation");
         assert!(satisfies_constraints(&problem, &f.positions));
         assert!(f.figures.det >= 2.156e-3, "{f:?}");
+    }
+
+    /// The rail of the independent comparison's case `cc 89deb478`, and its COM.
+    fn pentagon_89deb478() -> (Rail, Vec2) {
+        let vertices = [
+            Vec2::new(0.719_683_47, 0.011_614_611),
+            Vec2::new(-0.382_768_3, 0.485_327_9),
+            Vec2::new(-0.719_520_5, -0.016_839_025),
+            Vec2::new(-0.685_681_3, -0.174_414_94),
+            Vec2::new(0.702_578_3, -0.124_714_22),
+        ];
+        let rail = Rail::new(&vertices).expect("a rail");
+        (rail, Vec2::new(0.248_673_3, 0.129_017_55))
+    }
+
+    /// Every start of every assignment keeps every gap, the one that wraps round the rail
+    /// included: on the pentagon, five robots on the first segment and the last robot on the
+    /// short segment (0.137 m) behind it can only stand so if the first robots keep clear of
+    /// the first vertex, which the reachable ranges once ignored (and the assignment, which
+    /// holds the only balanced formations, was skipped).
+    #[test]
+    fn every_start_of_every_assignment_keeps_every_gap() {
+        let (pentagon, com) = pentagon_89deb478();
+        let rect = checked(rect_sim1());
+        let l = checked(l_sim1());
+        let spin = [1i8, -1, 1, -1, 1, -1, 1, -1];
+        let spacing = 0.25 + SPACING_MARGIN;
+        for rail in [&pentagon, &rect.payload.rail, &l.payload.rail] {
+            for assignment in Assignments::new(rail, &spin, spacing) {
+                let Some(layout) = Layout::new(rail, &spin, com, spacing, &assignment) else {
+                    continue;
+                };
+                for lean in STARTS {
+                    let face = Face::start(&layout, lean);
+                    let Some(face) = face else {
+                        panic!("{assignment:?}, lean {lean}: no start");
+                    };
+                    let positions: Positions = face.x[..8].iter().map(|&x| rail.wrap(x)).collect();
+                    assert!(
+                        order_and_spacing_hold(rail, &positions, 0.25),
+                        "{assignment:?}, lean {lean}: {positions:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The pentagon's COM can be balanced (exactly, by the assignment above): the solver finds
+    /// the formation (the independent search's best is 2.1833e-4 at min_spacing), and the
+    /// closest balance is zero.
+    #[test]
+    fn balances_when_the_gap_round_the_first_vertex_is_tight() {
+        let (rail, com) = pentagon_89deb478();
+        let spin = [1i8, -1, 1, -1, 1, -1, 1, -1];
+        let problem = FormationProblem {
+            rail: &rail,
+            spin: &spin,
+            min_spacing: 0.25,
+            com,
+            torque_per_thrust: 0.016,
+            balance_eps: 1e-4,
+            current: None,
+        };
+        let closest = closest_balance(&problem);
+        assert!(
+            closest[0].abs() <= 1e-5 && closest[1].abs() <= 1e-5,
+            "{closest:?}"
+        );
+        let f = solve(&problem).expect("a formation");
+        assert!(satisfies_constraints(&problem, &f.positions));
+        let det = f.figures.det;
+        assert!(det >= 2.18e-4 * (1.0 - 0.005), "{det} {f:?}");
     }
 
     #[test]
