@@ -17,9 +17,11 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
    refused, SYS_STATUS sent once on MAV_CMD_REQUEST_MESSAGE), TIMESYNC answered and asked,
    every parameter (count and indices consistent, read back by name and by index), arming
    refused with its COMMAND_ACK and a STATUSTEXT, bad values refused (PARAM_VALUE with the old
-   value and a STATUSTEXT), one good value set; then the power is cut (host-sim and QEMU
-   killed).
-2. restart: the value is still there; the ground station starts the mission, a PARAM_SET in
+   value and a STATUSTEXT), MAVLink 2 signing set up (SETUP_SIGNING): the vehicle's frames
+   signed, an unsigned start and an unsigned parameter write refused, one good value set
+   signed; then the power is cut (host-sim and QEMU killed).
+2. restart (the plant signing its upload with the key): the key and the value are still there
+   (an unsigned write is refused); the ground station starts the mission, a PARAM_SET in
    flight is refused, the STATUSTEXTs are followed to the landing, and the plant's report shows
    the parameter changed the mission (the pre-flight checks lasted MIS_CHECKS_T).
 
@@ -46,6 +48,8 @@ except ImportError:
 mavlink = mavutil.mavlink
 CHECKS_PARAM = "MIS_CHECKS_T"
 CHECKS_VALUE = 2.0
+# The MAVLink 2 signing key the ground station sets up (test only).
+SIGNING_KEY = bytes(range(1, 33))
 BAD_VALUES = [("MAX_TILT", 5.0, "outside"), ("MAX_TILT", float("nan"), "finite"),
               ("MIS_CONFIRM", 1.5, "whole")]
 
@@ -103,8 +107,9 @@ class Vehicle:
             self.recv(["STATUSTEXT"], 0.5)
             if self.has_text(needle):
                 return
+        params = [t for t in self.texts if t.startswith("param") or "sign" in t]
         raise Failure(f"no STATUSTEXT containing {needle!r} within {timeout} s "
-                      f"(got: {self.texts[-5:]})")
+                      f"(last: {self.texts[-5:]}; about parameters and signing: {params[-5:]})")
 
     def command(self, cmd, *params):
         p = list(params) + [0.0] * (7 - len(params))
@@ -212,6 +217,30 @@ def timesync_checks(v):
     print(f"TIMESYNC: answered (vehicle time {answer.tc1} ns); the vehicle asks too")
 
 
+def signing_timestamp():
+    """Now in MAVLink signing's units: 10 us since 2015-01-01."""
+    return int((time.time() - 1420070400) * 100000)
+
+
+def signing_checks(v):
+    """SETUP_SIGNING, then: the vehicle signs, refuses unsigned commands and writes."""
+    v.conn.mav.setup_signing_send(1, 1, list(SIGNING_KEY), signing_timestamp())
+    v.text_matching("signing: on", 10)
+    v.conn.setup_signing(SIGNING_KEY, sign_outgoing=False)
+    hb = v.expect(["HEARTBEAT"], 10, "a signed HEARTBEAT",
+                  lambda m: m.get_srcComponent() == 1 and m.get_signed())
+    ack = v.command(mavlink.MAV_CMD_MISSION_START)
+    if ack.result != mavlink.MAV_RESULT_DENIED:
+        raise Failure(f"an unsigned MISSION_START acknowledged {ack.result}, expected DENIED")
+    v.text_matching("not signed", 10)
+    old = v.param_read(name=CHECKS_PARAM).param_value
+    if v.param_set(CHECKS_PARAM, CHECKS_VALUE).param_value != old:
+        raise Failure(f"an unsigned PARAM_SET of {CHECKS_PARAM} was taken")
+    v.conn.mav.signing.sign_outgoing = True
+    print(f"signing on: the vehicle signs (HEARTBEAT seq {hb.get_seq()}); an unsigned start "
+          "and parameter write refused")
+
+
 def start_hil(args, port, extra):
     cmd = [args.host_sim, "hil", "--scenario", args.scenario, "--qemu", args.elf,
            "--storage", args.storage, "--gcs", f"udp:127.0.0.1:{port}", "--ground-start",
@@ -280,6 +309,7 @@ def first_run(args, port):
         if v.param_read(name="MAX_TILT").param_value != old_tilt:
             raise Failure("MAX_TILT changed by a refused value")
 
+        signing_checks(v)
         answer = v.param_set(CHECKS_PARAM, CHECKS_VALUE)
         if answer.param_value != CHECKS_VALUE:
             raise Failure(f"{CHECKS_PARAM} = {CHECKS_VALUE} answered {answer.param_value}")
@@ -294,9 +324,14 @@ def first_run(args, port):
 
 
 def second_run(args, port):
-    plant = start_hil(args, port, [])
+    plant = start_hil(args, port, ["--signing-key", SIGNING_KEY.hex()])
     try:
         v = connect(port, plant)
+        v.conn.setup_signing(SIGNING_KEY, sign_outgoing=False)
+        if v.param_set("MAX_TILT", 0.3).param_value == 0.3:
+            raise Failure("after the restart an unsigned PARAM_SET was taken: signing lost")
+        v.conn.mav.signing.sign_outgoing = True
+        print("after the restart signing is on: an unsigned PARAM_SET refused")
         value = v.param_read(name=CHECKS_PARAM).param_value
         if value != CHECKS_VALUE:
             raise Failure(f"after the restart {CHECKS_PARAM} reads {value}, set {CHECKS_VALUE}")

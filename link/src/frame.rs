@@ -19,10 +19,7 @@ pub const MAX_FRAME_LEN: usize = 280;
 pub const STX_V2: u8 = 0xFD;
 /// MAVLink 1 start byte.
 pub const STX_V1: u8 = 0xFE;
-/// MAVLink 2 incompatibility flag: the frame is signed.
-const IFLAG_SIGNED: u8 = 0x01;
-/// Length of a MAVLink 2 signature.
-const SIGNATURE_LEN: usize = 13;
+use crate::signing::{IFLAG_SIGNED, SIGNATURE_LEN};
 /// MAVLink 2 header after the start byte: len, incompat, compat, seq, sysid, compid, msgid[3].
 const V2_HEADER: usize = 9;
 /// MAVLink 1 header after the start byte: len, seq, sysid, compid, msgid.
@@ -122,6 +119,33 @@ impl Frame {
                 u32::from_le_bytes([self.bytes[7], self.bytes[8], self.bytes[9], 0])
             }
         }
+    }
+
+    /// Signs this MAVLink 2 frame (unsigned, as encoded or received): sets the signed flag,
+    /// recomputes the checksum with `crc_extra`, and appends what `signature` makes of the
+    /// frame so far (start byte to checksum). `false`, and the frame unchanged, for a MAVLink 1
+    /// or already signed frame.
+    pub fn append_signature(
+        &mut self,
+        crc_extra: u8,
+        signature: impl FnOnce(&[u8]) -> [u8; SIGNATURE_LEN],
+    ) -> bool {
+        let header = 1 + V2_HEADER;
+        if self.len < header + 2
+            || self.bytes[0] != STX_V2
+            || self.bytes[2] & IFLAG_SIGNED != 0
+            || self.len + SIGNATURE_LEN > MAX_FRAME_LEN
+        {
+            return false;
+        }
+        self.bytes[2] |= IFLAG_SIGNED;
+        let crc_end = self.len - 2;
+        let crc = calculate_crc(&self.bytes[1..crc_end], crc_extra);
+        self.bytes[crc_end..self.len].copy_from_slice(&crc.to_le_bytes());
+        let tail = signature(&self.bytes[..self.len]);
+        self.bytes[self.len..self.len + SIGNATURE_LEN].copy_from_slice(&tail);
+        self.len += SIGNATURE_LEN;
+        true
     }
 
     /// The message, if this frame carries an `M` that decodes.

@@ -338,6 +338,15 @@ impl<const N: usize> Server<N> {
     }
 }
 
+/// The answer to `request` from a sender the vehicle does not trust (an unsigned one once
+/// signing is on): `NAK` `FileProtected`, nothing done.
+pub fn refusal(request: &FtpMessage) -> FtpMessage {
+    let mut answer = nak(request.session, ErrorCode::FileProtected);
+    answer.seq = request.seq.wrapping_add(1);
+    answer.req_opcode = request.opcode;
+    answer
+}
+
 fn ack(session: u8) -> FtpMessage {
     FtpMessage {
         session,

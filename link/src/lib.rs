@@ -13,6 +13,7 @@
 //!   description) and the ground side's upload.
 //! - [`param`]: MAVLink's parameter protocol over the mission's parameter table.
 //! - [`store`]: the parameters' storage (`sequential-storage` on NOR flash), power-cut safe.
+//! - [`signing`]: MAVLink 2 message signing (SHA-256), both ways.
 //! - [`status`]: `STATUSTEXT` (long texts in chunks, and their reassembly) and named values.
 //! - [`telemetry`]: `SYS_STATUS`, `ATTITUDE_QUATERNION`, `LOCAL_POSITION_NED` at set rates.
 //! - [`timesync`]: `TIMESYNC`: the motion-capture computer's clock on the vehicle's.
@@ -39,6 +40,7 @@ pub mod ftp;
 pub mod hil;
 pub mod odometry;
 pub mod param;
+pub mod signing;
 pub mod status;
 pub mod store;
 pub mod telemetry;

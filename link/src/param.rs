@@ -114,9 +114,10 @@ impl ParamService {
         &self.values
     }
 
-    /// Answers `request`; `may_change` is false while the mission runs (then every
-    /// `PARAM_SET` is refused).
-    pub fn handle(&mut self, request: &ParamRequest, may_change: bool) -> ParamAnswer {
+    /// Answers `request`; `refuse_changes` says why no value may change now (the mission
+    /// runs, the request is not signed): then every `PARAM_SET` is answered with the value in
+    /// force and that reason.
+    pub fn handle(&mut self, request: &ParamRequest, refuse_changes: Option<&str>) -> ParamAnswer {
         let mut answer = ParamAnswer {
             values: Values::None,
             changed: None,
@@ -152,11 +153,8 @@ impl ParamService {
                 };
                 answer.values = Values::One(i);
                 let spec = &TABLE[i];
-                if !may_change {
-                    answer.text = text(format_args!(
-                        "param {} not changed: the mission is running",
-                        spec.name
-                    ));
+                if let Some(why) = refuse_changes {
+                    answer.text = text(format_args!("param {} not changed: {why}", spec.name));
                     return answer;
                 }
                 let old = self.values.get(i);
@@ -212,19 +210,19 @@ mod tests {
     #[test]
     fn list_and_reads_answer_with_consistent_indices() {
         let mut s = ParamService::default();
-        assert_eq!(s.handle(&ParamRequest::List, true).values, Values::All);
+        assert_eq!(s.handle(&ParamRequest::List, None).values, Values::All);
         for (i, spec) in TABLE.iter().enumerate() {
             let m = s.value_message(i).expect("in table");
             assert_eq!((m.param_index as usize, m.param_count as usize), (i, COUNT));
-            let by_name = s.handle(&ParamRequest::ReadName(*m.param_id), true);
+            let by_name = s.handle(&ParamRequest::ReadName(*m.param_id), None);
             assert_eq!(by_name.values, Values::One(i));
-            let by_index = s.handle(&ParamRequest::ReadIndex(i as u16), true);
+            let by_index = s.handle(&ParamRequest::ReadIndex(i as u16), None);
             assert_eq!(by_index.values, Values::One(i));
             assert_eq!(m.param_type, MavParamType::MAV_PARAM_TYPE_REAL32);
             assert_eq!(m.param_value, spec.default_value());
         }
         assert!(s.value_message(COUNT).is_none());
-        let past = s.handle(&ParamRequest::ReadIndex(COUNT as u16), true);
+        let past = s.handle(&ParamRequest::ReadIndex(COUNT as u16), None);
         assert_eq!(past.values, Values::None);
         assert!(past.text.is_some_and(|t| t.contains("no parameter")));
     }
@@ -237,7 +235,7 @@ mod tests {
                 name: id("MAX_TILT"),
                 value: 0.3,
             },
-            true,
+            None,
         );
         let i = find(b"MAX_TILT").expect("exists");
         assert_eq!(a.values, Values::One(i));
@@ -263,7 +261,7 @@ mod tests {
                     name: id("LIFT_RAMP"),
                     value,
                 },
-                true,
+                None,
             );
             assert_eq!(a.values, Values::One(i), "PARAM_VALUE still sent");
             assert_eq!(a.changed, None);
@@ -276,7 +274,7 @@ mod tests {
                 name: id("LIFT_RAMP"),
                 value: 2.0,
             },
-            false,
+            Some("the mission is running"),
         );
         assert_eq!(running.changed, None);
         assert!(running.text.is_some_and(|t| t.contains("running")));
@@ -286,7 +284,7 @@ mod tests {
                 name: [0xFF; NAME_LEN],
                 value: 1.0,
             },
-            true,
+            None,
         );
         assert_eq!(unknown.values, Values::None);
         assert!(unknown.text.is_some());
@@ -299,6 +297,6 @@ mod tests {
             name: id("PLN_HOVER_T"),
             value: TABLE[find(b"PLN_HOVER_T").expect("exists")].default_value(),
         };
-        assert_eq!(s.handle(&set, true).changed, None);
+        assert_eq!(s.handle(&set, None).changed, None);
     }
 }

@@ -15,14 +15,15 @@
 
 use core::ops::Range;
 
+use crate::signing::KEY_LEN;
 use embedded_storage_async::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
 use shared::mission::params::{NAME_LEN, ParamValues, TABLE};
 
-/// Bytes of the work buffer: a key (16) and a value (4), rounded up to any flash's word (up
-/// to 32 bytes).
-const BUFFER_LEN: usize = 64;
+/// Bytes of the work buffer: a key (16) and a value (4 for a parameter, 32 for the signing
+/// key), rounded up to any flash's word (up to 32 bytes).
+const BUFFER_LEN: usize = 96;
 
 /// Why the store failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -81,6 +82,18 @@ pub struct ParamStore<F: NorFlash> {
     buffer: [u8; BUFFER_LEN],
 }
 
+/// Storage names of the signing key and timestamp (not parameter names: no parameter has
+/// the `SIGN_` prefix, a test checks it).
+const SIGNING_KEY: &str = "SIGN_KEY";
+const SIGNING_TIMESTAMP: &str = "SIGN_TS";
+
+fn named(name: &str) -> [u8; NAME_LEN] {
+    let mut k = [0u8; NAME_LEN];
+    let name = name.as_bytes();
+    k[..name.len()].copy_from_slice(name);
+    k
+}
+
 fn key(index: usize) -> [u8; NAME_LEN] {
     let mut k = [0u8; NAME_LEN];
     let name = TABLE[index].name.as_bytes();
@@ -135,6 +148,41 @@ impl<F: NorFlash> ParamStore<F> {
             .store_item(&mut self.buffer, &key(index), &value)
             .await
             .map_err(error)
+    }
+
+    /// Stores the signing key and the vehicle's signing timestamp (an all-zero key: signing
+    /// off).
+    pub async fn save_signing(
+        &mut self,
+        key: &[u8; KEY_LEN],
+        timestamp: u64,
+    ) -> Result<(), StoreError> {
+        self.map
+            .store_item(&mut self.buffer, &named(SIGNING_KEY), key)
+            .await
+            .map_err(error)?;
+        self.map
+            .store_item(&mut self.buffer, &named(SIGNING_TIMESTAMP), &timestamp)
+            .await
+            .map_err(error)
+    }
+
+    /// The stored signing key and timestamp, if a key other than all zeros is stored.
+    pub async fn load_signing(&mut self) -> Result<Option<([u8; KEY_LEN], u64)>, StoreError> {
+        let key = self
+            .map
+            .fetch_item::<[u8; KEY_LEN]>(&mut self.buffer, &named(SIGNING_KEY))
+            .await
+            .map_err(error)?;
+        let timestamp = self
+            .map
+            .fetch_item::<u64>(&mut self.buffer, &named(SIGNING_TIMESTAMP))
+            .await
+            .map_err(error)?;
+        Ok(match key {
+            Some(k) if k != [0; KEY_LEN] => Some((k, timestamp.unwrap_or(0))),
+            _ => None,
+        })
     }
 
     /// The flash back.
@@ -343,6 +391,27 @@ mod tests {
         assert_eq!((loaded.restored, loaded.error), (1, None));
         assert_eq!(values.get(3), Some(0.06));
         assert_eq!(values.get(4), Some(TABLE[4].default_value()));
+    }
+
+    #[test]
+    fn the_signing_key_survives_a_restart_beside_the_parameters() {
+        assert!(!TABLE.iter().any(|p| p.name.starts_with("SIGN_")));
+        let mut store = ParamStore::new(CutFlash::new(), 0..(PAGE * PAGES) as u32).expect("range");
+        assert_eq!(block_on(store.load_signing()), Ok(None));
+        block_on(store.save(3, 0.05)).expect("saved");
+        block_on(store.save_signing(&[5; KEY_LEN], 123_456)).expect("saved");
+        let flash = store.into_flash();
+        let mut store = ParamStore::new(flash, 0..(PAGE * PAGES) as u32).expect("range");
+        assert_eq!(
+            block_on(store.load_signing()),
+            Ok(Some(([5; KEY_LEN], 123_456)))
+        );
+        let mut values = ParamValues::DEFAULT;
+        let loaded = block_on(store.load(&mut values));
+        assert_eq!((loaded.restored, loaded.error), (1, None));
+        // An all-zero key is signing switched off.
+        block_on(store.save_signing(&[0; KEY_LEN], 0)).expect("saved");
+        assert_eq!(block_on(store.load_signing()), Ok(None));
     }
 
     #[test]

@@ -15,7 +15,7 @@ use crate::msg::{
     HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA, HIL_SENSOR_DATA, LOCAL_POSITION_NED_DATA,
     MISSION_COUNT_DATA, MISSION_REQUEST_LIST_DATA, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA,
     ODOMETRY_DATA, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA,
-    PARAM_VALUE_DATA, STATUSTEXT_DATA, SYS_STATUS_DATA, TIMESYNC_DATA,
+    PARAM_VALUE_DATA, SETUP_SIGNING_DATA, STATUSTEXT_DATA, SYS_STATUS_DATA, TIMESYNC_DATA,
 };
 use crate::param::ParamRequest;
 
@@ -55,6 +55,7 @@ crc_extras!(
     LOCAL_POSITION_NED_DATA,
     ODOMETRY_DATA,
     TIMESYNC_DATA,
+    SETUP_SIGNING_DATA,
 );
 
 /// Who sent a frame.
@@ -105,6 +106,16 @@ pub enum Inbound {
     Param {
         /// What it asks.
         request: ParamRequest,
+        /// Its sender.
+        from: Sender,
+    },
+    /// `SETUP_SIGNING` addressed to the vehicle: a new signing key (all zeros: signing off)
+    /// and the timestamp to start from.
+    SetupSigning {
+        /// The key.
+        key: [u8; crate::signing::KEY_LEN],
+        /// The initial timestamp, 10 us units since 2015-01-01.
+        timestamp: u64,
         /// Its sender.
         from: Sender,
     },
@@ -169,6 +180,14 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
             Ok(Some(f)) => Inbound::Mocap(f),
             Ok(None) => ignored,
             Err(e) => Inbound::Invalid(e),
+        },
+        SETUP_SIGNING_DATA::ID => match frame.decode::<SETUP_SIGNING_DATA>() {
+            Some(m) if for_us(m.target_system, m.target_component) => Inbound::SetupSigning {
+                key: m.secret_key,
+                timestamp: m.initial_timestamp,
+                from,
+            },
+            _ => ignored,
         },
         TIMESYNC_DATA::ID => match frame.decode::<TIMESYNC_DATA>() {
             // The extension fields `target_system`, `target_component` follow the base fields

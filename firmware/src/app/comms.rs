@@ -25,6 +25,7 @@ use link::msg::{
     MavSeverity, TIMESYNC_DATA,
 };
 use link::param::{ParamRequest, ParamService, Values, value_message};
+use link::signing::{KEY_LEN, Verdict};
 use link::status::{MissionState, Text, chunks, heartbeat, named_float, named_int};
 use link::store::ParamStore;
 use link::telemetry::Stream;
@@ -38,7 +39,7 @@ use static_cell::StaticCell;
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
 use super::{
     ARMED, COMMANDS, IN_HIL, MISSION_CONFIG, MISSION_STATE, MOCAP, OUTBOX, RELOAD, SENSOR,
-    TELEMETRY_CHANGED, TO_LOAD, VEHICLE, telemetry, timesync,
+    TELEMETRY_CHANGED, TO_LOAD, VEHICLE, signing, telemetry, timesync,
 };
 use crate::board::{Board, Selected};
 
@@ -130,6 +131,9 @@ pub enum Outbound {
 /// The parameters' store on this board.
 type Store = ParamStore<<Selected as Board>::ParamFlash>;
 
+/// The link id the vehicle signs with (one link at a time).
+const LINK_ID: u8 = 0;
+
 /// Oldest a motion-capture fix may be when it arrives for its own stamp to be used, us (the
 /// attitude estimator keeps 160 ms of history to compensate a fix's latency).
 const MAX_FIX_AGE_US: u64 = 150_000;
@@ -203,6 +207,7 @@ pub async fn receive(
     let mut parser = Parser::new(crc_extra);
     let ftp = FTP.init(Server::new());
     let (mut params, mut store) = open_params(param_flash).await;
+    restore_signing(&mut store).await;
     let mut buf = [0u8; 64];
     loop {
         // A board's read error (a UART framing error) loses bytes the parser resyncs over.
@@ -211,18 +216,96 @@ pub async fn receive(
             let Some((frame, integrity)) = parser.push(byte) else {
                 continue;
             };
+            let verdict = signing(|s| s.check(frame, Instant::now().as_micros()));
             let inbound = dispatch(frame, integrity);
-            handle(inbound, ftp, &mut params, &mut store).await;
+            handle(inbound, verdict, ftp, &mut params, &mut store).await;
         }
     }
+}
+
+/// Puts the stored signing key in force, if one is stored; says so.
+async fn restore_signing(store: &mut Option<Store>) {
+    let Some(store) = store else {
+        return;
+    };
+    match store.load_signing().await {
+        Ok(Some((key, timestamp))) => {
+            signing(|s| s.set_key(key, timestamp, Instant::now().as_micros(), LINK_ID));
+            OUTBOX
+                .send(report(
+                    Severity::Info,
+                    format_args!("signing: on (key restored)"),
+                ))
+                .await;
+        }
+        Ok(None) => {}
+        Err(e) => {
+            OUTBOX
+                .send(report(
+                    Severity::Error,
+                    format_args!("signing: stored key not read ({e}); signing off"),
+                ))
+                .await;
+        }
+    }
+}
+
+/// Sets (or with an all-zero key clears) the signing key, on a link that may (see
+/// [`Board::key_setup_allowed`]); stores it before saying so.
+async fn setup_signing(key: [u8; KEY_LEN], timestamp: u64, store: &mut Option<Store>) {
+    if !<Selected as Board>::key_setup_allowed() {
+        OUTBOX
+            .send(report(
+                Severity::Warning,
+                format_args!("signing: key refused: it is set over USB only"),
+            ))
+            .await;
+        return;
+    }
+    let stored = match store {
+        Some(store) => store.save_signing(&key, timestamp).await,
+        None => Err(link::store::StoreError::Other),
+    };
+    let on = signing(|s| {
+        s.set_key(key, timestamp, Instant::now().as_micros(), LINK_ID);
+        s.enabled()
+    });
+    let mut r = Report::default();
+    if on {
+        r.text(
+            Severity::Notice,
+            format_args!("signing: on; unsigned commands and parameter writes are refused"),
+        );
+    } else {
+        r.text(Severity::Notice, format_args!("signing: off"));
+    }
+    if let Err(e) = stored {
+        r.text(
+            Severity::Error,
+            format_args!("signing: key in force but not stored: {e}"),
+        );
+    }
+    OUTBOX.send(Outbound::Report(r)).await;
 }
 
 /// Answers a parameter request, puts a changed value in force and stores it. The value is
 /// stored before its `PARAM_VALUE` goes out, so a ground station that saw the answer may cut
 /// the power.
-async fn handle_param(request: ParamRequest, params: &mut ParamService, store: &mut Option<Store>) {
+async fn handle_param(
+    request: ParamRequest,
+    verdict: Verdict,
+    params: &mut ParamService,
+    store: &mut Option<Store>,
+) {
     let running = MISSION_STATE.load(Ordering::Relaxed) == MissionState::Running as u8;
-    let answer = params.handle(&request, !running);
+    let refuse_changes = if !verdict.trusted() {
+        Some(verdict.reason())
+    } else if running {
+        Some("the mission is running")
+    } else {
+        None
+    };
+    let answer = params.handle(&request, refuse_changes);
     if let Some((index, value)) = answer.changed {
         let stored = match store {
             Some(store) => store.save(index, value).await,
@@ -267,6 +350,7 @@ async fn refuse(command: CommandId, result: MavResult, why: &str) {
 
 async fn handle(
     inbound: Inbound,
+    verdict: Verdict,
     ftp: &mut Server<FILE_CAPACITY>,
     params: &mut ParamService,
     store: &mut Option<Store>,
@@ -310,17 +394,6 @@ async fn handle(
             request,
             from,
         } => match request {
-            Request::Operator(operator) => {
-                let pending = PendingCommand {
-                    command: operator,
-                    mav_cmd: command,
-                    from,
-                };
-                if COMMANDS.try_send(pending).is_err() {
-                    let result = MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
-                    OUTBOX.send(Outbound::Ack { command, result }).await;
-                }
-            }
             Request::Message(id) if id == AUTOPILOT_VERSION_DATA::ID => {
                 let result = MavResult::MAV_RESULT_ACCEPTED;
                 OUTBOX.send(Outbound::Ack { command, result }).await;
@@ -334,6 +407,21 @@ async fn handle(
                 } else {
                     let result = MavResult::MAV_RESULT_UNSUPPORTED;
                     refuse(command, result, "that message is not sent on request").await;
+                }
+            }
+            // Once signing is on, only reading goes without a signature.
+            _ if !verdict.trusted() => {
+                refuse(command, MavResult::MAV_RESULT_DENIED, verdict.reason()).await;
+            }
+            Request::Operator(operator) => {
+                let pending = PendingCommand {
+                    command: operator,
+                    mav_cmd: command,
+                    from,
+                };
+                if COMMANDS.try_send(pending).is_err() {
+                    let result = MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
+                    OUTBOX.send(Outbound::Ack { command, result }).await;
                 }
             }
             Request::SetInterval {
@@ -369,8 +457,25 @@ async fn handle(
                 refuse(command, result, why).await;
             }
         },
-        Inbound::Param { request, .. } => handle_param(request, params, store).await,
+        Inbound::Param { request, .. } => handle_param(request, verdict, params, store).await,
+        Inbound::SetupSigning { key, timestamp, .. } => {
+            setup_signing(key, timestamp, store).await;
+        }
         Inbound::MissionList(to) => OUTBOX.send(Outbound::MissionCount { to }).await,
+        Inbound::Ftp { message, from } if !verdict.trusted() => {
+            OUTBOX
+                .send(Outbound::Ftp {
+                    message: link::ftp::refusal(&message),
+                    to: from,
+                })
+                .await;
+            OUTBOX
+                .send(report(
+                    Severity::Warning,
+                    format_args!("payload upload refused: {}", verdict.reason()),
+                ))
+                .await;
+        }
         Inbound::Ftp { message, from } => {
             let (answer, event) = ftp.handle(&message);
             OUTBOX
@@ -459,8 +564,12 @@ impl<W: Write> Sending<W> {
         self.encoder.encode(message, &mut self.frame);
     }
 
-    /// Sends the frame.
+    /// Sends the frame, signed once signing is on.
     async fn flush(&mut self) {
+        if let Some(extra) = crc_extra(self.frame.message_id()) {
+            let now = Instant::now().as_micros();
+            signing(|s| s.sign(&mut self.frame, extra, now));
+        }
         // A board link cannot fail in a way the firmware could mend; the bytes are dropped.
         let _ = self.tx.write_all(self.frame.bytes()).await;
     }

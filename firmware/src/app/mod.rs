@@ -24,6 +24,7 @@ use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
+use link::signing::Signing;
 use link::telemetry::{Schedule, VehicleSnapshot};
 use link::timesync::TimeSync;
 use shared::mission::MissionConfig;
@@ -114,6 +115,19 @@ pub fn timesync<R>(change: impl FnOnce(&mut TimeSync) -> R) -> R {
         cell.set(sync);
         result
     })
+}
+
+/// MAVLink 2 signing: the key, the vehicle's timestamp, the streams heard. Only the two link
+/// tasks use it, and they run on one executor and never preempt each other, so a copy taken,
+/// changed (a signature computed outside the critical section) and put back is never stale.
+pub static SIGNING: Mutex<Cs, Cell<Signing>> = Mutex::new(Cell::new(Signing::new()));
+
+/// Changes the signing state with `change` (from a link task only), returning what it returns.
+pub fn signing<R>(change: impl FnOnce(&mut Signing) -> R) -> R {
+    let mut state = SIGNING.lock(|cell| cell.get());
+    let result = change(&mut state);
+    SIGNING.lock(|cell| cell.set(state));
+    result
 }
 
 /// The mission state as last reported by the control task (for the heartbeat).

@@ -71,6 +71,10 @@ pub trait Board: 'static {
     /// A free-running counter (wrapping) for measuring the control tick.
     fn cycle_count() -> u32;
 
+    /// Whether the link in use may set the signing key (`SETUP_SIGNING`): a wired link the
+    /// operator plugs in by hand (the Pixhawk's USB), never a radio.
+    fn key_setup_allowed() -> bool;
+
     /// What the board's drivers report failed now (none on a board without drivers).
     fn hardware_faults() -> shared::mission::HardwareFaults {
         shared::mission::HardwareFaults::NONE

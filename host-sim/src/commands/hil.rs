@@ -78,9 +78,36 @@ pub struct HilArgs {
     /// the idle vehicle until it starts (parameters may be changed meanwhile).
     #[arg(long, requires = "gcs")]
     pub ground_start: bool,
+    /// Sign what the plant sends (the payload upload, commands) with this MAVLink 2 signing
+    /// key, 64 hexadecimal digits: for a vehicle whose signing is on.
+    #[arg(long, value_name = "HEX", value_parser = parse_signing_key)]
+    pub signing_key: Option<[u8; link::signing::KEY_LEN]>,
     /// Failure injection: motion capture stops this many seconds after take-off.
     #[arg(long, value_name = "S")]
     pub mocap_lost_after: Option<f64>,
+}
+
+/// A MAVLink 2 signing key from 64 hexadecimal digits.
+fn parse_signing_key(text: &str) -> std::result::Result<[u8; link::signing::KEY_LEN], String> {
+    let digits = text.trim();
+    if digits.len() != 2 * link::signing::KEY_LEN {
+        return Err(format!(
+            "a signing key is {} hexadecimal digits, this has {}",
+            2 * link::signing::KEY_LEN,
+            digits.len()
+        ));
+    }
+    let mut key = [0u8; link::signing::KEY_LEN];
+    for (i, byte) in key.iter_mut().enumerate() {
+        let pair = digits.get(2 * i..2 * i + 2).unwrap_or("");
+        *byte = u8::from_str_radix(pair, 16).map_err(|_| {
+            format!(
+                "not a hexadecimal digit pair at position {}: {pair:?}",
+                2 * i
+            )
+        })?;
+    }
+    Ok(key)
 }
 
 /// Runs the command.
@@ -131,7 +158,7 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
             let _ = say!("  step {:6}  firmware: {}", t.step, t.text);
         }
     });
-    let (_qemu, link) = if let Some(elf) = &args.qemu {
+    let (_qemu, mut link) = if let Some(elf) = &args.qemu {
         let (qemu, stream) = Qemu::launch_with_storage(elf, args.storage.as_deref())?;
         (Some(qemu), Link::over_tcp(stream)?)
     } else if let Some(path) = &args.serial {
@@ -145,6 +172,9 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
     } else {
         bail!("give the firmware: --qemu ELF, --serial DEV or --connect tcp:HOST:PORT");
     };
+    if let Some(key) = args.signing_key {
+        link.sign_with(key);
+    }
     if !json {
         say!("hil on {}", loaded.name)?;
     }

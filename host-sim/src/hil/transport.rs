@@ -15,6 +15,8 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, anyhow, bail};
 use link::MessageData;
 use link::frame::{Encoder, Frame, Integrity, Parser};
+use link::msg::STATUSTEXT_DATA;
+use link::signing::Signing;
 use link::status::StatusChunk;
 use link::vehicle::crc_extra;
 
@@ -59,7 +61,14 @@ pub struct Link {
     frame: Frame,
     buf: [u8; 512],
     pending: (usize, usize),
+    /// Signs what is sent, with the time signing began.
+    signing: Option<(Signing, Instant)>,
 }
+
+/// The plant's signing link id. It sends as system 255, component 190, as ground stations
+/// do; a signature stream is (system, component, link id), so the plant takes a link id ground
+/// stations do not (they count up from 0) and its timestamps never interleave with theirs.
+pub const SIGNING_LINK_ID: u8 = 200;
 
 /// How long one read may block before the deadline is checked again.
 const READ_SLICE: Duration = Duration::from_millis(50);
@@ -107,6 +116,27 @@ impl Link {
             frame: Frame::default(),
             buf: [0; 512],
             pending: (0, 0),
+            signing: None,
+        }
+    }
+
+    /// Signs every frame sent from now on with `key` (MAVLink 2 signing, link id
+    /// [`SIGNING_LINK_ID`]), its timestamp the wall clock's.
+    pub fn sign_with(&mut self, key: [u8; link::signing::KEY_LEN]) {
+        // 10 us units since 2015-01-01 (1,420,070,400 s after the Unix epoch).
+        let since_2015 = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_micros().saturating_sub(1_420_070_400_000_000) / 10)
+            .unwrap_or(0);
+        let mut signing = Signing::new();
+        signing.set_key(key, since_2015 as u64, 0, SIGNING_LINK_ID);
+        self.signing = Some((signing, Instant::now()));
+    }
+
+    fn sign(&mut self, crc_extra: u8) {
+        if let Some((signing, since)) = &mut self.signing {
+            let uptime_us = since.elapsed().as_micros() as u64;
+            signing.sign(&mut self.frame, crc_extra, uptime_us);
         }
     }
 
@@ -118,12 +148,14 @@ impl Link {
     /// Sends one message.
     pub fn send<M: MessageData>(&mut self, message: &M) -> Result<()> {
         self.encoder.encode(message, &mut self.frame);
+        self.sign(M::EXTRA_CRC);
         write_frame(&self.writer, self.frame.bytes())
     }
 
     /// Sends one `STATUSTEXT` chunk (with its extension fields).
     pub fn send_text_chunk(&mut self, chunk: &StatusChunk) -> Result<()> {
         chunk.encode(&mut self.encoder, &mut self.frame);
+        self.sign(STATUSTEXT_DATA::EXTRA_CRC);
         write_frame(&self.writer, self.frame.bytes())
     }
 
