@@ -12,7 +12,8 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
 
 1. connect (HEARTBEAT from component 1, MAV_AUTOPILOT_GENERIC), AUTOPILOT_VERSION through
    MAV_CMD_REQUEST_MESSAGE (MAVLink 2 and parameter-encoding capabilities), MISSION_COUNT 0,
-   telemetry (SYS_STATUS, ATTITUDE_QUATERNION, LOCAL_POSITION_NED streamed; a stream stopped
+   telemetry (SYS_STATUS, ATTITUDE_QUATERNION, LOCAL_POSITION_NED and the robots' rail positions
+   as DEBUG_FLOAT_ARRAY streamed; a stream stopped
    and restarted by MAV_CMD_SET_MESSAGE_INTERVAL, a bad interval and an unstreamed message
    refused, SYS_STATUS sent once on MAV_CMD_REQUEST_MESSAGE), TIMESYNC answered and asked,
    every parameter (count and indices consistent, read back by name and by index), arming
@@ -168,8 +169,10 @@ def telemetry_checks(v):
     if abs(norm - 1.0) > 1e-3:
         raise Failure(f"ATTITUDE_QUATERNION of norm {norm}")
     v.expect(["LOCAL_POSITION_NED"], 10, "LOCAL_POSITION_NED")
+    v.expect(["DEBUG_FLOAT_ARRAY"], 10, "DEBUG_FLOAT_ARRAY rail (the robots' rail positions)",
+             lambda m: m.name == "rail" and m.array_id == 1)
     print("telemetry: SYS_STATUS (IMU present and healthy), ATTITUDE_QUATERNION (unit), "
-          "LOCAL_POSITION_NED")
+          "LOCAL_POSITION_NED, DEBUG_FLOAT_ARRAY rail")
 
     attitude = mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION
     ack = v.command(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, attitude, -1)

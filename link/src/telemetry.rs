@@ -1,5 +1,6 @@
-//! Telemetry at set rates (issue 14): `SYS_STATUS`, `ATTITUDE_QUATERNION` and
-//! `LOCAL_POSITION_NED`, each on its own interval that a ground station sets with
+//! Telemetry at set rates (issue 14): `SYS_STATUS`, `ATTITUDE_QUATERNION`,
+//! `LOCAL_POSITION_NED` and each robot's rail position (`DEBUG_FLOAT_ARRAY` named `rail`: the
+//! formation once the robots have moved to it), each on its own interval that a ground station sets with
 //! `MAV_CMD_SET_MESSAGE_INTERVAL` (or asks for once with `MAV_CMD_REQUEST_MESSAGE`), as
 //! MAVLink's message interval protocol has it; and the three messages built from a
 //! [`VehicleSnapshot`], the vehicle's state after its last control step.
@@ -8,9 +9,10 @@
 //! asks [`Schedule::next_due`] when to wake and [`Schedule::take_due`] what to send.
 
 use crate::MessageData;
+use crate::hil::MAX_ROBOTS;
 use crate::msg::{
-    ATTITUDE_QUATERNION_DATA, LOCAL_POSITION_NED_DATA, MavResult, MavSysStatusSensor,
-    SYS_STATUS_DATA,
+    ATTITUDE_QUATERNION_DATA, DEBUG_FLOAT_ARRAY_DATA, LOCAL_POSITION_NED_DATA, MavResult,
+    MavSysStatusSensor, SYS_STATUS_DATA,
 };
 
 /// A message the vehicle streams.
@@ -22,10 +24,16 @@ pub enum Stream {
     AttitudeQuaternion = 1,
     /// `LOCAL_POSITION_NED`: position and velocity from the take-off point.
     LocalPositionNed = 2,
+    /// `DEBUG_FLOAT_ARRAY` `rail` ([`RAIL_ARRAY_ID`]): each robot's commanded arc length.
+    RailPositions = 3,
 }
 
 /// How many streams there are.
-pub const STREAMS: usize = 3;
+pub const STREAMS: usize = 4;
+/// `array_id` of the rail positions' `DEBUG_FLOAT_ARRAY`.
+pub const RAIL_ARRAY_ID: u16 = 1;
+/// `name` of the rail positions' `DEBUG_FLOAT_ARRAY`.
+pub const RAIL_ARRAY_NAME: &str = "rail";
 
 impl Stream {
     /// Every stream, in the order of their index.
@@ -33,6 +41,7 @@ impl Stream {
         Stream::SysStatus,
         Stream::AttitudeQuaternion,
         Stream::LocalPositionNed,
+        Stream::RailPositions,
     ];
 
     /// The MAVLink message id.
@@ -41,6 +50,7 @@ impl Stream {
             Self::SysStatus => SYS_STATUS_DATA::ID,
             Self::AttitudeQuaternion => ATTITUDE_QUATERNION_DATA::ID,
             Self::LocalPositionNed => LOCAL_POSITION_NED_DATA::ID,
+            Self::RailPositions => DEBUG_FLOAT_ARRAY_DATA::ID,
         }
     }
 
@@ -50,10 +60,11 @@ impl Stream {
     }
 
     /// The interval at start and after a request for the default (interval 0), us: 1 Hz for
-    /// the status, 10 Hz for attitude and position.
+    /// the status, 2 Hz for the rail positions, 10 Hz for attitude and position.
     pub const fn default_interval_us(self) -> u32 {
         match self {
             Self::SysStatus => 1_000_000,
+            Self::RailPositions => 500_000,
             Self::AttitudeQuaternion | Self::LocalPositionNed => 100_000,
         }
     }
@@ -89,6 +100,7 @@ impl Schedule {
                 Some(Stream::SysStatus.default_interval_us()),
                 Some(Stream::AttitudeQuaternion.default_interval_us()),
                 Some(Stream::LocalPositionNed.default_interval_us()),
+                Some(Stream::RailPositions.default_interval_us()),
             ],
             next_us: [0; STREAMS],
             once: [false; STREAMS],
@@ -199,6 +211,10 @@ pub struct VehicleSnapshot {
     pub imu_healthy: bool,
     /// The rotors may spin.
     pub armed: bool,
+    /// Robots in use.
+    pub robots: u8,
+    /// Each robot's commanded position along the rail, arc length, m.
+    pub rail: [f32; MAX_ROBOTS],
     /// The control loop's load: the worst step since the last `SYS_STATUS`, in thousandths
     /// of the step's period.
     pub load_permille: u16,
@@ -215,6 +231,8 @@ impl VehicleSnapshot {
         position_valid: false,
         imu_healthy: true,
         armed: false,
+        robots: 0,
+        rail: [0.0; MAX_ROBOTS],
         load_permille: 0,
     };
 
@@ -269,6 +287,22 @@ impl VehicleSnapshot {
         }
     }
 
+    /// `DEBUG_FLOAT_ARRAY` `rail` and its `data` (an extension field: its bytes, to send
+    /// with `Encoder::encode_extended`), one arc length per robot in use.
+    pub fn rail_positions(&self) -> (DEBUG_FLOAT_ARRAY_DATA, [u8; 4 * MAX_ROBOTS], usize) {
+        let robots = usize::from(self.robots).min(MAX_ROBOTS);
+        let mut data = [0u8; 4 * MAX_ROBOTS];
+        for (j, s) in self.rail[..robots].iter().enumerate() {
+            data[4 * j..4 * j + 4].copy_from_slice(&s.to_le_bytes());
+        }
+        let array = DEBUG_FLOAT_ARRAY_DATA {
+            time_usec: self.time_us,
+            array_id: RAIL_ARRAY_ID,
+            name: RAIL_ARRAY_NAME.into(),
+        };
+        (array, data, 4 * robots)
+    }
+
     /// `LOCAL_POSITION_NED`.
     pub fn local_position_ned(&self) -> LOCAL_POSITION_NED_DATA {
         LOCAL_POSITION_NED_DATA {
@@ -312,6 +346,7 @@ mod tests {
         let mut s = Schedule::new();
         let log = sent(&mut s, 2_000_000);
         assert_eq!(count(&log, Stream::SysStatus), 2);
+        assert_eq!(count(&log, Stream::RailPositions), 4);
         assert_eq!(count(&log, Stream::AttitudeQuaternion), 20);
         assert_eq!(count(&log, Stream::LocalPositionNed), 20);
     }
@@ -381,7 +416,7 @@ mod tests {
         while let Some(stream) = s.take_due(1_000_000) {
             late.push(stream);
         }
-        assert_eq!(late.len(), 3);
+        assert_eq!(late.len(), STREAMS);
         assert_eq!(s.next_due(), Some(1_100_000));
     }
 
@@ -406,8 +441,23 @@ mod tests {
             position_valid: true,
             imu_healthy: false,
             armed: true,
+            robots: 3,
+            rail: [
+                0.5, 1.25, 2.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0,
+            ],
             load_permille: 1500,
         };
+        let (array, data, len) = snap.rail_positions();
+        assert_eq!(
+            (array.array_id, array.name.to_str().ok()),
+            (RAIL_ARRAY_ID, Some("rail"))
+        );
+        assert_eq!(len, 12);
+        let arcs: std::vec::Vec<f32> = data[..len]
+            .chunks(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        assert_eq!(arcs, [0.5, 1.25, 2.0]);
         let q = snap.attitude_quaternion();
         assert_eq!(q.time_boot_ms, 12_345);
         assert_eq!([q.q1, q.q2, q.q3, q.q4], snap.attitude);

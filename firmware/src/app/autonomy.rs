@@ -341,6 +341,8 @@ impl Autonomy {
             ],
             position_valid: position.valid,
             armed: out.armed,
+            robots: robots as u8,
+            rail,
             ..VehicleSnapshot::START
         };
         TickOutput {

@@ -617,6 +617,11 @@ impl<W: Write> Sending<W> {
                 Stream::SysStatus => self.encode(&vehicle.sys_status()),
                 Stream::AttitudeQuaternion => self.encode(&vehicle.attitude_quaternion()),
                 Stream::LocalPositionNed => self.encode(&vehicle.local_position_ned()),
+                Stream::RailPositions => {
+                    let (array, data, len) = vehicle.rail_positions();
+                    self.encoder
+                        .encode_extended(&array, &data[..len], &mut self.frame);
+                }
             }
             self.flush().await;
         }

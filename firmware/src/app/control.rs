@@ -143,14 +143,11 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             load_permille = (u64::from(second_worst) * 1000 / period).min(1000) as u16;
             second_worst = 0;
         }
-        VEHICLE.lock(|v| {
-            v.set(link::telemetry::VehicleSnapshot {
-                time_us: step.time_us,
-                imu_healthy: !imu_failed,
-                load_permille,
-                ..out.telemetry
-            })
-        });
+        let mut snapshot = out.telemetry;
+        snapshot.time_us = step.time_us;
+        snapshot.imu_healthy = !imu_failed;
+        snapshot.load_permille = load_permille;
+        VEHICLE.lock(|v| v.set(snapshot));
         if held_counts > 0 {
             out.report.value("job_holds", Value::Int(holds as i32));
         }
