@@ -91,14 +91,20 @@ pub static VEHICLE: Mutex<Cs, Cell<VehicleSnapshot>> =
 /// (`embassy_time::Instant`, us).
 pub static TELEMETRY: Mutex<Cs, Cell<Schedule>> = Mutex::new(Cell::new(Schedule::new()));
 
-/// Changes the telemetry schedule with `change`, returning what it returns.
-pub fn telemetry<R>(change: impl FnOnce(&mut Schedule) -> R) -> R {
-    TELEMETRY.lock(|cell| {
-        let mut schedule = cell.get();
-        let result = change(&mut schedule);
-        cell.set(schedule);
+/// Changes the value kept in `cell` with `change` (a copy taken and put back in one critical
+/// section), returning what `change` returns.
+fn update<T: Copy, R>(cell: &Mutex<Cs, Cell<T>>, change: impl FnOnce(&mut T) -> R) -> R {
+    cell.lock(|cell| {
+        let mut value = cell.get();
+        let result = change(&mut value);
+        cell.set(value);
         result
     })
+}
+
+/// Changes the telemetry schedule with `change`, returning what it returns.
+pub fn telemetry<R>(change: impl FnOnce(&mut Schedule) -> R) -> R {
+    update(&TELEMETRY, change)
 }
 /// The telemetry schedule changed: the send task looks at it again.
 pub static TELEMETRY_CHANGED: Signal<Cs, ()> = Signal::new();
@@ -109,12 +115,7 @@ pub static TIMESYNC: Mutex<Cs, Cell<TimeSync>> = Mutex::new(Cell::new(TimeSync::
 
 /// Changes the time synchronisation with `change`, returning what it returns.
 pub fn timesync<R>(change: impl FnOnce(&mut TimeSync) -> R) -> R {
-    TIMESYNC.lock(|cell| {
-        let mut sync = cell.get();
-        let result = change(&mut sync);
-        cell.set(sync);
-        result
-    })
+    update(&TIMESYNC, change)
 }
 
 /// MAVLink 2 signing: the key, the vehicle's timestamp, the streams heard. Only the two link
