@@ -21,8 +21,9 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
    value and a STATUSTEXT), MAVLink 2 signing set up (SETUP_SIGNING): the vehicle's frames
    signed, an unsigned start and an unsigned parameter write refused, one good value set
    signed; then the power is cut (host-sim and QEMU killed).
-2. restart (the plant signing its upload with the key): the key and the value are still there
-   (an unsigned write is refused); the ground station starts the mission, a PARAM_SET in
+2. restart (the plant signing its upload with the key): the key, the value and the payload
+   description are still there (an unsigned write is refused; `payload description restored
+   from storage`); the ground station starts the mission, a PARAM_SET in
    flight is refused, the STATUSTEXTs are followed to the landing, and the plant's report shows
    the parameter changed the mission (the pre-flight checks lasted MIS_CHECKS_T).
 
@@ -362,6 +363,8 @@ def second_run(args, port):
             report = json.loads(out)
         except json.JSONDecodeError:
             raise Failure(f"host-sim printed no JSON (exit {plant.returncode}): {err[-500:]}")
+        if not any("restored from storage" in t["text"] for t in report["statustexts"]):
+            raise Failure("the payload description was not restored from storage at the restart")
         checks = [p for p in report["phases"] if p["name"] == "preflight-checks"]
         if not checks or abs(checks[0]["duration_s"] - CHECKS_VALUE) > 0.1:
             raise Failure(f"pre-flight checks lasted {checks}, {CHECKS_PARAM} = {CHECKS_VALUE}")

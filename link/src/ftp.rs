@@ -248,6 +248,16 @@ impl<const N: usize> Server<N> {
         }
     }
 
+    /// The file's whole buffer, to fill with a stored file (then [`Self::restored`]).
+    pub fn restore_buffer(&mut self) -> &mut [u8] {
+        &mut self.file
+    }
+
+    /// The first `len` bytes of the buffer are the file, restored from storage.
+    pub fn restored(&mut self, len: usize) {
+        self.len = len.min(N);
+    }
+
     /// The file's contents so far.
     pub fn file(&self) -> &[u8] {
         &self.file[..self.len]

@@ -12,6 +12,7 @@
 //! - [`ftp`]: MAVLink FTP: the vehicle's minimal server (one writable file, the payload
 //!   description) and the ground side's upload.
 //! - [`param`]: MAVLink's parameter protocol over the mission's parameter table.
+//! - [`slots`]: the payload description's two power-cut-safe slots.
 //! - [`store`]: the parameters' storage (`sequential-storage` on NOR flash), power-cut safe.
 //! - [`signing`]: MAVLink 2 message signing (SHA-256), both ways.
 //! - [`status`]: `STATUSTEXT` (long texts in chunks, and their reassembly) and named values.
@@ -41,6 +42,7 @@ pub mod hil;
 pub mod odometry;
 pub mod param;
 pub mod signing;
+pub mod slots;
 pub mod status;
 pub mod store;
 pub mod telemetry;

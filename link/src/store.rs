@@ -16,6 +16,7 @@
 use core::ops::Range;
 
 use crate::signing::KEY_LEN;
+use crate::slots::Slots;
 use embedded_storage_async::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
@@ -39,6 +40,8 @@ pub enum StoreError {
     Corrupted,
     /// Any other error of the storage layer.
     Other,
+    /// The board keeps no room for a payload description, or it is larger than a slot.
+    NoRoom,
 }
 
 impl core::fmt::Display for StoreError {
@@ -49,6 +52,7 @@ impl core::fmt::Display for StoreError {
             Self::Full => write!(f, "parameter storage full"),
             Self::Corrupted => write!(f, "parameter storage corrupted; erased, defaults used"),
             Self::Other => write!(f, "parameter storage error"),
+            Self::NoRoom => write!(f, "no storage room for the payload description"),
         }
     }
 }
@@ -78,8 +82,11 @@ type NoCache = Cache<Uncached, Uncached, Uncached, [u8; NAME_LEN]>;
 
 /// The parameters' storage on a flash `F`.
 pub struct ParamStore<F: NorFlash> {
-    map: MapStorage<[u8; NAME_LEN], F, NoCache>,
+    /// The map (it owns the flash; lent out, briefly, to the payload slots).
+    map: Option<MapStorage<[u8; NAME_LEN], F, NoCache>>,
+    config: Range<u32>,
     buffer: [u8; BUFFER_LEN],
+    payload: Option<Slots>,
 }
 
 /// Storage names of the signing key and timestamp (not parameter names: no parameter has
@@ -104,22 +111,75 @@ fn key(index: usize) -> [u8; NAME_LEN] {
 impl<F: NorFlash> ParamStore<F> {
     /// The store on `range` of `flash` (whole erase pages, at least two).
     pub fn new(flash: F, range: Range<u32>) -> Result<Self, StoreError> {
-        let config = MapConfig::try_new(range).map_err(|_| StoreError::BadRange)?;
+        let config = MapConfig::try_new(range.clone()).map_err(|_| StoreError::BadRange)?;
         Ok(Self {
-            map: MapStorage::new(flash, config, Cache::new_uncached()),
+            map: Some(MapStorage::new(flash, config, Cache::new_uncached())),
+            config: range,
             buffer: [0; BUFFER_LEN],
+            payload: None,
         })
+    }
+
+    /// Keeps the payload description in `range` too (two slots of whole erase pages, apart
+    /// from the parameters' range).
+    pub fn with_payload(mut self, range: Range<u32>) -> Result<Self, StoreError> {
+        let overlaps = range.start < self.config.end && self.config.start < range.end;
+        let slots = Slots::new(range, F::ERASE_SIZE).ok_or(StoreError::BadRange)?;
+        if overlaps {
+            return Err(StoreError::BadRange);
+        }
+        self.payload = Some(slots);
+        Ok(self)
+    }
+
+    /// The flash out of the map, for the payload slots; [`Self::give_back`] returns it.
+    fn lend(&mut self) -> Result<F, StoreError> {
+        Ok(self.map.take().ok_or(StoreError::Other)?.destroy().0)
+    }
+
+    fn give_back(&mut self, flash: F) -> Result<(), StoreError> {
+        let config = MapConfig::try_new(self.config.clone()).map_err(|_| StoreError::BadRange)?;
+        self.map = Some(MapStorage::new(flash, config, Cache::new_uncached()));
+        Ok(())
+    }
+
+    /// Stores the payload description `bytes` (a power cut leaves the one before readable).
+    pub async fn save_payload(&mut self, bytes: &[u8]) -> Result<(), StoreError> {
+        let slots = self.payload.clone().ok_or(StoreError::NoRoom)?;
+        let mut flash = self.lend()?;
+        let saved = slots.save(&mut flash, bytes).await;
+        self.give_back(flash)?;
+        match saved {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(StoreError::NoRoom),
+            Err(e) => Err(StoreError::Flash(e.kind())),
+        }
+    }
+
+    /// The stored payload description that passes `valid`, read into `into`: its length.
+    pub async fn load_payload(
+        &mut self,
+        into: &mut [u8],
+        valid: impl Fn(&[u8]) -> bool,
+    ) -> Result<Option<usize>, StoreError> {
+        let Some(slots) = self.payload.clone() else {
+            return Ok(None);
+        };
+        let mut flash = self.lend()?;
+        let loaded = slots.load(&mut flash, into, valid).await;
+        self.give_back(flash)?;
+        loaded.map_err(|e| StoreError::Flash(e.kind()))
     }
 
     /// Sets `values` from storage: every parameter stored and still acceptable.
     pub async fn load(&mut self, values: &mut ParamValues) -> Loaded {
         let mut loaded = Loaded::default();
         for index in 0..TABLE.len() {
-            match self
-                .map
-                .fetch_item::<f32>(&mut self.buffer, &key(index))
-                .await
-            {
+            let Ok(map) = self.map.as_mut().ok_or(StoreError::Other) else {
+                loaded.error = Some(StoreError::Other);
+                break;
+            };
+            match map.fetch_item::<f32>(&mut self.buffer, &key(index)).await {
                 Ok(Some(v)) => match values.set(index, v) {
                     Ok(()) => loaded.restored += 1,
                     Err(_) => loaded.refused += 1,
@@ -129,7 +189,7 @@ impl<F: NorFlash> ParamStore<F> {
                     let e = error(e);
                     if e == StoreError::Corrupted {
                         // Beyond repair: start over rather than fail on every start.
-                        let _ = self.map.erase_all().await;
+                        let _ = map.erase_all().await;
                     }
                     loaded.error = Some(e);
                     break;
@@ -144,8 +204,11 @@ impl<F: NorFlash> ParamStore<F> {
         if index >= TABLE.len() {
             return Err(StoreError::Other);
         }
+        let buffer = &mut self.buffer;
         self.map
-            .store_item(&mut self.buffer, &key(index), &value)
+            .as_mut()
+            .ok_or(StoreError::Other)?
+            .store_item(buffer, &key(index), &value)
             .await
             .map_err(error)
     }
@@ -157,25 +220,23 @@ impl<F: NorFlash> ParamStore<F> {
         key: &[u8; KEY_LEN],
         timestamp: u64,
     ) -> Result<(), StoreError> {
-        self.map
-            .store_item(&mut self.buffer, &named(SIGNING_KEY), key)
+        let map = self.map.as_mut().ok_or(StoreError::Other)?;
+        map.store_item(&mut self.buffer, &named(SIGNING_KEY), key)
             .await
             .map_err(error)?;
-        self.map
-            .store_item(&mut self.buffer, &named(SIGNING_TIMESTAMP), &timestamp)
+        map.store_item(&mut self.buffer, &named(SIGNING_TIMESTAMP), &timestamp)
             .await
             .map_err(error)
     }
 
     /// The stored signing key and timestamp, if a key other than all zeros is stored.
     pub async fn load_signing(&mut self) -> Result<Option<([u8; KEY_LEN], u64)>, StoreError> {
-        let key = self
-            .map
+        let map = self.map.as_mut().ok_or(StoreError::Other)?;
+        let key = map
             .fetch_item::<[u8; KEY_LEN]>(&mut self.buffer, &named(SIGNING_KEY))
             .await
             .map_err(error)?;
-        let timestamp = self
-            .map
+        let timestamp = map
             .fetch_item::<u64>(&mut self.buffer, &named(SIGNING_TIMESTAMP))
             .await
             .map_err(error)?;
@@ -185,9 +246,9 @@ impl<F: NorFlash> ParamStore<F> {
         })
     }
 
-    /// The flash back.
-    pub fn into_flash(self) -> F {
-        self.map.destroy().0
+    /// The flash back (`None` only if a payload access was cut short by a flash error).
+    pub fn into_flash(self) -> Option<F> {
+        self.map.map(|m| m.destroy().0)
     }
 }
 
@@ -225,8 +286,12 @@ mod tests {
 
     impl CutFlash {
         fn new() -> Self {
+            Self::sized(PAGE * PAGES)
+        }
+
+        fn sized(len: usize) -> Self {
             Self {
-                bytes: vec![0xFF; PAGE * PAGES],
+                bytes: vec![0xFF; len],
                 budget: None,
                 partial: 0,
                 ops: 0,
@@ -352,7 +417,7 @@ mod tests {
                 }
             }
         }
-        let mut flash = store.into_flash();
+        let mut flash = store.into_flash().expect("the flash");
         flash.reboot();
         let mut store = ParamStore::new(flash, 0..(PAGE * PAGES) as u32).expect("range");
         let mut after = ParamValues::DEFAULT;
@@ -385,7 +450,7 @@ mod tests {
         assert_eq!(block_on(store.load(&mut values)).restored, 0);
         block_on(store.save(3, 0.05)).expect("saved");
         block_on(store.save(3, 0.06)).expect("saved");
-        let flash = store.into_flash();
+        let flash = store.into_flash().expect("the flash");
         let mut store = ParamStore::new(flash, 0..(PAGE * PAGES) as u32).expect("range");
         let loaded = block_on(store.load(&mut values));
         assert_eq!((loaded.restored, loaded.error), (1, None));
@@ -400,7 +465,7 @@ mod tests {
         assert_eq!(block_on(store.load_signing()), Ok(None));
         block_on(store.save(3, 0.05)).expect("saved");
         block_on(store.save_signing(&[5; KEY_LEN], 123_456)).expect("saved");
-        let flash = store.into_flash();
+        let flash = store.into_flash().expect("the flash");
         let mut store = ParamStore::new(flash, 0..(PAGE * PAGES) as u32).expect("range");
         assert_eq!(
             block_on(store.load_signing()),
@@ -449,6 +514,85 @@ mod tests {
             let partial = (rng.next() % 256) as u8;
             run_with_cut(&run, budget, partial);
         }
+    }
+
+    /// Two payload slots of two pages each, after the parameters' pages.
+    const PAYLOAD: Range<u32> = (PAGE * PAGES) as u32..(PAGE * (PAGES + 4)) as u32;
+
+    fn with_payload(flash: CutFlash) -> ParamStore<CutFlash> {
+        ParamStore::new(flash, 0..(PAGE * PAGES) as u32)
+            .and_then(|s| s.with_payload(PAYLOAD))
+            .expect("ranges")
+    }
+
+    /// A description as the test writes them: `len` bytes of `fill` (and a check for it).
+    fn uniform(bytes: &[u8]) -> bool {
+        bytes.iter().all(|&b| b == bytes[0])
+    }
+
+    #[test]
+    fn the_payload_description_survives_a_restart_beside_the_parameters() {
+        let mut store = with_payload(CutFlash::sized(PAGE * (PAGES + 4)));
+        let mut into = [0u8; 2048];
+        assert_eq!(block_on(store.load_payload(&mut into, uniform)), Ok(None));
+        block_on(store.save(3, 0.05)).expect("saved");
+        block_on(store.save_payload(&[7; 1500])).expect("saved");
+        block_on(store.save_payload(&[9; 983])).expect("saved");
+        let flash = store.into_flash().expect("the flash");
+        let mut store = with_payload(flash);
+        assert_eq!(
+            block_on(store.load_payload(&mut into, uniform)),
+            Ok(Some(983))
+        );
+        assert_eq!(into[..983], [9; 983]);
+        let mut values = ParamValues::DEFAULT;
+        assert_eq!(block_on(store.load(&mut values)).restored, 1);
+        // Too large for a slot, or a range on the parameters: refused.
+        assert_eq!(
+            block_on(store.save_payload(&[1; 2 * PAGE])),
+            Err(StoreError::NoRoom)
+        );
+        let flash = store.into_flash().expect("the flash");
+        let overlapping = ParamStore::new(flash, 0..(PAGE * PAGES) as u32)
+            .and_then(|s| s.with_payload(0..(4 * PAGE) as u32));
+        assert_eq!(overlapping.err(), Some(StoreError::BadRange));
+    }
+
+    #[test]
+    fn a_power_cut_at_every_step_of_a_payload_save_keeps_the_old_or_the_new() {
+        let mut trials = 0;
+        for partial in [0u8, 128, 255] {
+            for budget in 0.. {
+                let mut store = with_payload(CutFlash::sized(PAGE * (PAGES + 4)));
+                block_on(store.save_payload(&[1; 1200])).expect("saved");
+                block_on(store.save_payload(&[2; 900])).expect("saved");
+                let mut flash = store.into_flash().expect("the flash");
+                flash.budget = Some(flash.ops + budget);
+                flash.partial = partial;
+                let mut store = with_payload(flash);
+                let finished = block_on(store.save_payload(&[3; 1000])).is_ok();
+                let mut flash = match store.into_flash() {
+                    Some(f) => f,
+                    None => break,
+                };
+                flash.reboot();
+                let mut store = with_payload(flash);
+                let mut into = [0u8; 2048];
+                let got = block_on(store.load_payload(&mut into, uniform)).expect("read");
+                let found = got.map(|n| (into[0], n));
+                if finished {
+                    assert_eq!(found, Some((3, 1000)), "budget {budget}");
+                    break;
+                }
+                assert!(
+                    found == Some((2, 900)) || found == Some((3, 1000)),
+                    "cut at step {budget} ({partial}/256): read {found:?}"
+                );
+                trials += 1;
+            }
+        }
+        std::eprintln!("payload save cut at each of {trials} steps");
+        assert!(trials > 20, "only {trials} steps");
     }
 
     #[test]

@@ -154,7 +154,9 @@ pub fn report(severity: Severity, args: core::fmt::Arguments<'_>) -> Outbound {
 /// it found.
 async fn open_params(flash: <Selected as Board>::ParamFlash) -> (ParamService, Option<Store>) {
     let mut values = ParamValues::DEFAULT;
-    let store = match ParamStore::new(flash, <Selected as Board>::PARAM_RANGE) {
+    let opened = ParamStore::new(flash, <Selected as Board>::PARAM_RANGE)
+        .and_then(|s| s.with_payload(<Selected as Board>::PAYLOAD_RANGE));
+    let store = match opened {
         Ok(mut store) => {
             let loaded = store.load(&mut values).await;
             let mut r = Report::default();
@@ -208,6 +210,7 @@ pub async fn receive(
     let ftp = FTP.init(Server::new());
     let (mut params, mut store) = open_params(param_flash).await;
     restore_signing(&mut store).await;
+    restore_payload(ftp, &mut store).await;
     let mut buf = [0u8; 64];
     loop {
         // A board's read error (a UART framing error) loses bytes the parser resyncs over.
@@ -219,6 +222,36 @@ pub async fn receive(
             let verdict = signing(|s| s.check(frame, Instant::now().as_micros()));
             let inbound = dispatch(frame, integrity);
             handle(inbound, verdict, ftp, &mut params, &mut store).await;
+        }
+    }
+}
+
+/// Loads the stored payload description, if one is stored and passes the checks, as if it had
+/// just been uploaded.
+async fn restore_payload(ftp: &mut Server<FILE_CAPACITY>, store: &mut Option<Store>) {
+    let Some(store) = store else {
+        return;
+    };
+    let valid = |bytes: &[u8]| decode_and_check(bytes).is_ok();
+    match store.load_payload(ftp.restore_buffer(), valid).await {
+        Ok(Some(len)) => {
+            ftp.restored(len);
+            OUTBOX
+                .send(report(
+                    Severity::Info,
+                    format_args!("payload description restored from storage"),
+                ))
+                .await;
+            check_payload(ftp.file(), &mut None).await;
+        }
+        Ok(None) => {}
+        Err(e) => {
+            OUTBOX
+                .send(report(
+                    Severity::Error,
+                    format_args!("payload description not read from storage: {e}"),
+                ))
+                .await;
         }
     }
 }
@@ -485,7 +518,7 @@ async fn handle(
                 })
                 .await;
             if let FileEvent::Written { .. } = event {
-                check_payload(ftp.file()).await;
+                check_payload(ftp.file(), store).await;
             }
         }
         Inbound::Invalid(e) => {
@@ -508,10 +541,11 @@ pub struct Received {
     pub scenario: Scenario,
 }
 
-/// Decodes and checks a received payload description with the host's checks; hands it to the
-/// job task to load (which then says it was accepted), or says which key is wrong.
-async fn check_payload(file: &[u8]) {
-    match decode_and_check(file) {
+/// Decodes and checks a received payload description with the host's checks; stores it (in
+/// `store`, when given) and hands it to the job task to load (which then says it was
+/// accepted), or says which key is wrong.
+async fn check_payload(file: &[u8], store: &mut Option<Store>) {
+    let accepted = match decode_and_check(file) {
         Ok((wire, scenario)) => {
             TO_LOAD
                 .send(Received {
@@ -519,6 +553,7 @@ async fn check_payload(file: &[u8]) {
                     scenario,
                 })
                 .await;
+            true
         }
         Err(e) => {
             OUTBOX
@@ -526,8 +561,22 @@ async fn check_payload(file: &[u8]) {
                     Severity::Error,
                     format_args!("payload refused: {e}"),
                 ))
-                .await
+                .await;
+            false
         }
+    };
+    // Stored after it went to the planner, so the description (1.4 KB) is not held across the
+    // store's wait.
+    if accepted
+        && let Some(store) = store
+        && let Err(e) = store.save_payload(file).await
+    {
+        OUTBOX
+            .send(report(
+                Severity::Error,
+                format_args!("payload description in use but not stored: {e}"),
+            ))
+            .await;
     }
 }
 

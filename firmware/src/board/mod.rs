@@ -67,6 +67,9 @@ pub trait Board: 'static {
     /// Whether [`Board::ParamFlash`] keeps its contents over a power cycle (reported to the
     /// ground at start).
     const PARAM_FLASH_PERSISTENT: bool;
+    /// Where the payload description is kept (two slots of whole erase pages, apart from
+    /// [`Board::PARAM_RANGE`]).
+    const PAYLOAD_RANGE: core::ops::Range<u32>;
 
     /// A free-running counter (wrapping) for measuring the control tick.
     fn cycle_count() -> u32;

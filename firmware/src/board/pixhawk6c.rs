@@ -142,6 +142,10 @@ impl Board for Pixhawk6c {
     /// (the rest stays free for the payload description).
     const PARAM_RANGE: core::ops::Range<u32> = 0..(8 * super::fram::PAGE) as u32;
     const PARAM_FLASH_PERSISTENT: bool = true;
+    /// The 2 KiB after the parameters' 8 KiB of FRAM: two 1 KiB slots (a description is at
+    /// most 983 bytes).
+    const PAYLOAD_RANGE: core::ops::Range<u32> =
+        (8 * super::fram::PAGE) as u32..(10 * super::fram::PAGE) as u32;
 
     fn cycle_count() -> u32 {
         cortex_m::peripheral::DWT::cycle_count()

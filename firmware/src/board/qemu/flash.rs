@@ -15,7 +15,9 @@ use embedded_storage_async::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, 
 /// Erase page, bytes.
 pub const PAGE: usize = 4096;
 /// Pages of the file.
-pub const PAGES: usize = 4;
+pub const PAGES: usize = PARAM_PAGES + 2;
+/// Pages of the parameters; the two after them hold the payload description.
+pub const PARAM_PAGES: usize = 4;
 /// Name of the host file, NUL-terminated for `SYS_OPEN`.
 const FILE_NAME: &[u8] = b"firmware-params.bin\0";
 /// Bytes moved per semihosting call.
