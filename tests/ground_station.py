@@ -20,7 +20,8 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
    refused with its COMMAND_ACK and a STATUSTEXT, bad values refused (PARAM_VALUE with the old
    value and a STATUSTEXT), MAVLink 2 signing set up (SETUP_SIGNING): the vehicle's frames
    signed, an unsigned start and an unsigned parameter write refused, one good value set
-   signed; then the power is cut (host-sim and QEMU killed).
+   signed; then the power is cut (host-sim and QEMU killed). MAVProxy (headless, when
+   installed; required with HIL_REQUIRED=1) then connects and fetches every parameter.
 2. restart (the plant signing its upload with the key): the key, the value and the payload
    description are still there (an unsigned write is refused; `payload description restored
    from storage`); the ground station starts the mission, a PARAM_SET in
@@ -34,6 +35,8 @@ Exit status 0 when everything holds; 2 with one line on stderr when pymavlink is
 import argparse
 import json
 import os
+import shutil
+import threading
 import socket
 import subprocess
 import sys
@@ -245,6 +248,44 @@ def signing_checks(v):
           "and parameter write refused")
 
 
+def mavproxy_check(args, port, parameters):
+    """MAVProxy, headless, connects to the vehicle and fetches every parameter by itself
+    (it reads no commands from stdin when --non-interactive, so this is what it is asked)."""
+    mavproxy = shutil.which("mavproxy.py")
+    if mavproxy is None:
+        if os.environ.get("HIL_REQUIRED") == "1":
+            raise Failure("MAVProxy is not installed (pip install MAVProxy) and HIL_REQUIRED=1")
+        print("MAVProxy is not installed (pip install MAVProxy): its check skipped")
+        return
+    plant = start_hil(args, port, ["--signing-key", SIGNING_KEY.hex()])
+    want = f"Received {parameters} parameters"
+    seen = []
+    with tempfile.TemporaryDirectory(prefix="mavproxy-") as logs:
+        proxy = subprocess.Popen(
+            [mavproxy, f"--master=udpin:127.0.0.1:{port}", "--source-system=255",
+             "--non-interactive", f"--state-basedir={logs}"],
+            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+            text=True)
+        stop = threading.Timer(60, proxy.kill)
+        stop.start()
+        try:
+            for line in proxy.stdout:
+                seen.append(line.rstrip())
+                if want in line:
+                    break
+        finally:
+            stop.cancel()
+            proxy.kill()
+            proxy.communicate()
+            plant.kill()
+            plant.communicate()
+    if not any("Detected vehicle 1:1" in line for line in seen):
+        raise Failure(f"MAVProxy did not see the vehicle: {seen[-5:]}")
+    if not any(want in line for line in seen):
+        raise Failure(f"MAVProxy did not fetch the {parameters} parameters: {seen[-5:]}")
+    print(f"MAVProxy (headless): vehicle 1:1 detected, {parameters} parameters fetched")
+
+
 def start_hil(args, port, extra):
     cmd = [args.host_sim, "hil", "--scenario", args.scenario, "--qemu", args.elf,
            "--storage", args.storage, "--gcs", f"udp:127.0.0.1:{port}", "--ground-start",
@@ -318,6 +359,7 @@ def first_run(args, port):
         if answer.param_value != CHECKS_VALUE:
             raise Failure(f"{CHECKS_PARAM} = {CHECKS_VALUE} answered {answer.param_value}")
         print(f"{CHECKS_PARAM} set to {CHECKS_VALUE}; cutting the power")
+        return len(params)
     finally:
         # The power cut: host-sim and, with it, QEMU die at once.
         plant.kill()
@@ -389,7 +431,8 @@ def main():
         args.storage = args.storage or tmp
         started = time.monotonic()
         try:
-            first_run(args, free_udp_port())
+            parameters = first_run(args, free_udp_port())
+            mavproxy_check(args, free_udp_port(), parameters)
             second_run(args, free_udp_port())
         except Failure as e:
             print(f"ground station: FAILED: {e}", file=sys.stderr)
