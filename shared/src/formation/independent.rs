@@ -122,15 +122,22 @@ impl Stated<'_> {
             && self.gaps(s).iter().all(|&g| g >= self.spacing - 1e-9)
     }
 
-    /// Best feasible `det(B B^T)` over `starts` random formations polished by COBYLA, and
-    /// the formation that has it.
-    fn best(&self, starts: usize, seed: u64) -> Option<(f64, Vec<f64>)> {
+    /// Each of `starts` random formations (random gaps: min spacing plus a uniform share of
+    /// the free rail) polished by COBYLA minimising `objective`, keeping order and `spacing`
+    /// and, with `balanced`, the balance within eps/2; `each` gets every polished formation.
+    fn polish_random_starts(
+        &self,
+        starts: usize,
+        seed: u64,
+        xtol: f64,
+        objective: impl Fn(&[f64], &mut ()) -> f64,
+        balanced: bool,
+        mut each: impl FnMut(Vec<f64>),
+    ) {
         let n = self.spin.len();
         let length = self.rail.length();
         let room = length - n as f64 * self.spacing;
         let mut rng = SplitMix(seed);
-        let mut best: Option<(f64, Vec<f64>)> = None;
-        let objective = |s: &[f64], _: &mut ()| -1e3 * self.det_and_balance(s).0;
         let mut constraints: Vec<Box<dyn Func<()> + '_>> = Vec::new();
         for j in 0..n {
             constraints.push(Box::new(move |s: &[f64], _: &mut ()| {
@@ -142,16 +149,17 @@ impl Stated<'_> {
                 gap - self.spacing
             }));
         }
-        for axis in 0..2 {
-            for sign in [1.0, -1.0] {
-                constraints.push(Box::new(move |s: &[f64], _: &mut ()| {
-                    0.5 * self.eps - sign * self.det_and_balance(s).1[axis]
-                }));
+        if balanced {
+            for axis in 0..2 {
+                for sign in [1.0, -1.0] {
+                    constraints.push(Box::new(move |s: &[f64], _: &mut ()| {
+                        0.5 * self.eps - sign * self.det_and_balance(s).1[axis]
+                    }));
+                }
             }
         }
         let bounds = vec![(-length, 3.0 * length); n];
         for _ in 0..starts {
-            // Random gaps: min spacing plus a uniform share of the free rail.
             let mut share: Vec<f64> = (0..n).map(|_| -rng.uniform().ln()).collect();
             let total: f64 = share.iter().sum();
             share.iter_mut().for_each(|w| *w *= 0.999 * room / total);
@@ -160,11 +168,11 @@ impl Stated<'_> {
                 s.push(s[j - 1] + self.spacing + share[j - 1]);
             }
             let stop = StopTols {
-                xtol_abs: vec![1e-8; n],
+                xtol_abs: vec![xtol; n],
                 ..StopTols::default()
             };
             let polished = match minimize(
-                objective,
+                &objective,
                 &s,
                 &bounds,
                 &constraints,
@@ -175,13 +183,23 @@ impl Stated<'_> {
             ) {
                 Ok((_, x, _)) | Err((_, x, _)) => x,
             };
+            each(polished);
+        }
+    }
+
+    /// Best feasible `det(B B^T)` over `starts` random formations polished by COBYLA, and
+    /// the formation that has it.
+    fn best(&self, starts: usize, seed: u64) -> Option<(f64, Vec<f64>)> {
+        let mut best: Option<(f64, Vec<f64>)> = None;
+        let objective = |s: &[f64], _: &mut ()| -1e3 * self.det_and_balance(s).0;
+        self.polish_random_starts(starts, seed, 1e-8, objective, true, |polished| {
             if self.feasible(&polished) {
                 let det = self.det_and_balance(&polished).0;
                 if best.as_ref().is_none_or(|(b, _)| det > *b) {
                     best = Some((det, polished));
                 }
             }
-        }
+        });
         best
     }
 }
@@ -190,51 +208,12 @@ impl Stated<'_> {
     /// Smallest `|sum b|` over `starts` random formations polished by COBYLA towards balance,
     /// keeping order and `spacing` (the eps and det play no part).
     fn closest(&self, starts: usize, seed: u64) -> f64 {
-        let n = self.spin.len();
-        let length = self.rail.length();
-        let room = length - n as f64 * self.spacing;
-        let mut rng = SplitMix(seed);
         let mut best = f64::INFINITY;
         let objective = |s: &[f64], _: &mut ()| {
             let h = self.det_and_balance(s).1;
             1e3 * (h[0] * h[0] + h[1] * h[1])
         };
-        let mut constraints: Vec<Box<dyn Func<()> + '_>> = Vec::new();
-        for j in 0..n {
-            constraints.push(Box::new(move |s: &[f64], _: &mut ()| {
-                let gap = if j + 1 < n {
-                    s[j + 1] - s[j]
-                } else {
-                    s[0] + length - s[n - 1]
-                };
-                gap - self.spacing
-            }));
-        }
-        let bounds = vec![(-length, 3.0 * length); n];
-        for _ in 0..starts {
-            let mut share: Vec<f64> = (0..n).map(|_| -rng.uniform().ln()).collect();
-            let total: f64 = share.iter().sum();
-            share.iter_mut().for_each(|w| *w *= 0.999 * room / total);
-            let mut s = vec![rng.uniform() * length];
-            for j in 1..n {
-                s.push(s[j - 1] + self.spacing + share[j - 1]);
-            }
-            let stop = StopTols {
-                xtol_abs: vec![1e-9; n],
-                ..StopTols::default()
-            };
-            let polished = match minimize(
-                objective,
-                &s,
-                &bounds,
-                &constraints,
-                (),
-                1500,
-                RhoBeg::All(0.1),
-                Some(stop),
-            ) {
-                Ok((_, x, _)) | Err((_, x, _)) => x,
-            };
+        self.polish_random_starts(starts, seed, 1e-9, objective, false, |polished| {
             if self
                 .gaps(&polished)
                 .iter()
@@ -243,7 +222,7 @@ impl Stated<'_> {
                 let h = self.det_and_balance(&polished).1;
                 best = best.min(h[0].hypot(h[1]));
             }
-        }
+        });
         best
     }
 }
