@@ -315,6 +315,55 @@ fn a_delivered_flight_exits_zero() {
 }
 
 #[test]
+fn a_comparison_reports_both_flights_with_the_command_line_names() {
+    let dir = temp_dir("compare");
+    let rect = scenario_path("rect-sim2");
+    let args = [
+        "fly",
+        "--scenario",
+        path_str(&rect),
+        "--formation",
+        "optimized",
+        "--output",
+        path_str(&dir),
+        "--compare",
+    ];
+    let (code, stdout, stderr) = run(&args);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        stdout.contains("optimised formation, equal-split mixer: delivered"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("even formation, equal-split mixer:"),
+        "{stdout}"
+    );
+    for file in [
+        "rect-sim2-optimized-equal-split.csv",
+        "rect-sim2-even-equal-split.csv",
+        "rect-sim2-height-comparison.png",
+    ] {
+        assert!(stdout.contains(file), "{file} not reported: {stdout}");
+        assert!(dir.join(file).is_file(), "{file} not written");
+    }
+    assert!(
+        !stdout.contains("EqualSplit") && !stdout.contains("Optimized"),
+        "{stdout}"
+    );
+    let csv =
+        std::fs::read_to_string(dir.join("rect-sim2-optimized-equal-split.csv")).expect("csv");
+    assert!(
+        csv.starts_with("t_s,x_m,y_m,z_down_m,ref_x_m,ref_y_m,ref_z_down_m,"),
+        "{csv:.100}"
+    );
+    let (_, json, _) = run(&[&args[..], &["--json"]].concat());
+    let v: serde_json::Value = serde_json::from_str(&json).expect("JSON");
+    assert_eq!(v["formation"], "optimized", "{json}");
+    assert_eq!(v["compared"]["formation"], "even", "{json}");
+    assert!(v["compared"]["max_tilt_deg"].is_number(), "{json}");
+}
+
+#[test]
 fn the_readme_lists_the_parameters_the_firmware_serves() {
     let (code, table, stderr) = run(&["params"]);
     assert_eq!(code, Some(0), "{stderr}");

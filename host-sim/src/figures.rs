@@ -27,8 +27,13 @@ fn draw_error<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("drawing failed: {e:?}")
 }
 
+/// Room kept free above the curves for the legend, which sits in the top right corner, as a
+/// fraction of the curves' largest value: no curve passes under it.
+const LEGEND_HEADROOM: f32 = 0.5;
+
 /// Height above ground over time for each `(label, flight)`, with the first flight's
-/// reference dashed; written to `path`.
+/// reference dashed (drawn down to the ground: after the plan the controller's setpoint sits
+/// below the ground, which the CSV keeps); written to `path`.
 pub fn height(path: &Path, title: &str, flights: &[(&str, &FlightOutcome)]) -> Result<PathBuf> {
     let Some(&(_, first)) = flights.first() else {
         bail!("no flight to draw");
@@ -48,7 +53,7 @@ pub fn height(path: &Path, title: &str, flights: &[(&str, &FlightOutcome)]) -> R
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(55)
-        .build_cartesian_2d(0f32..t_end, -0.05f32..top * 1.1)
+        .build_cartesian_2d(0f32..t_end, -0.05f32..top * (1.1 + LEGEND_HEADROOM))
         .map_err(draw_error)?;
     chart
         .configure_mesh()
@@ -58,13 +63,16 @@ pub fn height(path: &Path, title: &str, flights: &[(&str, &FlightOutcome)]) -> R
         .map_err(draw_error)?;
     chart
         .draw_series(DashedLineSeries::new(
-            first.samples.iter().map(|s| (s.t, -s.reference.z)),
+            first
+                .samples
+                .iter()
+                .map(|s| (s.t, (-s.reference.z).max(0.0))),
             6,
             4,
             BLACK.stroke_width(1),
         ))
         .map_err(draw_error)?
-        .label("reference")
+        .label("reference (plan)")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
     for (i, (label, flight)) in flights.iter().enumerate() {
         let colour = COLOURS[i % COLOURS.len()];
@@ -81,6 +89,7 @@ pub fn height(path: &Path, title: &str, flights: &[(&str, &FlightOutcome)]) -> R
     }
     chart
         .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .draw()
@@ -104,7 +113,10 @@ pub fn attitude(path: &Path, title: &str, flight: &FlightOutcome) -> Result<Path
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(55)
-        .build_cartesian_2d(0f32..t_end, -peak * 1.1..peak * 1.1)
+        .build_cartesian_2d(
+            0f32..t_end,
+            -peak * 1.1..peak * (1.1 + 2.0 * LEGEND_HEADROOM),
+        )
         .map_err(draw_error)?;
     chart
         .configure_mesh()
@@ -131,6 +143,7 @@ pub fn attitude(path: &Path, title: &str, flight: &FlightOutcome) -> Result<Path
     }
     chart
         .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .draw()

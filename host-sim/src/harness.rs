@@ -39,6 +39,40 @@ pub enum FormationChoice {
     Optimized,
 }
 
+impl FormationChoice {
+    /// The name on the command line (`even`, `optimized`), also used in file names.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Even => "even",
+            Self::Optimized => "optimized",
+        }
+    }
+
+    /// The name for people: `even formation`, `optimised formation`.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Even => "even formation",
+            Self::Optimized => "optimised formation",
+        }
+    }
+
+    /// The other one.
+    pub fn other(self) -> Self {
+        match self {
+            Self::Even => Self::Optimized,
+            Self::Optimized => Self::Even,
+        }
+    }
+}
+
+/// The mixer's name as on the command line: `equal-split`, `allocation`.
+pub fn mixer_name(mixer: MixerKind) -> &'static str {
+    match mixer {
+        MixerKind::EqualSplit => "equal-split",
+        MixerKind::Allocation => "allocation",
+    }
+}
+
 /// One flight to simulate.
 #[derive(Clone, Copy, Debug)]
 pub struct FlightSetup {

@@ -86,9 +86,12 @@ pub fn file_stem(name: &str) -> String {
 }
 
 /// Writes `<dir>/<stem>.csv`, `<stem>-height.png` and `<stem>-attitude.png` with
-/// `stem = <name>-<formation>-<mixer>` (`name` through [`file_stem`]), and returns the files
-/// written. A figure that cannot be
-/// drawn (no font) is reported on stderr; the CSV always is written.
+/// `stem = <name>-<formation>-<mixer>` (`name` through [`file_stem`], formation and mixer as
+/// on the command line), and returns the files written. Positions in the CSV are world NED
+/// from the take-off point: `z_down_m` and `ref_z_down_m` are positive downwards (the height
+/// is minus them; once the plan is over the setpoint sits 0.3 m below the ground, which holds
+/// the payload down until the rotors stop). A figure that cannot be drawn (no font) is
+/// reported on stderr; the CSV always is written.
 pub fn write_flight(
     dir: &Path,
     name: &str,
@@ -97,18 +100,17 @@ pub fn write_flight(
 ) -> Result<Vec<PathBuf>> {
     fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let stem = format!(
-        "{}-{:?}-{:?}",
+        "{}-{}-{}",
         file_stem(name),
-        setup.formation,
-        setup.mixer
-    )
-    .to_lowercase();
+        setup.formation.name(),
+        crate::harness::mixer_name(setup.mixer)
+    );
     let csv = dir.join(format!("{stem}.csv"));
     let mut f =
         fs::File::create(&csv).with_context(|| format!("cannot write {}", csv.display()))?;
     writeln!(
         f,
-        "t_s,x_m,y_m,z_m,ref_x_m,ref_y_m,ref_z_m,roll_deg,pitch_deg,yaw_deg,max_thrust_fraction,collective_n,saturated"
+        "t_s,x_m,y_m,z_down_m,ref_x_m,ref_y_m,ref_z_down_m,roll_deg,pitch_deg,yaw_deg,max_thrust_fraction,collective_n,saturated"
     )?;
     for s in &outcome.samples {
         writeln!(
@@ -130,7 +132,11 @@ pub fn write_flight(
         )?;
     }
     let mut written = vec![csv];
-    let label = format!("{:?} formation, {:?} mixer", setup.formation, setup.mixer);
+    let label = format!(
+        "{}, {} mixer",
+        setup.formation.label(),
+        crate::harness::mixer_name(setup.mixer)
+    );
     let height = crate::figures::height(
         &dir.join(format!("{stem}-height.png")),
         &format!("{name}: height, {label}"),

@@ -12,7 +12,7 @@ use shared::control::allocation::MixerKind;
 use shared::geometry::Vec2;
 
 use crate::cli::{Common, Outcome, check_map_error, check_mass, pair, show};
-use crate::harness::{self, FlightOutcome, FlightSetup, FormationChoice};
+use crate::harness::{self, FlightOutcome, FlightSetup, FormationChoice, mixer_name};
 use crate::report::{self, print_json};
 use crate::say;
 use crate::scenario_file;
@@ -81,19 +81,48 @@ pub struct FlyArgs {
     compare: bool,
 }
 
-/// The mixer's name as on the command line.
-fn mixer_name(mixer: MixerKind) -> &'static str {
-    match mixer {
-        MixerKind::EqualSplit => "equal-split",
-        MixerKind::Allocation => "allocation",
-    }
-}
-
 /// How a flight came out, for the exit code: dropped, delivered (landed within
 /// [`DELIVERY_RADIUS_M`] of the landing point), or not.
 pub fn outcome_of(flight: &FlightOutcome) -> Outcome {
     let delivered = flight.landed && flight.final_position_error_m < DELIVERY_RADIUS_M;
     Outcome::of_run(flight.dropped, false, delivered)
+}
+
+/// One flight's keys of the JSON report.
+fn flight_json(setup: &FlightSetup, outcome: &FlightOutcome) -> serde_json::Value {
+    json!({
+        "formation": setup.formation.name(),
+        "mixer": mixer_name(setup.mixer),
+        "dropped": outcome.dropped,
+        "delivered": outcome_of(outcome) == Outcome::Done,
+        "max_tilt_deg": outcome.max_tilt_deg,
+        "rms_tracking_error_m": outcome.rms_tracking_error_m,
+        "final_position_error_m": outcome.final_position_error_m,
+        "max_thrust_fraction": outcome.max_thrust_fraction,
+        "landed": outcome.landed,
+        "max_height_m": outcome.max_height_m,
+        "positions": outcome.positions,
+        "simulated_s": outcome.simulated_s,
+    })
+}
+
+/// One flight in a line for people.
+fn flight_line(setup: &FlightSetup, outcome: &FlightOutcome) -> String {
+    format!(
+        "{}, {} mixer: {}; max tilt {:.1} deg, rms tracking {:.3} m, final error {:.3} m, max thrust {:.0} %",
+        setup.formation.label(),
+        mixer_name(setup.mixer),
+        match outcome_of(outcome) {
+            Outcome::Dropped => "DROPPED",
+            Outcome::Done => "delivered",
+            _ if outcome.landed => "NOT delivered (landed away from the target)",
+            _ => "NOT delivered (did not land)",
+        },
+        outcome.max_tilt_deg,
+        outcome.rms_tracking_error_m,
+        outcome.final_position_error_m,
+        100.0 * outcome.max_thrust_fraction
+    )
 }
 
 /// Runs the command.
@@ -144,74 +173,54 @@ pub fn run(args: &FlyArgs) -> Result<Outcome> {
     let outcome = harness::fly(s, &setup)?;
     let wall_s = started.elapsed().as_secs_f64();
     let mut written = Vec::new();
+    let mut other = None;
     if let Some(dir) = &args.output {
         written = report::write_flight(dir, &loaded.name, &setup, &outcome)?;
         if args.compare {
-            let other_choice = match setup.formation {
-                FormationChoice::Even => FormationChoice::Optimized,
-                FormationChoice::Optimized => FormationChoice::Even,
+            let other_setup = FlightSetup {
+                formation: setup.formation.other(),
+                ..setup
             };
-            let other = harness::fly(
-                s,
-                &FlightSetup {
-                    formation: other_choice,
-                    ..setup
-                },
-            )?;
-            let label = |c: FormationChoice| match c {
-                FormationChoice::Even => "even formation",
-                FormationChoice::Optimized => "optimised formation",
-            };
+            let flight = harness::fly(s, &other_setup)?;
+            written.extend(report::write_flight(
+                dir,
+                &loaded.name,
+                &other_setup,
+                &flight,
+            )?);
             let flights = [
-                (label(setup.formation), &outcome),
-                (label(other_choice), &other),
+                (setup.formation.label(), &outcome),
+                (other_setup.formation.label(), &flight),
             ];
             match report::write_comparison(dir, &loaded.name, &flights) {
                 Ok(path) => written.push(path),
                 Err(e) => report::warn(&format!("figure skipped: {e:#}")),
             }
+            other = Some((other_setup, flight));
         }
     }
     let realtime = f64::from(outcome.simulated_s) / wall_s.max(1e-9);
     if args.common.json {
-        print_json(json!({
-            "scenario": loaded.name,
-            "formation": format!("{:?}", setup.formation).to_lowercase(),
-            "mixer": mixer_name(setup.mixer),
-            "dropped": outcome.dropped,
-            "delivered": outcome_of(&outcome) == Outcome::Done,
-            "max_tilt_deg": outcome.max_tilt_deg,
-            "rms_tracking_error_m": outcome.rms_tracking_error_m,
-            "final_position_error_m": outcome.final_position_error_m,
-            "max_thrust_fraction": outcome.max_thrust_fraction,
-            "landed": outcome.landed,
-            "max_height_m": outcome.max_height_m,
-            "positions": outcome.positions,
-            "simulated_s": outcome.simulated_s,
-            "wall_s": wall_s,
-            "realtime_factor": realtime,
-            "files": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-        }))?;
+        let mut report = flight_json(&setup, &outcome);
+        report["scenario"] = json!(loaded.name);
+        report["wall_s"] = json!(wall_s);
+        report["realtime_factor"] = json!(realtime);
+        report["files"] = json!(
+            written
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+        );
+        if let Some((other_setup, flight)) = &other {
+            report["compared"] = flight_json(other_setup, flight);
+        }
+        print_json(report)?;
     } else {
-        say!(
-            "{}: {} formation, {} mixer: {}; max tilt {:.1} deg, rms tracking {:.3} m, final error {:.3} m, max thrust {:.0} %",
-            loaded.name,
-            match setup.formation {
-                FormationChoice::Even => "even",
-                FormationChoice::Optimized => "optimised",
-            },
-            mixer_name(setup.mixer),
-            match outcome_of(&outcome) {
-                Outcome::Dropped => "DROPPED",
-                Outcome::Done => "delivered",
-                _ if outcome.landed => "NOT delivered (landed away from the target)",
-                _ => "NOT delivered (did not land)",
-            },
-            outcome.max_tilt_deg,
-            outcome.rms_tracking_error_m,
-            outcome.final_position_error_m,
-            100.0 * outcome.max_thrust_fraction
-        )?;
+        say!("{}:", loaded.name)?;
+        say!("  {}", flight_line(&setup, &outcome))?;
+        if let Some((other_setup, flight)) = &other {
+            say!("  {}", flight_line(other_setup, flight))?;
+        }
         say!(
             "  {:.1} s simulated in {:.2} s ({:.0}x real time)",
             outcome.simulated_s,
