@@ -23,8 +23,8 @@ const COLOURS: [RGBColor; 4] = [
 /// Picks one angle out of a sample.
 type AngleOf = fn(&crate::harness::Sample) -> f32;
 
-fn draw_error<E: std::fmt::Debug>(e: E) -> anyhow::Error {
-    anyhow!("drawing failed: {e:?}")
+fn draw_error<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow!("drawing failed: {e}")
 }
 
 /// Room kept free above the curves for the legend, which sits in the top right corner, as a

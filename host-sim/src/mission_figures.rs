@@ -14,8 +14,8 @@ use plotters::prelude::*;
 use crate::mission_run::{FlightSample, MissionOutcome};
 use crate::report::file_stem;
 
-fn draw_error<E: std::fmt::Debug>(e: E) -> anyhow::Error {
-    anyhow!("drawing failed: {e:?}")
+fn draw_error<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow!("drawing failed: {e}")
 }
 
 /// A colour per robot (up to 16, then repeating).

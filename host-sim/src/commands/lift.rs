@@ -77,13 +77,14 @@ pub fn run(args: &LiftArgs) -> Result<Outcome> {
         }))?;
     } else {
         say!(
-            "pair {} (candidates {:?}): lift-off at {thrust:.3} N per robot ({} at max {} N){}",
+            "pair {} (candidates at {} m along the rail): lift-off at {thrust:.3} N per robot ({} at max {} N){}",
             args.pair_index,
             group
                 .candidates
                 .iter()
-                .map(|&c| s.payload.candidates[c])
-                .collect::<Vec<_>>(),
+                .map(|&c| format!("{:.3}", s.payload.candidates[c]))
+                .collect::<Vec<_>>()
+                .join(" and "),
             if feasible { "feasible" } else { "NOT feasible" },
             s.robots.max_thrust,
             if group.reachable {
