@@ -20,7 +20,6 @@
 //! global minimum of `|sum r|` over every assignment, a convex problem on each).
 
 use crate::numbers::Num;
-use heapless::Vec;
 
 use crate::formation::assignment::{Assignments, Layout, spin_period};
 use crate::formation::balance::project_to_balance;
@@ -42,8 +41,7 @@ const PRUNE_MARGIN: f32 = 1e-4;
 /// rails needed at most 4.
 const MAX_CLIMBS: u32 = 4;
 
-/// Arc lengths of a formation, in rail order.
-pub type Positions = Vec<f32, MAX_ROBOTS>;
+pub use crate::rail::moves::Positions;
 
 /// What the formation must satisfy.
 #[derive(Clone, Copy, Debug)]
