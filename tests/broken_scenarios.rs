@@ -1,5 +1,5 @@
 //! The corpus of broken scenario files (`tests/broken-scenarios/`, one defect each) run through
-//! every command: SPEC.md section 5 wants bad input to end with a one-line error naming the
+//! every command (docs/formats.md#scenario-files): bad input ends with a one-line error naming the
 //! key and a non-zero exit code, never a panic; nothing may hang on it either.
 //!
 //! Each file's second line says which key its error must name: `# expect: robots.spin`.

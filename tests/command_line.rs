@@ -1,4 +1,4 @@
-//! The command line's own safety (SPEC.md section 5; README "Exit codes"): flag values are
+//! The command line's own safety (docs/formats.md#command-line; README "Exit codes"): flag values are
 //! checked and named, negative numbers parse, a scenario cannot make the tool write outside
 //! `--output`, an endless or huge file is refused, a closed stdout ends the run quietly, and
 //! the exit code tells how a mission or flight ended.

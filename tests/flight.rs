@@ -1,5 +1,5 @@
-//! The paper's flight comparison in the physics plant (SPEC.md section 4, "Flight
-//! simulation"): on rect-sim1, rect-sim2, L-sim1 and L-sim2, with the paper's mixer, the
+//! The paper's flight comparison in the physics plant (docs/system.md#paper-cases,
+//! flight): on rect-sim1, rect-sim2, L-sim1 and L-sim2, with the paper's mixer, the
 //! optimised formation takes off and tracks the target with small attitude excursions; the
 //! even formation does much worse (the paper saw it fail).
 

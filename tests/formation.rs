@@ -1,4 +1,4 @@
-//! Formation decision through the command line (SPEC.md section 5, `formation`): the JSON keys,
+//! Formation decision through the command line (docs/formats.md#formation): the JSON keys,
 //! the constraints on every paper case, the comparison with the even formation, and errors.
 
 mod common;

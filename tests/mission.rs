@@ -1,4 +1,4 @@
-//! The autonomous mission end to end in the physics plant (SPEC.md section 2; section 5,
+//! The autonomous mission end to end in the physics plant (docs/system.md#pipeline;
 //! `mission`): estimation by real lift-off detection, formation decision, rearrangement,
 //! flight, delivery; and the refusals that keep a real vehicle on the ground.
 

@@ -1,5 +1,5 @@
-//! Scenario tests, run by `cargo test -p host-sim`: the paper's scenario files (copied from
-//! SPEC.md's set into `tests/scenarios/`) load and pass every check. Broken files are in
+//! Scenario tests, run by `cargo test -p host-sim`: the paper's scenario files (the cases of
+//! docs/system.md#paper-cases, in `tests/scenarios/`) load and pass every check. Broken files are in
 //! `tests/broken-scenarios/` with their own test (`broken_scenarios.rs`).
 
 mod common;

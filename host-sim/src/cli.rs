@@ -1,4 +1,4 @@
-//! The `host-sim` command line (SPEC.md section 5, "The simulator's command line").
+//! The `host-sim` command line (docs/formats.md#command-line).
 //!
 //! Every command takes `--scenario FILE` and `--json`; with `--json`, stdout is one JSON object
 //! and nothing else. Negative numbers work as `--mass -3`, `--com -0.2,0.1` and
@@ -49,7 +49,7 @@ pub enum Command {
 /// Options every command takes.
 #[derive(Debug, Args)]
 pub struct Common {
-    /// Scenario file (TOML, SPEC.md section 5; at most 1 MiB).
+    /// Scenario file (TOML, see docs/formats.md; at most 1 MiB).
     #[arg(long, value_name = "FILE")]
     pub scenario: PathBuf,
     /// Print one JSON object on stdout and nothing else.

@@ -1,4 +1,4 @@
-//! Figures like the paper's (SPEC.md section 4, "Flight simulation"): height over time for
+//! Figures like the paper's (docs/system.md#paper-cases): height over time for
 //! several flights against their reference, and roll and pitch over time, as PNG files drawn
 //! with plotters.
 //!

@@ -1,5 +1,5 @@
-//! Runs `shared`'s flight software against the physics plant at the firmware's rates (SPEC.md
-//! section 2, step 4; section 5, `fly`): IMU and control at 400 Hz, physics at 2 kHz,
+//! Runs `shared`'s flight software against the physics plant at the firmware's rates
+//! (docs/system.md#flight; docs/formats.md#fly): IMU and control at 400 Hz, physics at 2 kHz,
 //! motion capture at 100 Hz with latency.
 //!
 //! The vehicle takes off from the ground, follows the reference trajectory to the target,

@@ -1,4 +1,4 @@
-//! `host-sim`: the simulator's command line (SPEC.md section 5).
+//! `host-sim`: the simulator's command line (docs/formats.md#command-line).
 //!
 //! Errors print as one line on stderr; nothing panics on bad input. The exit code says how the
 //! run ended (README "Exit codes"): 0 done, 1 bad input, 2 usage, 3 mission aborted, 4 not

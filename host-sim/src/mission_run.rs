@@ -1,4 +1,4 @@
-//! Runs a mission against the physics plant (SPEC.md section 5, `mission` and `hil`): the
+//! Runs a mission against the physics plant (docs/system.md#pipeline; `mission`, `hil`): the
 //! estimation lifts are real lift-offs of the simulated payload read from the simulated IMU,
 //! the robots move along the rail as commanded, and the flight is the plant's.
 //!

@@ -1,4 +1,4 @@
-//! Monte Carlo of the estimation alone (SPEC.md section 4, "Estimation simulation"; section 5,
+//! Monte Carlo of the estimation alone (docs/system.md#paper-cases;
 //! `estimate`): random truths, readings from the lift-off model plus white noise (censored at
 //! the robots' maximum thrust), and `shared`'s estimator choosing the lifts.
 //!

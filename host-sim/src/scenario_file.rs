@@ -1,4 +1,4 @@
-//! Reading scenario files (SPEC.md section 5, "Scenario files").
+//! Reading scenario files (docs/formats.md#scenario-files).
 //!
 //! The TOML is parsed here, on the host; every rule a value must follow is checked by
 //! `shared::scenario`, so the simulator and the firmware accept the same scenarios. Any

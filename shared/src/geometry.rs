@@ -1,8 +1,8 @@
 //! Plane geometry of the payload: the footprint polygon and its convex hull, and the closed
 //! rail with its arc-length parametrisation.
 //!
-//! SPEC.md section 5 ("Scenario files": `footprint`, `rail`, `candidates` as arc lengths) and
-//! section 3 ("Lift-off thrust": the ground support is the convex hull `H` of the footprint).
+//! docs/formats.md#scenario-keys (`footprint`, `rail`, `candidates` as arc lengths) and
+//! docs/models.md#lift-off-thrust (the ground support is the convex hull `H` of the footprint).
 //! Coordinates are the payload's body frame in metres.
 
 use core::ops::{Add, Mul, Neg, Sub};

@@ -1,5 +1,5 @@
 //! The autonomy of a payload carried by `n` single-rotor robots riding a common rail around it
-//! (SPEC.md, sections 2 and 3).
+//! (docs/system.md; the models: docs/models.md).
 //!
 //! Everything here is plain synchronous code: no allocation, no executor, no time source,
 //! fixed capacities and `f32`. The flight controller (`firmware`) and the simulator

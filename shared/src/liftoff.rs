@@ -1,4 +1,4 @@
-//! Lift-off detection during an estimation lift (SPEC.md section 2, step 1.3): the pair's
+//! Lift-off detection during an estimation lift (docs/models.md#lift-off-detector): the pair's
 //! thrust ramps slowly while the other robots hold their own weight; the IMU's attitude shows
 //! when the payload starts to tilt, and the thrust at that moment is the measurement.
 //!

@@ -1,4 +1,4 @@
-//! The paper's simulation cases built in (SPEC.md section 4): `rect-sim1` and `L-sim1` as
+//! The paper's simulation cases built in (docs/system.md#paper-cases): `rect-sim1` and `L-sim1` as
 //! [`ScenarioInput`]s, the same values as the files in `tests/scenarios/` (a test checks they
 //! agree). For unit tests and for target-side benchmarks that cannot read files, with a
 //! hovering flight of the rectangle for the 400 Hz benchmarks.

@@ -1,7 +1,7 @@
 //! Plain data the rest of the crate takes: one payload, its rail, the robots, the estimation
 //! set-up and (for simulation) the truth, with the checks that make them safe to use.
 //!
-//! This is the data of a scenario file (SPEC.md section 5, "Scenario files"); the TOML parsing
+//! This is the data of a scenario file (docs/formats.md#scenario-files); the TOML parsing
 //! lives on the host, which hands the values over as a [`ScenarioInput`]. Every rule that a
 //! value must follow is checked here, once, so that the firmware (which may receive the same
 //! values over telemetry) and the simulator reject exactly the same inputs. Each error names
@@ -73,7 +73,7 @@ pub const MAX_DISTURBANCE_TORQUE: f32 = 50.0;
 const HULL_TOLERANCE: f32 = 1e-6;
 
 /// Guard added before flooring `(max - min) / resolution` to count grid points.
-/// SPEC.md writes `1e-9` for double precision; the values here are `f32`, whose rounding of a
+/// The SPEC wrote `1e-9` for double precision; the values here are `f32`, whose rounding of a
 /// ratio such as `0.52 / 0.065` is about `1e-6`, so the guard is widened accordingly.
 const AXIS_COUNT_GUARD: f32 = 1e-4;
 
@@ -137,7 +137,8 @@ pub struct EstimationSetup {
 }
 
 impl EstimationSetup {
-    /// Number of grid points along `axis`: `floor((max - min) / res) + 1` (SPEC.md section 5).
+    /// Number of grid points along `axis`: `floor((max - min) / res + guard) + 1`
+    /// (docs/formats.md#scenario-keys).
     pub fn axis_len(&self, axis: usize) -> usize {
         let span = (self.grid_max[axis] - self.grid_min[axis]) / self.resolution[axis];
         crate::math::floor(span + AXIS_COUNT_GUARD) as usize + 1
@@ -1100,7 +1101,7 @@ mod tests {
         assert_eq!(
             [0, 1, 2].map(|a| s.estimation.axis_len(a)),
             [11, 4, 4],
-            "SPEC grid axis rule"
+            "the grid axis rule"
         );
     }
 

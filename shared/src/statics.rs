@@ -1,5 +1,6 @@
 //! Lift-off thrust: the thrust per robot at which a group of robots lifting together makes the
-//! payload pivot off the ground (SPEC.md section 3, "Lift-off thrust").
+//! payload pivot off the ground (docs/models.md#lift-off-thrust; Oishi & Jimbo (2025), eq. (1);
+//! the equilibrium of Corah et al. (2017) in closed form).
 //!
 //! With `k` robots at rotor points `p_j` each applying thrust `T`, robot mass `m_r`, payload mass
 //! `M` at COM `c`, and every other robot holding its own weight, the ground reaction's centre of

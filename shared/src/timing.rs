@@ -1,7 +1,7 @@
 //! Health of a fixed-rate loop: the measured period of each tick, its jitter, and overruns.
 //!
-//! The flight controller runs its control step at [`CONTROL_RATE_HZ`] (SPEC.md section 2,
-//! step 4: the cascaded PID); the simulator runs `shared` at the same rate. Each tick the loop
+//! The flight controller runs its control step at [`CONTROL_RATE_HZ`]
+//! (docs/models.md#flight-cascade); the simulator runs `shared` at the same rate. Each tick the loop
 //! reports the time it woke; [`LoopMonitor::step`] returns the `dt` the controllers should
 //! integrate with, clamped so that one late wake-up cannot kick an integrator, and keeps
 //! statistics that the firmware logs once a second.

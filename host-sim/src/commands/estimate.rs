@@ -1,5 +1,5 @@
 //! `host-sim estimate --trials N --seed S [--truth X,Y,M]`: Monte Carlo of the estimation
-//! (SPEC.md section 5), with the optional thrust-scale bias term and a simulated map error.
+//! (docs/formats.md#estimate), with the optional thrust-scale bias term and a simulated map error.
 
 use anyhow::{Result, anyhow, bail};
 use clap::Args;

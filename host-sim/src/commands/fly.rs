@@ -1,5 +1,5 @@
 //! `host-sim fly --formation even|optimized [--mixer equal-split|allocation] [--com X,Y]
-//! [--mass M]`: one closed-loop flight in the physics plant (SPEC.md section 5), with the
+//! [--mass M]`: one closed-loop flight in the physics plant (docs/formats.md#fly), with the
 //! time series as CSV and figures when `--output DIR` is given.
 
 use std::path::PathBuf;

@@ -1,4 +1,4 @@
-//! `host-sim hil`: the mission with the firmware in the loop (SPEC.md section 5; issue 11,
+//! `host-sim hil`: the mission with the firmware in the loop (docs/formats.md#hil; issue 11,
 //! section 3): the plant side of PX4's simulator MAVLink API, in lockstep. The firmware runs
 //! under QEMU (`--qemu ELF`, started here), on a board over a serial device (`--serial DEV`),
 //! or behind any TCP socket (`--connect tcp:HOST:PORT`).
@@ -32,7 +32,7 @@ use crate::scenario_file;
 #[derive(Debug, Args)]
 #[command(group(ArgGroup::new("firmware").required(true).args(["qemu", "serial", "connect"])))]
 pub struct HilArgs {
-    /// Scenario file (TOML, SPEC.md section 5).
+    /// Scenario file (TOML, see docs/formats.md).
     #[arg(long, value_name = "FILE")]
     pub scenario: PathBuf,
     /// Run this firmware image under qemu-system-arm (mps2-an500), e.g.

@@ -1,4 +1,4 @@
-//! `host-sim mission`: the whole autonomous pipeline in the physics plant (SPEC.md section 5):
+//! `host-sim mission`: the autonomous pipeline in the physics plant (docs/formats.md#mission):
 //! estimation by real lift-off detection, formation decision, rearrangement, flight. Without
 //! `--scenario` it runs the paper's experiment case rect-ex1 (built into the binary), printing
 //! each phase as it happens. This is the project's main job.

@@ -1,8 +1,8 @@
-//! The simulated world the flight software is tested against (SPEC.md section 2, step 4;
-//! section 4, "Flight simulation").
+//! The simulated world the flight software is tested against (docs/system.md#hardware;
+//! docs/system.md#paper-cases).
 //!
 //! A rapier3d rigid body for the payload (its footprint as a thin plate; the support on flat
-//! ground is the footprint's convex hull, as SPEC.md section 3 has it), with the payload's mass
+//! ground is the footprint's convex hull, as docs/models.md has it), with the payload's mass
 //! at the scenario's true COM and each robot as a point mass at its rotor. Flat ground with
 //! contact and friction, so the payload rests, pivots on an edge and takes off. Rotors push
 //! along the body's up axis at their rotor points and twist the body about its z axis by

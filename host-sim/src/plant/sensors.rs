@@ -1,5 +1,5 @@
-//! The sensors of the simulated vehicle, seeded and reproducible (SPEC.md section 4,
-//! "Flight simulation"): an IMU at the payload frame's origin and a motion-capture system.
+//! The sensors of the simulated vehicle, seeded and reproducible (docs/system.md#hardware):
+//! an IMU at the payload frame's origin and a motion-capture system.
 //!
 //! - IMU: gyro with a constant bias and white noise; accelerometer reading the specific force
 //!   (acceleration minus gravity) in the body frame, with white noise. Sampled at the control

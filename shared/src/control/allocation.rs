@@ -1,6 +1,6 @@
 //! Control allocation: from the commanded wrench (collective thrust, roll, pitch, yaw torque)
-//! to one thrust per rotor (SPEC.md section 3, "Controllability and the mixer"; section 2,
-//! step 4: the mixer is rebuilt from the robots' positions).
+//! to one thrust per rotor (docs/models.md#allocation-and-mixer;
+//! the mixer is rebuilt from the robots' positions).
 //!
 //! Rotor `i` at `r_i = (x_i, y_i)` from the estimated COM (body FRD), spin `s_i`, thrust `T_i`
 //! upwards produces roll torque `-y_i T_i`, pitch torque `x_i T_i` and yaw torque

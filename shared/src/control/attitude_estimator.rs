@@ -1,4 +1,4 @@
-//! Attitude and body-rate estimation from the IMU (SPEC.md section 2, step 4): a Mahony
+//! Attitude and body-rate estimation from the IMU (docs/models.md#state-estimation): a Mahony
 //! complementary filter on the unit quaternion, with gyro bias estimation.
 //!
 //! The gyro is integrated at the IMU rate. The motion-capture attitude, when it comes,

@@ -1,4 +1,4 @@
-//! The cascaded flight controller at 400 Hz (SPEC.md section 2, step 4): position (P) ->
+//! The cascaded flight controller at 400 Hz (docs/models.md#flight-cascade): position (P) ->
 //! velocity (PID) -> attitude (quaternion P, tilt before yaw) -> body rate (PID), with gravity
 //! compensation from the estimated mass and torques scaled by the estimated inertia.
 //!

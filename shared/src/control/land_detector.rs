@@ -1,4 +1,4 @@
-//! Whether the payload has left the ground or is back on it (SPEC.md section 2, step 4: the
+//! Whether the payload has left the ground or is back on it (docs/models.md#flight-cascade: the
 //! integrators must not run while the payload still rests on the ground).
 //!
 //! Airborne once the estimated height above the take-off point exceeds

@@ -1,4 +1,4 @@
-//! Flight control as the firmware runs it at 400 Hz (SPEC.md section 2, step 4).
+//! Flight control as the firmware runs it at 400 Hz (docs/models.md#flight-cascade).
 //!
 //! - [`vector`]: 3-vectors and quaternions (body FRD, world NED).
 //! - [`attitude_estimator`]: Mahony filter with gyro bias, heading from motion capture.

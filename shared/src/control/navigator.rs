@@ -1,4 +1,4 @@
-//! The vehicle's state estimate as every phase uses it (SPEC.md section 2: the lift-off
+//! The vehicle's state estimate as every phase uses it (docs/models.md#state-estimation: the lift-off
 //! detector reads the attitude on the ground, the cascade reads attitude, position and
 //! velocity in flight): the attitude filter and the position observer fed by the IMU every
 //! tick and by motion-capture fixes when they come.

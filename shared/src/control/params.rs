@@ -1,5 +1,5 @@
-//! Every gain and limit of the flight controller in one place, with units (SPEC.md section 2,
-//! step 4: the cascaded PID).
+//! Every gain and limit of the flight controller in one place, with units
+//! (docs/models.md#flight-cascade).
 //!
 //! The loops command physical quantities: the position loop a velocity, the velocity loop an
 //! acceleration (m/s^2), the attitude loop a body rate, and the rate loop an angular

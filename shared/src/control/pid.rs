@@ -1,5 +1,5 @@
 //! PID with derivative on the measurement through a first-order low-pass, a clamped integral
-//! that only runs when allowed (anti-windup), and an output limit (SPEC.md section 2, step 4).
+//! that only runs when allowed (anti-windup), and an output limit (docs/models.md#flight-cascade).
 
 use crate::control::vector::Vec3;
 use crate::math;

@@ -1,6 +1,6 @@
 //! Position and velocity in the world frame (NED, from the take-off point) from the
 //! accelerometer at the control rate and motion-capture fixes at 30 to 120 Hz that arrive late
-//! or not at all (SPEC.md section 2, step 4).
+//! or not at all (docs/models.md#state-estimation).
 //!
 //! A second-order complementary observer: the state is propagated with the world-frame
 //! acceleration every tick; a fix stamped at `t` is compared with the state the observer had

@@ -1,5 +1,5 @@
-//! The reference trajectory: take-off, transit to the target, hover, landing (SPEC.md
-//! section 2, step 4; section 5, `[flight] target`).
+//! The reference trajectory: take-off, transit to the target, hover, landing
+//! (docs/models.md#reference-trajectory; the target: docs/formats.md#scenario-keys).
 //!
 //! Each segment is a minimum-jerk polynomial `p(t) = a + (b - a) s(t/T)`,
 //! `s(u) = 10 u^3 - 15 u^4 + 6 u^5`, smooth in position, velocity and acceleration, with zero

@@ -1,4 +1,4 @@
-//! Three-vectors and unit quaternions for attitude (SPEC.md section 2, step 4), on the
+//! Three-vectors and unit quaternions for attitude (docs/models.md#conventions), on the
 //! crate's `libm` math so host and target rotate identically.
 //!
 //! Conventions: body frame FRD (x forward, y right, z down), world frame NED; Hamilton

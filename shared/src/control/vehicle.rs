@@ -1,5 +1,5 @@
 //! The flying vehicle as the controller sees it: total mass, inertia about the estimated COM,
-//! thrust available (SPEC.md section 2, step 4: gravity compensation from the estimated mass).
+//! thrust available (docs/models.md#flight-cascade: gravity compensation from the estimated mass).
 //!
 //! The inertia is estimated from what the robots know: the payload as a uniform plate of its
 //! footprint moved to the estimated COM (parallel axis), plus each robot as a point mass at its

@@ -1,5 +1,5 @@
-//! The estimation loop as the flight controller runs it (SPEC.md section 2, step 1): choose the
-//! lifting group with the most information, take its reading, update, check convergence.
+//! The estimation loop as the flight controller runs it (docs/system.md#estimation-loop): choose
+//! the lifting group with the most information, take its reading, update, check convergence.
 //!
 //! The estimator does not move robots or ramp thrust; the mission does that and hands back the
 //! [`Measurement`]. Everything here is bounded: fixed-size buffers, one pass over the grid per

@@ -1,6 +1,7 @@
-//! The estimation grid over theta = [COM x, COM y, mass] (SPEC.md section 5, `[estimation]`:
-//! axis `k` has `floor((max - min) / res) + 1` points `min + i * res`), with an optional fourth
-//! axis: an unknown thrust-scale factor of the command-to-thrust map, marginalised out.
+//! The estimation grid over theta = [COM x, COM y, mass]
+//! (docs/models.md#grid-posterior-and-stopping-rule: axis `k` has `floor((max - min) / res) + 1`
+//! points `min + i * res`), with an optional fourth axis: an unknown thrust-scale factor of the
+//! command-to-thrust map, marginalised out.
 //!
 //! Flat index layout: `((ix * ny + iy) * nm + im) * ns + is`, so the points sharing one COM
 //! are contiguous (the lift-off model's geometric part depends on the COM only).

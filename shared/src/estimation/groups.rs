@@ -1,5 +1,5 @@
 //! Lifting groups: `pair_size` robots at adjacent candidate attachment points, group `i` at
-//! candidates `i, i+1, ...` (wrapping) (SPEC.md section 2, step 1.1: only adjacent pairs are
+//! candidates `i, i+1, ...` (wrapping) (docs/system.md#estimation-loop: only adjacent pairs are
 //! scored, so the cost does not grow with the number of robots).
 //!
 //! A group is reachable when its robots can stand there at all: neighbouring candidates of the

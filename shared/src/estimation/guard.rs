@@ -1,6 +1,7 @@
 //! The grid's guard band: one layer of points just beyond each face of the estimation grid,
-//! updated with every reading like the grid itself (SPEC.md section 2, step 1; the grid is
-//! the prior's support, but a payload need not respect it).
+//! updated with every reading like the grid itself
+//! (docs/models.md#grid-posterior-and-stopping-rule; the grid is the prior's support, but a
+//! payload need not respect it).
 //!
 //! The guard band does not move the estimate: the posterior, its MAP and its mean stay on the
 //! grid the scenario gives. It answers two questions the grid alone cannot:

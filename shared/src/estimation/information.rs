@@ -1,5 +1,6 @@
 //! Mutual information between theta and the next lift reading of one group, under the current
-//! posterior (SPEC.md section 2, step 1.1).
+//! posterior (docs/models.md#information-measure; the choice of lift by information follows
+//! Corah et al. (2017)).
 //!
 //! Shannon information `I = H(z) - H(z | theta)`, by quadrature. Why Shannon and not the
 //! Cauchy-Schwarz quadratic MI of Corah et al.: the quadratic form needs a double sum over grid

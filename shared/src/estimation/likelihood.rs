@@ -1,4 +1,5 @@
-//! The measurement model of one lift (SPEC.md section 2, step 1.4): a thrust reading `z` with
+//! The measurement model of one lift (docs/models.md#likelihood-and-censoring; Oishi & Jimbo
+//! (2025), eq. (2)): a thrust reading `z` with
 //! likelihood `N(z; lambda(theta), sigma^2)`, or, when the group cannot lift even at the
 //! robots' maximum thrust, a censored reading with likelihood `P(lambda(theta) + e >= max)`,
 //! `e ~ N(0, sigma^2)`.

@@ -1,5 +1,5 @@
 //! Estimation of theta = [COM x, COM y, mass] before take-off, by lifting one edge with
-//! adjacent groups of robots (SPEC.md section 2, step 1; section 4 for the paper's cases).
+//! adjacent groups of robots (docs/system.md#estimation-loop; docs/system.md#paper-cases).
 //!
 //! - [`grid`]: the grid of theta (and an optional thrust-scale axis).
 //! - [`groups`]: lifting groups of adjacent candidates.

@@ -1,5 +1,6 @@
 //! The grid posterior over theta (and the thrust scale, when on), kept as log-probabilities so
-//! that long runs never underflow (SPEC.md section 2, steps 1.4 and 1.5).
+//! that long runs never underflow (docs/models.md#grid-posterior-and-stopping-rule; Bayes'
+//! rule and the stopping rule of Oishi & Jimbo (2025)).
 //!
 //! The prior is uniform on the grid points whose COM lies in the footprint's convex hull and
 //! zero elsewhere. After each update the log-values are shifted so the largest is 0.
@@ -258,7 +259,8 @@ impl Posterior {
 }
 
 /// The stopping rule's view of a theta marginal: the MAP point and the posterior mass of
-/// `Theta_N`, the points within one resolution of it on every axis (SPEC.md section 2, 1.5).
+/// `Theta_N`, the points within one resolution of it on every axis
+/// (docs/models.md#grid-posterior-and-stopping-rule).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Concentration {
     /// Grid indices of the MAP point.

@@ -1,6 +1,5 @@
 //! The formation adapts in flight to a load that shifts (beyond the paper, which names a load
-//! that moves during flight as future work; SPEC.md section 2, step 3 for the formation and
-//! section 3 for the mixer).
+//! that moves during flight as future work; docs/models.md#in-flight-adaptation).
 //!
 //! In a hover the trim ([`crate::flight::trim`]) measures where the payload's COM lies from
 //! the wrench the rotors deliver. When that COM sits more than [`AdaptConfig::threshold`]

@@ -1,4 +1,4 @@
-//! The flight stack (SPEC.md section 2, step 4): everything between a chosen formation and
+//! The flight stack (docs/system.md#flight): everything between a chosen formation and
 //! the rotors, as one component that the mission, the simulator's `fly`, the benchmarks and
 //! the firmware all step the same way.
 //!

@@ -1,6 +1,6 @@
 //! The flight's model of the vehicle and its mixer, built from the robots' positions and the
-//! estimate (SPEC.md section 3, "Controllability and the mixer": the mixing matrix is rebuilt
-//! from the new positions; section 2, step 4: gravity compensation from the estimated mass).
+//! estimate (docs/models.md#allocation-and-mixer: the mixing matrix is rebuilt from the new
+//! positions; docs/models.md#flight-cascade: gravity compensation from the estimated mass).
 
 use heapless::Vec;
 

@@ -1,4 +1,4 @@
-//! One flight at 400 Hz (SPEC.md section 2, step 4): take-off, transit, hover and landing
+//! One flight at 400 Hz (docs/system.md#flight): take-off, transit, hover and landing
 //! with the cascade and the formation's mixer, from the moment the rotors may spin until they
 //! stop again.
 //!

@@ -1,5 +1,5 @@
-//! Segment assignments: which straight rail segment each robot stands on (SPEC.md section 2,
-//! step 2; section 3, "Controllability and the mixer").
+//! Segment assignments: which straight rail segment each robot stands on
+//! (docs/models.md#formation-search).
 //!
 //! Robots keep their cyclic order, so an assignment is a count of robots per segment (in rail
 //! order, each at most what the segment holds at `min_spacing`) and the robot that comes first.

@@ -1,5 +1,5 @@
 //! Bringing a formation onto the balance constraints `|sum b1| <= eps`, `|sum b2| <= eps`
-//! (SPEC.md section 2, step 2): the robots' centroid onto the estimated COM.
+//! (docs/models.md#formation-search): the robots' centroid onto the estimated COM.
 //!
 //! Damped least-norm Newton steps along the rail, with the spacing constraints as an active
 //! set: with `t_j` the rail direction at robot `j` and `h = sum (p_j - c)`, the smallest move

@@ -1,4 +1,4 @@
-//! Cheap tests of one segment assignment before it is solved (SPEC.md section 2, step 2):
+//! Cheap tests of one segment assignment before it is solved (docs/models.md#formation-search):
 //! whether its robots can balance at all, and an upper bound on `det(S)` over it.
 //!
 //! The bound: for any `W` with `det W = 1` and `S` positive semidefinite,

@@ -1,5 +1,5 @@
 //! The smooth problem of one segment assignment, solved by an active-set Newton method
-//! (SPEC.md section 2, step 2; section 3, "Controllability and the mixer").
+//! (docs/models.md#formation-search).
 //!
 //! On a fixed assignment ([`crate::formation::assignment::Layout`]) robot `i` stands at
 //! `r_i = base_i + t_i x_i` from the COM, so the balance sums `h = sum r_i` are linear in the

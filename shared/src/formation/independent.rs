@@ -1,7 +1,7 @@
 //! An independent global search to compare the solver with (tests only): thousands of random
 //! formations, each polished by COBYLA (a general-purpose constrained local method) on the
-//! problem as SPEC.md states it, in `f64`, with its own rail walk and its own `det(B B^T)`. It
-//! shares no code with the solver.
+//! problem as stated (Oishi & Jimbo (2025), eq. (4); docs/models.md#formation-search), in
+//! `f64`, with its own rail walk and its own `det(B B^T)`. It shares no code with the solver.
 
 #![cfg(test)]
 

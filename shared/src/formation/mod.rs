@@ -1,5 +1,5 @@
-//! Formation decision: where every robot stands on the rail for flight (SPEC.md section 2,
-//! step 2; section 3, "Controllability and the mixer").
+//! Formation decision: where every robot stands on the rail for flight
+//! (docs/system.md#formation-decision; docs/models.md#formation-objective-and-balance-constraints).
 //!
 //! - [`objective`]: `det(B B^T)` and the balance sums of a formation.
 //! - [`assignment`]: which rail segment each robot stands on, and the smooth problem of one

@@ -1,5 +1,5 @@
-//! The formation's objective and constraints (SPEC.md section 3, "Controllability and the
-//! mixer"; section 2, step 2).
+//! The formation's objective and constraints
+//! (docs/models.md#formation-objective-and-balance-constraints; Oishi & Jimbo (2025), eq. (4)).
 //!
 //! With rotor `j` at `r^j` from the COM, thrust as the input (`c_t = 1`), torque coefficient
 //! `c_q` and spin `s_j`, `B = [r1^1 .. r1^n ; r2^1 .. r2^n ; s_1 c_q .. s_n c_q]` and

@@ -1,5 +1,6 @@
-//! Where a robot can move from a rail point, and the order and spacing check (SPEC.md
-//! section 3: robots keep their cyclic order and `min_spacing` on the closed rail).
+//! Where a robot can move from a rail point, and the order and spacing check
+//! (docs/models.md#formation-search): robots keep their cyclic order and `min_spacing` on the
+//! closed rail.
 
 use crate::geometry::{Rail, Vec2};
 

@@ -1,4 +1,4 @@
-//! The formation decision (SPEC.md section 2, step 2): every robot's arc length on the rail,
+//! The formation decision (docs/models.md#formation-search): every robot's arc length on the rail,
 //! maximising `det(B B^T)` with the robots balanced about the estimated COM, in their cyclic
 //! order and at least `min_spacing` apart.
 //!

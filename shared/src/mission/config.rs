@@ -1,5 +1,5 @@
-//! Everything the mission may be tuned with beyond the scenario (SPEC.md section 2), with the
-//! defaults the simulated vehicle was characterised with.
+//! Everything the mission may be tuned with beyond the scenario (docs/system.md#mission-phases),
+//! with the defaults the simulated vehicle was characterised with.
 
 use crate::control::allocation::MixerKind;
 use crate::estimation::EstimatorOptions;

@@ -1,4 +1,4 @@
-//! The mission's long computations, handed off the 400 Hz tick (SPEC.md section 2: pair
+//! The mission's long computations, handed off the 400 Hz tick (docs/system.md#mission-phases: pair
 //! selection by mutual information, the Bayes update, the formation decision, the mixer).
 //!
 //! The tick side ([`crate::mission::Mission`]) issues a [`JobRequest`]; the job side

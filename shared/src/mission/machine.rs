@@ -1,4 +1,4 @@
-//! The autonomous mission as the flight controller runs it at 400 Hz (SPEC.md section 2):
+//! The autonomous mission as the flight controller runs it at 400 Hz (docs/system.md#mission-phases):
 //! pre-flight checks, the estimation loop (choose a pair, move the robots, ramp and read the
 //! lift-off, update, check convergence), the formation decision with a thrust-margin check,
 //! the rearrangement, arming and the flight, with the operator's commands at any time.

@@ -1,4 +1,4 @@
-//! The autonomous mission end to end (SPEC.md section 2): one state machine from pre-flight
+//! The autonomous mission end to end (docs/system.md#pipeline): one state machine from pre-flight
 //! checks through estimation, formation decision and rearrangement to the flight and disarm.
 //!
 //! - [`phases`]: the phases and the reasons of each transition.

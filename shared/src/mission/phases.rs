@@ -1,5 +1,5 @@
-//! The mission's phases and the reasons it moves between them (SPEC.md section 2: the whole
-//! pipeline; the paper built it as a Stateflow chart). Every transition carries its reason so
+//! The mission's phases and the reasons it moves between them (docs/system.md#mission-phases;
+//! the paper built it as a Stateflow chart). Every transition carries its reason so
 //! the caller can log it.
 
 use crate::control::allocation::AllocationError;

@@ -1,4 +1,4 @@
-//! The robots on the rail (SPEC.md section 1; section 2, steps 1.2 and 3): the stepper drive
+//! The robots on the rail (docs/models.md#rail-moves): the stepper drive
 //! and its motion profiles, and moves of all robots that keep their order and spacing.
 
 pub mod moves;

@@ -1,6 +1,5 @@
 //! Moves of all robots along the shared rail that keep their cyclic order and `min_spacing`
-//! at every instant (SPEC.md section 1: the robots cannot pass each other; section 2,
-//! steps 1.2 and 3).
+//! at every instant (docs/models.md#rail-moves: the robots cannot pass each other).
 //!
 //! All robots move together on one time profile: robot `j` travels `lambda(t) d_j` with the
 //! same `lambda` from 0 to 1. The displacements are chosen so that each forward gap changes

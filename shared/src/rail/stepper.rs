@@ -1,7 +1,6 @@
 //! The robots' rail drive: arc length to stepper steps through the pinion on the rack, and
 //! trapezoidal motion profiles with speed and acceleration limits, turned into the step times
-//! the firmware loads into a timer (SPEC.md section 1: rack and pinion, one stepper each;
-//! section 2, steps 1.2 and 3).
+//! the firmware loads into a timer (docs/models.md#rail-moves: rack and pinion, one stepper each).
 
 use crate::math;
 
