@@ -106,8 +106,17 @@ impl PlanSegment {
         }
     }
 
-    /// The setpoint `t` seconds into the segment (held at its end after `duration`).
+    /// The setpoint `t` seconds into the segment (held at its end after `duration`; a segment
+    /// of no duration, such as a hover of no time, is its end at rest).
     pub fn sample(&self, t: f32) -> Setpoint {
+        if self.duration.is_nan() || self.duration <= 0.0 {
+            return Setpoint {
+                position: self.to,
+                velocity: Vec3::ZERO,
+                acceleration: Vec3::ZERO,
+                yaw: self.yaw,
+            };
+        }
         let u = math::clamp(t / self.duration, 0.0, 1.0);
         let (u2, u3) = (u * u, u * u * u);
         let s = 10.0 * u3 - 15.0 * u3 * u + 6.0 * u3 * u2;
@@ -264,5 +273,35 @@ mod tests {
             (touchdown - Vec3::new(0.3, 1.98, 0.0)).norm() < 5e-3,
             "lands at the target: {touchdown:?}"
         );
+    }
+
+    /// `PLN_HOVER_T` may be 0 (no hover): the hover segment then lasts no time, and its
+    /// setpoint, sampled by the flight stack at its first tick, was 0/0 (NaN thrusts in
+    /// flight). Every segment's setpoint is finite at any time, whatever its length.
+    #[test]
+    fn a_segment_of_no_duration_holds_its_end_at_rest() {
+        let limits = PlanLimits {
+            hover_time: 0.0,
+            ..PlanLimits::DEFAULT
+        };
+        let plan = FlightPlan::new(Vec3::ZERO, [0.3, 1.98, 0.5], 0.0, limits);
+        let hover = plan.segment(2).expect("a hover segment");
+        assert_eq!(hover.phase, FlightPhase::Hover);
+        assert_eq!(hover.duration, 0.0);
+        for t in [0.0, 0.0025, 1.0, -1.0] {
+            let sp = hover.sample(t);
+            assert_eq!(sp.position, hover.to, "at {t}");
+            assert_eq!(sp.velocity, Vec3::ZERO, "at {t}");
+            assert_eq!(sp.acceleration, Vec3::ZERO, "at {t}");
+        }
+        let mut t = 0.0;
+        while t < plan.duration() + 1.0 {
+            let (sp, _) = plan.sample(t);
+            let finite = [sp.position, sp.velocity, sp.acceleration]
+                .iter()
+                .all(|v| v.x.is_finite() && v.y.is_finite() && v.z.is_finite());
+            assert!(finite, "at {t}: {sp:?}");
+            t += 0.0025;
+        }
     }
 }
