@@ -13,8 +13,9 @@
 //!
 //! The flash model follows the Pixhawk's parameter memory, the SPI FRAM on which the board
 //! emulates a NOR flash (`firmware/src/board/fram.rs`): writes and erases go byte by byte in
-//! address order, writes only clear bits, and a cut leaves the operation's first bytes done
-//! and the rest untouched.
+//! address order, and a cut leaves the operation's first bytes done and the rest untouched.
+//! Writes here only clear bits, as on NOR flash (the FRAM stores the bytes as given: the two
+//! differ only where a write would set a cleared bit).
 
 use embedded_storage_async::nor_flash::{
     ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
