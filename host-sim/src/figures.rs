@@ -1,10 +1,16 @@
-//! Figures like the paper's (docs/system.md#paper-cases): height over time for
-//! several flights against their reference, and roll and pitch over time, as PNG files drawn
-//! with plotters.
+//! Figures like the paper's, drawn with plotters. This file draws `fly`'s (docs/system.md#paper-cases;
+//! the paper's Fig. 8): height over time for several flights against their
+//! reference, and roll and pitch over time, as PNG files. The submodules draw the others, as PNG
+//! and SVG through [`canvas`]: [`estimate_summary`] (Fig. 7) and [`estimate_steps`] (Fig. 6)
+//! for `estimate`, [`formation`] for `formation`, and the mission's one-page summary.
 //!
 //! Text is drawn with the system's sans-serif font (plotters' `ttf` feature, through
 //! fontconfig). Where no font can be found the figure is skipped with a message; the CSV files
 //! carry the same data.
+
+pub mod canvas;
+pub mod estimate_steps;
+pub mod estimate_summary;
 
 use std::path::{Path, PathBuf};
 

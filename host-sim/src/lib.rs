@@ -9,6 +9,7 @@
 
 pub mod cli;
 pub mod commands;
+pub mod estimate_report;
 pub mod figures;
 pub mod harness;
 pub mod hil;
@@ -19,3 +20,4 @@ pub mod monte_carlo;
 pub mod plant;
 pub mod report;
 pub mod scenario_file;
+pub mod trial_trace;

@@ -132,16 +132,33 @@ pub fn simulated_reading(
 
 /// Runs one trial: lifts chosen by the estimator until it stops.
 pub fn run_trial(scenario: &Scenario, setup: &MonteCarloSetup, index: usize) -> Result<Trial> {
+    run_trial_observed(scenario, setup, index, &mut |_, _, _| {})
+}
+
+/// What a trial's observer is shown at each step: the estimator (before its next choice), the
+/// truth, and the lift that led there (`None` at the start).
+pub type Observer<'a> = dyn FnMut(&mut Estimator, [f32; 3], Option<(usize, Measurement)>) + 'a;
+
+/// [`run_trial`], showing `observe` the estimator before the first lift and after each lift
+/// (the same trial, lift for lift: the observer draws no random number).
+pub fn run_trial_observed(
+    scenario: &Scenario,
+    setup: &MonteCarloSetup,
+    index: usize,
+    observe: &mut Observer<'_>,
+) -> Result<Trial> {
     let mut rng = trial_rng(setup.seed, index);
     let truth = match setup.truth {
         Some(t) => t,
         None => draw_truth(scenario, &mut rng)?,
     };
     let mut estimator = Estimator::new(scenario, setup.options)?;
+    observe(&mut estimator, truth, None);
     while estimator.status() == Status::Measuring {
         let choice = estimator.select_group()?;
         let reading = simulated_reading(scenario, choice.group, truth, setup.map_error, &mut rng)?;
         estimator.update(choice.group, reading)?;
+        observe(&mut estimator, truth, Some((choice.group, reading)));
     }
     let est = estimator.estimate();
     Ok(Trial {

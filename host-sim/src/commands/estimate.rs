@@ -1,5 +1,9 @@
-//! `host-sim estimate --trials N --seed S [--truth X,Y,M]`: Monte Carlo of the estimation
-//! (docs/formats.md#estimate), with the optional thrust-scale bias term and a simulated map error.
+//! `host-sim estimate --trials N --seed S [--truth X,Y,M] [--output DIR]`: Monte Carlo of the
+//! estimation (docs/formats.md#estimate), with the optional thrust-scale bias term and a simulated map
+//! error; with `--output`, the trials as CSV and the paper's Figs. 6 and 7
+//! ([`crate::estimate_report`]).
+
+use std::path::PathBuf;
 
 use anyhow::{Result, anyhow, bail};
 use clap::Args;
@@ -15,7 +19,7 @@ use crate::cli::{
 use crate::monte_carlo::{self, MAX_TRIALS, MonteCarloSetup, Summary, Trial};
 use crate::report::print_json;
 use crate::say;
-use crate::scenario_file;
+use crate::{estimate_report, scenario_file, trial_trace};
 
 /// Arguments of `estimate`.
 #[derive(Debug, Args)]
@@ -42,6 +46,11 @@ pub struct EstimateArgs {
     /// 0.5 to 2, at most 16 values).
     #[arg(long, value_name = "MIN,MAX,STEP", value_parser = triple)]
     thrust_scale: Option<[f64; 3]>,
+    /// Write the trials (CSV), the first trial step by step (JSON) and figures (the error
+    /// summary; the posterior and each pair's information at each lift of the first trial)
+    /// into this folder.
+    #[arg(long, value_name = "DIR")]
+    output: Option<PathBuf>,
 }
 
 /// Checks `--trials` against [`MAX_TRIALS`].
@@ -151,11 +160,32 @@ pub fn run(args: &EstimateArgs) -> Result<Outcome> {
     bar.set_message(format!("estimating {}", loaded.name));
     let trials = monte_carlo::run(scenario, &setup, &|| bar.inc(1))?;
     bar.finish_and_clear();
-    let summary = monte_carlo::summarise(&trials, scenario.estimation.resolution);
+    let resolution = scenario.estimation.resolution;
+    let summary = monte_carlo::summarise(&trials, resolution);
+    let written = match &args.output {
+        Some(dir) => {
+            // The first trial again, step by step: the same trial, lift for lift.
+            let trace = trial_trace::trace(scenario, &setup, 0)?;
+            estimate_report::write(dir, &loaded.name, &summary, &trials, resolution, &trace)?
+        }
+        None => Vec::new(),
+    };
     if args.common.json {
-        print_json(report(&loaded.name, &setup, &summary, &trials))?;
+        let mut value = report(&loaded.name, &setup, &summary, &trials);
+        if args.output.is_some() {
+            value["files"] = json!(
+                written
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+            );
+        }
+        print_json(value)?;
     } else {
         print_human(&loaded.name, &setup, &summary)?;
+        for p in &written {
+            say!("  wrote {}", p.display())?;
+        }
     }
     Ok(Outcome::Done)
 }
