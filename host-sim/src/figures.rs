@@ -11,6 +11,7 @@
 pub mod canvas;
 pub mod estimate_steps;
 pub mod estimate_summary;
+pub mod formation;
 
 use std::path::{Path, PathBuf};
 

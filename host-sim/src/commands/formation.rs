@@ -1,6 +1,9 @@
-//! `host-sim formation [--com X,Y] [--mass M]`: the formation decision of `shared::formation`
-//! for a COM and mass (default: the scenario's truth), beside the even formation it replaces.
+//! `host-sim formation [--com X,Y] [--mass M] [--output DIR]`: the formation decision of
+//! `shared::formation` for a COM and mass (default: the scenario's truth), beside the even
+//! formation it replaces; with `--output`, both as CSV and a figure
+//! ([`crate::formation_report`]).
 
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Result, anyhow, bail};
@@ -11,6 +14,8 @@ use shared::geometry::{Rail, Vec2};
 use shared::scenario::GRAVITY;
 
 use crate::cli::{Common, Outcome, check_mass, pair, show};
+use crate::figures::formation::FormationFigure;
+use crate::formation_report;
 use crate::report::print_json;
 use crate::say;
 use crate::scenario_file;
@@ -26,6 +31,10 @@ pub struct FormationArgs {
     /// Estimated payload mass, kg (default: the scenario's truth; above 0, at most 1000).
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
     mass: Option<f64>,
+    /// Write both formations (CSV) and a figure of them on the payload (footprint, rail,
+    /// candidates, spins, the COM and the truth) into this folder.
+    #[arg(long, value_name = "DIR")]
+    output: Option<PathBuf>,
 }
 
 /// Runs the command.
@@ -79,8 +88,27 @@ pub fn run(args: &FormationArgs) -> Result<Outcome> {
     );
     let count = s.robots.count() as f32;
     let hover_fraction = (mass + count * s.robots.mass) * GRAVITY / (count * s.robots.max_thrust);
+    let written = match &args.output {
+        Some(dir) => formation_report::write(
+            dir,
+            &loaded.name,
+            &FormationFigure {
+                title: format!(
+                    "{}: formation for COM ({:.3}, {:.3}) m, mass {:.2} kg",
+                    loaded.name, com.x, com.y, mass
+                ),
+                scenario: s,
+                even: (&s.robots.initial, even),
+                optimised: (&formation.positions, formation.figures),
+                com: (com, args.com.is_some()),
+                truth: s.truth.map(|t| t.com),
+            },
+        )?,
+        None => Vec::new(),
+    };
+    let files: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
     if args.common.json {
-        print_json(json!({
+        let mut value = json!({
             "positions": formation.positions.as_slice(),
             "points": points(&s.payload.rail, &formation.positions),
             "det": formation.figures.det,
@@ -99,7 +127,11 @@ pub fn run(args: &FormationArgs) -> Result<Outcome> {
                 "balance": even.balance,
                 "min_gap": even.min_gap,
             },
-        }))?;
+        });
+        if args.output.is_some() {
+            value["files"] = json!(files);
+        }
+        print_json(value)?;
     } else {
         print_human(
             &loaded.name,
@@ -109,6 +141,9 @@ pub fn run(args: &FormationArgs) -> Result<Outcome> {
             solve_ms,
             hover_fraction,
         )?;
+        for f in &files {
+            say!("  wrote {f}")?;
+        }
     }
     Ok(Outcome::Done)
 }
