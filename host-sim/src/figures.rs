@@ -2,7 +2,7 @@
 //! the paper's Fig. 8): height over time for several flights against their
 //! reference, and roll and pitch over time, as PNG files. The submodules draw the others, as PNG
 //! and SVG through [`canvas`]: [`estimate_summary`] (Fig. 7) and [`estimate_steps`] (Fig. 6)
-//! for `estimate`, [`formation`] for `formation`, and the mission's one-page summary.
+//! for `estimate`, [`formation`] for `formation`, and [`mission_summary`] for `mission`.
 //!
 //! Text is drawn with the system's sans-serif font (plotters' `ttf` feature, through
 //! fontconfig). Where no font can be found the figure is skipped with a message; the CSV files
@@ -12,6 +12,7 @@ pub mod canvas;
 pub mod estimate_steps;
 pub mod estimate_summary;
 pub mod formation;
+pub mod mission_summary;
 
 use std::path::{Path, PathBuf};
 

@@ -1,7 +1,8 @@
 //! What `mission --output DIR` writes about the flight: the robots' rail positions, each
 //! rotor's thrust and the payload's roll and pitch over time, as one PNG of three panels
 //! (plotters) with the injected load shift and each in-flight re-formation marked, and the
-//! same samples as CSV (the adaptation issue: a load that shifts in flight).
+//! same samples as CSV (the adaptation issue: a load that shifts in flight); beside them the
+//! whole mission on one page ([`crate::figures::mission_summary`], PNG and SVG).
 
 use std::fs;
 use std::io::Write;
@@ -11,6 +12,8 @@ use anyhow::{Context, Result, anyhow};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+use crate::figures::canvas;
+use crate::figures::mission_summary::MissionSummary;
 use crate::mission_run::{FlightSample, MissionOutcome};
 use crate::report::file_stem;
 
@@ -33,10 +36,16 @@ fn colour(j: usize) -> RGBColor {
     C[j % C.len()]
 }
 
-/// Writes `<name>-mission-flight.csv` and `.png` into `dir`; returns the paths written. The
-/// figure is skipped with a warning (the CSV stays) where it cannot be drawn (no font, or a
-/// mission that never flew).
-pub fn write(dir: &Path, name: &str, outcome: &MissionOutcome) -> Result<Vec<PathBuf>> {
+/// Writes `<name>-mission-flight.csv` and `.png`, and `<name>-mission-summary.png` and `.svg`,
+/// into `dir` (`name` through [`file_stem`]); returns the paths written. `max_thrust` is the
+/// robots' maximum thrust, N (the summary's lifts). A figure is skipped with a warning (the CSV
+/// stays) where it cannot be drawn (no font; the flight figure of a mission that never flew).
+pub fn write(
+    dir: &Path,
+    name: &str,
+    outcome: &MissionOutcome,
+    max_thrust: f32,
+) -> Result<Vec<PathBuf>> {
     fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let stem = format!("{}-mission-flight", file_stem(name));
     let csv = dir.join(format!("{stem}.csv"));
@@ -47,6 +56,15 @@ pub fn write(dir: &Path, name: &str, outcome: &MissionOutcome) -> Result<Vec<Pat
         Ok(()) => written.push(png),
         Err(e) => crate::report::warn(&format!("figure skipped: {e:#}")),
     }
+    written.extend(canvas::write(
+        dir,
+        &format!("{}-mission-summary", file_stem(name)),
+        &MissionSummary {
+            name,
+            outcome,
+            max_thrust,
+        },
+    ));
     Ok(written)
 }
 

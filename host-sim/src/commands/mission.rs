@@ -71,8 +71,9 @@ pub struct MissionArgs {
     /// Switch off the formation's in-flight adaptation to a load that shifts.
     #[arg(long)]
     no_adapt: bool,
-    /// Write the flight's time series (CSV) and a figure (rail positions, rotor thrusts, roll
-    /// and pitch, with the shift marked) into this folder.
+    /// Write the flight's time series (CSV), a figure of the flight (rail positions, rotor
+    /// thrusts, roll and pitch, with the shift marked) and a one-page summary of the mission
+    /// (phases, lifts against the model, height, attitude, thrusts) into this folder.
     #[arg(long, value_name = "DIR")]
     output: Option<PathBuf>,
 }
@@ -178,7 +179,12 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
     progress?;
     let wall_s = started.elapsed().as_secs_f64();
     let written = match &args.output {
-        Some(dir) => mission_figures::write(dir, &loaded.name, &outcome)?,
+        Some(dir) => mission_figures::write(
+            dir,
+            &loaded.name,
+            &outcome,
+            loaded.scenario.robots.max_thrust,
+        )?,
         None => Vec::new(),
     };
     if json {
@@ -204,7 +210,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
                 "positions": a.positions,
                 "rebalanced_s": a.rebalanced_at,
             })).collect::<Vec<_>>(),
-            "written": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+            "files": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         }))?;
     } else {
         for (g, r, m) in &outcome.lifts {

@@ -1,0 +1,416 @@
+//! The one-page summary of `mission --output`: the phases on a time line (one row per phase,
+//! a bar for each time it was entered), each lift's reading against the model's lift-off thrust
+//! for the truth, and from take-off on the height, roll and pitch, and each rotor's thrust, with
+//! the flight's phases marked. Beside [`crate::mission_figures`]' flight figure; the paper has
+//! no such page (its Figs. 6 and 8 show parts of it).
+
+use anyhow::{Result, anyhow};
+use plotters::coord::ranged1d::SegmentValue;
+use plotters::prelude::*;
+
+use super::canvas::{
+    self, Area, Figure, Swatch, colour, draw_error, legend, titled, with_legend_column,
+};
+use crate::mission_run::MissionOutcome;
+
+/// The page's size, pixels.
+const SIZE: (u32, u32) = (1300, 1500);
+
+/// The summary page.
+pub struct MissionSummary<'a> {
+    /// The scenario's name.
+    pub name: &'a str,
+    /// What the mission did.
+    pub outcome: &'a MissionOutcome,
+    /// The robots' maximum thrust, N (a reading at it could not lift).
+    pub max_thrust: f32,
+}
+
+/// A phase as drawn: name, start and end, s.
+struct Span {
+    name: String,
+    start: f32,
+    end: f32,
+}
+
+impl MissionSummary<'_> {
+    /// Each phase with its start and end: the phases follow one another and the last ends
+    /// with the run.
+    fn spans(&self) -> Vec<Span> {
+        let o = self.outcome;
+        let total: f32 = o.phases.iter().map(|(_, d)| d).sum();
+        let mut t = (o.simulated_s - total).max(0.0);
+        o.phases
+            .iter()
+            .map(|(name, d)| {
+                let span = Span {
+                    name: name.clone(),
+                    start: t,
+                    end: t + d,
+                };
+                t += d;
+                span
+            })
+            .collect()
+    }
+
+    fn verdict(&self) -> &'static str {
+        let o = self.outcome;
+        if o.dropped {
+            "dropped"
+        } else if o.aborted.is_some() {
+            "aborted"
+        } else if o.delivered {
+            "delivered"
+        } else {
+            "not delivered"
+        }
+    }
+}
+
+impl Figure for MissionSummary<'_> {
+    fn size(&self) -> (u32, u32) {
+        SIZE
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &Area<DB>) -> Result<()> {
+        let o = self.outcome;
+        let body = titled(
+            root,
+            &format!(
+                "{}: the mission, {} ({:.1} s simulated)",
+                self.name,
+                self.verdict(),
+                o.simulated_s
+            ),
+        )?;
+        let spans = self.spans();
+        let rows = body.split_by_breakpoints([] as [u32; 0], [300, 560, 860, 1160]);
+        self.timeline(&rows[0], &spans)?;
+        self.lifts(&rows[1])?;
+        let flight: Vec<&Span> = spans.iter().skip_while(|s| s.name != "takeoff").collect();
+        let Some(first) = o.series.first() else {
+            for row in &rows[2..] {
+                let (w, h) = row.dim_in_pixel();
+                row.draw(&Text::new(
+                    "no flight: the mission never took off",
+                    (w as i32 / 2, h as i32 / 2),
+                    canvas::centred(18),
+                ))
+                .map_err(draw_error)?;
+            }
+            return Ok(());
+        };
+        let t = (first.t, o.series.last().map_or(first.t + 1.0, |s| s.t));
+        let t = (t.0, t.1.max(t.0 + 1.0));
+        let height = vec![(
+            "height".to_string(),
+            colour(0),
+            o.series.iter().map(|s| (s.t, s.height)).collect(),
+        )];
+        curves(
+            &rows[2],
+            "height above the start",
+            "height (m)",
+            t,
+            &height,
+            &flight,
+        )?;
+        let attitude = vec![
+            (
+                "roll".to_string(),
+                colour(0),
+                o.series
+                    .iter()
+                    .map(|s| (s.t, s.roll_pitch_deg[0]))
+                    .collect(),
+            ),
+            (
+                "pitch".to_string(),
+                colour(3),
+                o.series
+                    .iter()
+                    .map(|s| (s.t, s.roll_pitch_deg[1]))
+                    .collect(),
+            ),
+        ];
+        curves(
+            &rows[3],
+            "payload attitude",
+            "angle (deg)",
+            t,
+            &attitude,
+            &flight,
+        )?;
+        let n = first.thrust.len();
+        let thrusts: Vec<Curve> = (0..n)
+            .map(|j| {
+                let points: Vec<(f32, f32)> = o
+                    .series
+                    .iter()
+                    .map(|s| (s.t, s.thrust.get(j).copied().unwrap_or(0.0)))
+                    .collect();
+                // 100 Hz samples: 12 each side is a quarter-second mean (the rate loop's
+                // answer to sensor noise hides the level otherwise).
+                (format!("robot {}", j + 1), colour(j), smoothed(&points, 12))
+            })
+            .collect();
+        curves(
+            &rows[4],
+            "rotor thrusts (quarter-second means)",
+            "thrust (N)",
+            t,
+            &thrusts,
+            &flight,
+        )
+    }
+}
+
+impl MissionSummary<'_> {
+    /// One row per phase (in the order first entered), a bar for each time it ran.
+    fn timeline<DB: DrawingBackend>(&self, area: &Area<DB>, spans: &[Span]) -> Result<()> {
+        let (plot, _) = with_legend_column(area);
+        let mut names: Vec<&str> = Vec::new();
+        for s in spans {
+            if !names.contains(&s.name.as_str()) {
+                names.push(&s.name);
+            }
+        }
+        if names.is_empty() {
+            return Err(anyhow!("the mission entered no phase"));
+        }
+        let end = self.outcome.simulated_s.max(1.0);
+        let rows = names.len() as i32;
+        let mut chart = ChartBuilder::on(&plot)
+            .caption("phases", ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(130)
+            .build_cartesian_2d(0f32..end, (0..rows).into_segmented())
+            .map_err(draw_error)?;
+        // Top to bottom in the order entered.
+        let row_of =
+            |name: &str| rows - 1 - names.iter().position(|n| *n == name).unwrap_or(0) as i32;
+        let labels: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+        chart
+            .configure_mesh()
+            .disable_y_mesh()
+            .y_labels(names.len())
+            .y_label_formatter(&|v| match v {
+                SegmentValue::CenterOf(i) => labels
+                    .get((rows - 1 - i) as usize)
+                    .cloned()
+                    .unwrap_or_default(),
+                _ => String::new(),
+            })
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .x_desc("time (s)")
+            .draw()
+            .map_err(draw_error)?;
+        // Short phases still show: at least a 400th of the run.
+        let least = end / 400.0;
+        chart
+            .draw_series(spans.iter().map(|s| {
+                let r = row_of(&s.name);
+                let k = names.iter().position(|n| *n == s.name).unwrap_or(0);
+                Rectangle::new(
+                    [
+                        (s.start, SegmentValue::Exact(r)),
+                        ((s.end).max(s.start + least), SegmentValue::Exact(r + 1)),
+                    ],
+                    colour(k).filled(),
+                )
+            }))
+            .map_err(draw_error)?;
+        Ok(())
+    }
+
+    /// Each lift's reading beside the model's lift-off thrust for the truth.
+    fn lifts<DB: DrawingBackend>(&self, area: &Area<DB>) -> Result<()> {
+        let (plot, key) = with_legend_column(area);
+        let lifts = &self.outcome.lifts;
+        let count = lifts.len().max(1);
+        let top = lifts
+            .iter()
+            .flat_map(|(_, r, m)| [r.unwrap_or(self.max_thrust), *m])
+            .filter(|v| v.is_finite())
+            .fold(self.max_thrust, f32::max)
+            * 1.12;
+        let names: Vec<String> = lifts
+            .iter()
+            .enumerate()
+            .map(|(k, (g, _, _))| format!("lift {}: pair {g}", k + 1))
+            .collect();
+        let mut chart = ChartBuilder::on(&plot)
+            .caption(
+                "lifts: reading against the model for the truth",
+                ("sans-serif", 18),
+            )
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(70)
+            .build_cartesian_2d(-0.5f32..(count as f32 - 0.5), 0f32..top)
+            .map_err(draw_error)?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(count * 2 + 1)
+            .x_label_formatter(&|v| {
+                let i = v.round();
+                if (v - i).abs() < 1e-3 && i >= 0.0 {
+                    names.get(i as usize).cloned().unwrap_or_default()
+                } else {
+                    String::new()
+                }
+            })
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .y_desc("thrust per robot (N)")
+            .draw()
+            .map_err(draw_error)?;
+        chart
+            .draw_series(DashedLineSeries::new(
+                [
+                    (-0.5, self.max_thrust),
+                    (count as f32 - 0.5, self.max_thrust),
+                ],
+                6,
+                4,
+                colour(3).stroke_width(2),
+            ))
+            .map_err(draw_error)?;
+        let value = |x: f32, v: f32, text: String| {
+            EmptyElement::at((x, v)) + Text::new(text, (0, -10), canvas::centred(13))
+        };
+        for (k, (_, reading, model)) in lifts.iter().enumerate() {
+            let x = k as f32;
+            let shown = match reading {
+                Some(r) => (*r, format!("{r:.2}")),
+                None => (self.max_thrust, "could not lift".to_string()),
+            };
+            chart
+                .draw_series([value(x - 0.15, shown.0, shown.1)])
+                .map_err(draw_error)?;
+            if model.is_finite() {
+                chart
+                    .draw_series([value(x + 0.15, *model, format!("{model:.2}"))])
+                    .map_err(draw_error)?;
+            }
+            match reading {
+                Some(r) => chart
+                    .draw_series([Rectangle::new(
+                        [(x - 0.3, 0.0), (x, *r)],
+                        colour(0).filled(),
+                    )])
+                    .map_err(draw_error)?,
+                None => chart
+                    .draw_series([Rectangle::new(
+                        [(x - 0.3, 0.0), (x, self.max_thrust)],
+                        colour(0).stroke_width(2),
+                    )])
+                    .map_err(draw_error)?,
+            };
+            if model.is_finite() {
+                chart
+                    .draw_series([Rectangle::new(
+                        [(x, 0.0), (x + 0.3, *model)],
+                        canvas::GREY.filled(),
+                    )])
+                    .map_err(draw_error)?;
+            }
+        }
+        legend(
+            &key,
+            50,
+            &[
+                ("reading".to_string(), Swatch::Bar(colour(0))),
+                ("could not lift".to_string(), Swatch::Ring(colour(0))),
+                ("model, truth".to_string(), Swatch::Bar(canvas::GREY)),
+                ("max. thrust".to_string(), Swatch::Dashed(colour(3))),
+            ],
+        )
+    }
+}
+
+/// One curve: its label, colour and (time, value) points.
+type Curve = (String, RGBColor, Vec<(f32, f32)>);
+
+/// Curves against time over `t`, the flight's phases as dashed lines named at the top, and the
+/// legend in its own column.
+fn curves<DB: DrawingBackend>(
+    area: &Area<DB>,
+    title: &str,
+    y_desc: &str,
+    t: (f32, f32),
+    series: &[Curve],
+    phases: &[&Span],
+) -> Result<()> {
+    let (plot, key) = with_legend_column(area);
+    let (lo, hi) = canvas::span(
+        series
+            .iter()
+            .flat_map(|(_, _, p)| p.iter().map(|&(_, v)| v)),
+        (0.0, 1.0),
+    );
+    // Room at the top for the phases' names.
+    let pad = (hi - lo) * 0.08;
+    let (lo, hi) = (lo - pad, hi + 3.0 * pad);
+    let mut chart = ChartBuilder::on(&plot)
+        .caption(title, ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(70)
+        .build_cartesian_2d(t.0..t.1, lo..hi)
+        .map_err(draw_error)?;
+    chart
+        .configure_mesh()
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .x_desc("time (s)")
+        .y_desc(y_desc)
+        .draw()
+        .map_err(draw_error)?;
+    // The phase the series starts in (take-off) is named at the left edge.
+    for s in phases
+        .iter()
+        .filter(|s| s.start >= t.0 - 0.1 && s.start <= t.1)
+    {
+        let start = s.start.max(t.0);
+        chart
+            .draw_series(DashedLineSeries::new(
+                [(start, lo), (start, hi)],
+                5,
+                4,
+                canvas::GREY.stroke_width(1),
+            ))
+            .map_err(draw_error)?;
+        chart
+            .draw_series([EmptyElement::at((start, hi))
+                + Text::new(s.name.clone(), (4, 2), ("sans-serif", 14).into_font())])
+            .map_err(draw_error)?;
+    }
+    for (_, c, points) in series {
+        chart
+            .draw_series(LineSeries::new(points.iter().copied(), c.stroke_width(2)))
+            .map_err(draw_error)?;
+    }
+    let entries: Vec<(String, Swatch)> = series
+        .iter()
+        .map(|(label, c, _)| (label.clone(), Swatch::Line(*c)))
+        .chain([("phase begins".to_string(), Swatch::Dashed(canvas::GREY))])
+        .collect();
+    legend(&key, 40, &entries)
+}
+
+/// Mean of each value over a centred window of `half` samples each side.
+fn smoothed(points: &[(f32, f32)], half: usize) -> Vec<(f32, f32)> {
+    (0..points.len())
+        .map(|i| {
+            let lo = i.saturating_sub(half);
+            let hi = (i + half + 1).min(points.len());
+            let mean = points[lo..hi].iter().map(|p| p.1).sum::<f32>() / (hi - lo) as f32;
+            (points[i].0, mean)
+        })
+        .collect()
+}
