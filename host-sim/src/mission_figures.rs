@@ -141,6 +141,8 @@ fn panel(
         .map_err(draw_error)?;
     chart
         .configure_mesh()
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
         .x_desc("time (s)")
         .y_desc(y_desc)
         .draw()
@@ -215,19 +217,22 @@ fn draw(path: &Path, name: &str, outcome: &MissionOutcome) -> Result<()> {
     let root = BitMapBackend::new(path, (1100, 1200)).into_drawing_area();
     root.fill(&WHITE).map_err(draw_error)?;
     let (title, body) = root.split_vertically(40);
+    let marks = marks(outcome);
+    let what = if marks.is_empty() {
+        "the flight"
+    } else {
+        "the flight, load shift and re-formation"
+    };
     title
-        .titled(
-            &format!("{name}: the flight, load shift and re-formation"),
-            ("sans-serif", 24),
-        )
+        .titled(&format!("{name}: {what}"), ("sans-serif", 24))
         .map_err(draw_error)?;
     let panels = body.split_evenly((3, 1));
-    let marks = marks(outcome);
     let per_robot = |value: fn(&FlightSample, usize) -> f32, unit: &str| {
         (0..n)
             .map(|j| {
                 (
-                    format!("robot {j}{unit}"),
+                    // Robots counted from 1, as on the command line.
+                    format!("robot {}{unit}", j + 1),
                     colour(j),
                     s.iter().map(|p| (p.t, value(p, j))).collect::<Vec<_>>(),
                 )

@@ -80,6 +80,7 @@ impl Figure for StepFigure<'_> {
             ("posterior".to_string(), Swatch::Bar(POSTERIOR)),
             ("pair lifted next".to_string(), Swatch::Bar(CHOSEN)),
             ("other pairs".to_string(), Swatch::Bar(colour(0))),
+            ("pair out of reach".to_string(), Swatch::Cross(canvas::GREY)),
         ];
         legend(&key, 40, &entries)?;
         colour_bar(&key, 60 + 22 * entries.len() as i32, peak)?;

@@ -204,12 +204,14 @@ impl Figure for FormationFigure<'_> {
             "det: det(B B^T), m^6".to_string(),
             "offsets from the COM, summed:".to_string(),
             format!(
-                "  even ({:.3}, {:.3}) m",
-                self.even.1.balance[0], self.even.1.balance[1]
+                "  even ({}, {}) m",
+                millimetres(self.even.1.balance[0]),
+                millimetres(self.even.1.balance[1])
             ),
             format!(
-                "  optimised ({:.3}, {:.3}) m",
-                self.optimised.1.balance[0], self.optimised.1.balance[1]
+                "  optimised ({}, {}) m",
+                millimetres(self.optimised.1.balance[0]),
+                millimetres(self.optimised.1.balance[1])
             ),
             "candidates numbered as the".to_string(),
             "lifting pairs that start there".to_string(),
@@ -221,4 +223,10 @@ impl Figure for FormationFigure<'_> {
         }
         Ok(())
     }
+}
+
+/// `v` metres to the millimetre, never a negative zero.
+fn millimetres(v: f32) -> String {
+    let rounded = (v * 1000.0).round() / 1000.0 + 0.0;
+    format!("{rounded:.3}")
 }
