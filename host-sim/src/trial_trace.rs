@@ -111,3 +111,38 @@ fn step(
         estimate: estimator.estimate(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use shared::estimation::EstimatorOptions;
+
+    #[test]
+    fn the_traced_trial_is_the_monte_carlo_trial_of_the_same_index() {
+        let text = include_str!("../../tests/scenarios/rect-sim1.toml");
+        let loaded = crate::scenario_file::parse(text, std::path::Path::new("rect-sim1.toml"))
+            .expect("paper scenario");
+        let setup = MonteCarloSetup {
+            trials: 2,
+            seed: 7,
+            truth: None,
+            map_error: 1.0,
+            options: EstimatorOptions::default(),
+        };
+        for index in 0..2 {
+            let trial = monte_carlo::run_trial(&loaded.scenario, &setup, index).expect("trial");
+            let trace = trace(&loaded.scenario, &setup, index).expect("trace");
+            assert_eq!(trace.truth, trial.truth);
+            assert_eq!(trace.steps.len(), trial.measurements as usize + 1);
+            let last = trace.steps.last().expect("a step");
+            assert_eq!(last.estimate.theta, trial.estimate);
+            assert!(last.next.is_none() && last.information.is_empty());
+            // Every step but the last names the pair lifted next, which the next step read.
+            for pair in trace.steps.windows(2) {
+                assert_eq!(pair[0].next, pair[1].lift.map(|(g, _)| g));
+                let marginal: f32 = pair[1].com_marginal.iter().sum();
+                assert!((marginal - 1.0).abs() < 1e-3, "{marginal}");
+            }
+        }
+    }
+}
