@@ -65,6 +65,8 @@ pub fn height(path: &Path, title: &str, flights: &[(&str, &FlightOutcome)]) -> R
         .map_err(draw_error)?;
     chart
         .configure_mesh()
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
         .x_desc("time (s)")
         .y_desc("height (m)")
         .draw()
@@ -128,6 +130,8 @@ pub fn attitude(path: &Path, title: &str, flight: &FlightOutcome) -> Result<Path
         .map_err(draw_error)?;
     chart
         .configure_mesh()
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
         .x_desc("time (s)")
         .y_desc("angle (deg)")
         .draw()
