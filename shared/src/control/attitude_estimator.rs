@@ -9,6 +9,11 @@
 //! (on the bench, or during a dropout): on a multirotor in flight the accelerometer measures
 //! the thrust direction, not gravity, and would pull a tilted estimate towards level during
 //! every manoeuvre. The integral of the correction is the gyro bias estimate.
+//!
+//! Without the IMU (it failed in flight, [`AttitudeEstimator::update_from_reference`]) the
+//! same filter runs on motion capture alone: the rate is a state of its own, corrected by the
+//! fixes' error as the bias was, so attitude and rate follow the fixes as a second-order
+//! observer of natural frequency [`REFERENCE_ONLY_BANDWIDTH`].
 
 use crate::control::vector::{Quat, Vec3};
 use crate::math;
@@ -75,6 +80,12 @@ pub struct AttitudeEstimator {
 
 /// Estimates kept to meet late motion-capture fixes (0.16 s at 400 Hz).
 pub const ATTITUDE_HISTORY: usize = 64;
+
+/// Natural frequency of the observer on motion capture alone, rad/s: below the rate loop's
+/// 30 rad/s, and the fixes' 5 mrad noise at 100 Hz leaves about 0.03 rad/s in the rate.
+pub const REFERENCE_ONLY_BANDWIDTH: f32 = 20.0;
+/// Damping ratio of the observer on motion capture alone.
+pub const REFERENCE_ONLY_DAMPING: f32 = 0.8;
 
 impl AttitudeEstimator {
     /// A filter that initialises its tilt from the first accelerometer sample.
@@ -172,6 +183,39 @@ impl AttitudeEstimator {
         let omega = rate + correction;
         self.state.attitude = (q * Quat::from_rotation_vector(omega * dt)).normalized();
         self.state.rate = rate;
+        self.since_reference += dt;
+        if self.history.is_full() {
+            self.history.pop_front();
+        }
+        let _ = self.history.push_back((now_us, self.state.attitude));
+        self.state
+    }
+}
+
+impl AttitudeEstimator {
+    /// Forgets the body rate (the IMU it came from failed): [`Self::update_from_reference`]
+    /// starts from rest and learns the rate from the fixes.
+    pub fn forget_rate(&mut self) {
+        self.state.rate = Vec3::ZERO;
+    }
+
+    /// One step without the IMU, `dt` seconds after the previous one, at `now_us`: the
+    /// attitude and the body rate from motion-capture fixes alone (a second-order observer;
+    /// the fixes' latency is met as in [`Self::update`]). Without a fresh fix the attitude
+    /// coasts on the last rate.
+    pub fn update_from_reference(&mut self, dt: f32, now_us: u64) -> AttitudeState {
+        if !(dt > 0.0 && dt < 0.1) {
+            return self.state;
+        }
+        let error = match self.reference_error {
+            Some(e) if self.since_reference <= self.gains.reference_timeout => e,
+            _ => Vec3::ZERO,
+        };
+        let w = REFERENCE_ONLY_BANDWIDTH;
+        self.state.rate += error * (w * w * dt);
+        let omega = self.state.rate + error * (2.0 * REFERENCE_ONLY_DAMPING * w);
+        self.state.attitude =
+            (self.state.attitude * Quat::from_rotation_vector(omega * dt)).normalized();
         self.since_reference += dt;
         if self.history.is_full() {
             self.history.pop_front();

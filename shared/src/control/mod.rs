@@ -11,10 +11,12 @@
 //! - [`trajectory`]: take-off, transit, hover, landing.
 //! - [`land_detector`]: on the ground, airborne, landed.
 //! - [`navigator`]: both estimators together, fed by the IMU and motion capture.
+//! - [`imu_monitor`]: the IMU's samples checked every tick: frozen, or wildly noisy.
 
 pub mod allocation;
 pub mod attitude_estimator;
 pub mod controller;
+pub mod imu_monitor;
 pub mod land_detector;
 pub mod navigator;
 pub mod params;

@@ -1,7 +1,9 @@
 //! The vehicle's state estimate as every phase uses it (docs/models.md#state-estimation: the lift-off
 //! detector reads the attitude on the ground, the cascade reads attitude, position and
 //! velocity in flight): the attitude filter and the position observer fed by the IMU every
-//! tick and by motion-capture fixes when they come.
+//! tick and by motion-capture fixes when they come. Once the IMU is dropped
+//! ([`Navigator::drop_imu`], it failed in flight) both run on motion capture alone: the
+//! attitude and rate from the fixes' attitudes, position and velocity from their positions.
 
 use crate::control::attitude_estimator::{
     AttitudeEstimator, AttitudeEstimatorGains, AttitudeState,
@@ -58,6 +60,7 @@ impl NavState {
 pub struct Navigator {
     attitude: AttitudeEstimator,
     position: PositionEstimator,
+    imu_dropped: bool,
 }
 
 impl Default for Navigator {
@@ -72,7 +75,26 @@ impl Navigator {
         Self {
             attitude: AttitudeEstimator::new(AttitudeEstimatorGains::DEFAULT),
             position: PositionEstimator::new(PositionEstimatorGains::DEFAULT),
+            imu_dropped: false,
         }
+    }
+
+    /// Stops using the IMU (it failed): from the next update on, its samples are ignored.
+    pub fn drop_imu(&mut self) {
+        if !self.imu_dropped {
+            self.imu_dropped = true;
+            self.attitude.forget_rate();
+        }
+    }
+
+    /// Uses the IMU again (a new mission on a sensor that passes the checks again).
+    pub fn restore_imu(&mut self) {
+        self.imu_dropped = false;
+    }
+
+    /// Whether the IMU is dropped.
+    pub fn imu_dropped(&self) -> bool {
+        self.imu_dropped
     }
 
     /// Takes a motion-capture fix (it may arrive late: each estimator meets it at its stamp).
@@ -81,8 +103,17 @@ impl Navigator {
         self.position.correct(fix.position, fix.stamp_us);
     }
 
-    /// One IMU sample at `now_us`, `dt` seconds after the previous one.
+    /// One IMU sample at `now_us`, `dt` seconds after the previous one (ignored once the IMU
+    /// is dropped: the estimate then coasts between fixes, constant rate and velocity).
     pub fn update(&mut self, imu: &ImuSample, dt: f32, now_us: u64) -> NavState {
+        if self.imu_dropped {
+            let attitude = self.attitude.update_from_reference(dt, now_us);
+            self.position.predict(Vec3::ZERO, dt, now_us);
+            return NavState {
+                attitude,
+                position: self.position.state(),
+            };
+        }
         let attitude = self.attitude.update(imu.gyro, imu.accel, dt, now_us);
         let world = attitude.attitude.rotate(imu.accel) + Vec3::DOWN * GRAVITY;
         self.position.predict(world, dt, now_us);

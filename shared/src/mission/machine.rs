@@ -11,7 +11,13 @@
 //! a [`crate::mission::MissionPlanner`] and hands back with [`Mission::deliver`]; the mission
 //! takes each result exactly [`JobRequest::deadline_ticks`] after asking, while the rotors
 //! hold what the phase needs (off on the ground).
+//!
+//! Every tick's IMU sample also goes through an [`ImuMonitor`]: a frozen or wildly noisy IMU,
+//! like a fault the board's drivers report, stops the mission on the ground; in flight the
+//! vehicle lands where it is, and with an IMU fault it navigates on motion capture alone
+//! ([`Navigator::drop_imu`]).
 
+use crate::control::imu_monitor::{ImuFailure, ImuMonitor};
 use crate::control::navigator::{ImuSample, MocapFix, NavState, Navigator};
 use crate::control::trajectory::FlightPhase;
 use crate::estimation::{Estimate, Status};
@@ -160,6 +166,15 @@ pub struct TickOutput {
     pub nav: NavState,
 }
 
+/// An IMU failure the monitor found and the mission acted on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImuDetection {
+    /// What was wrong.
+    pub failure: ImuFailure,
+    /// The tick's time when it was found, us (the clock of [`TickInput::time_us`]).
+    pub time_us: u64,
+}
+
 /// A job asked for and not yet taken.
 #[derive(Clone, Debug)]
 struct PendingJob {
@@ -191,6 +206,8 @@ pub struct Mission {
     adapter: Option<Adapter>,
     adaptation: Option<AdaptEvent>,
     abort: Option<AbortReason>,
+    imu_monitor: ImuMonitor,
+    imu_detection: Option<ImuDetection>,
 }
 
 impl Mission {
@@ -233,6 +250,8 @@ impl Mission {
             adapter: None,
             adaptation: None,
             abort: None,
+            imu_monitor: ImuMonitor::new(),
+            imu_detection: None,
         }
     }
 
@@ -257,6 +276,8 @@ impl Mission {
         self.adapter = None;
         self.adaptation = None;
         self.abort = None;
+        self.imu_detection = None;
+        self.navigator.restore_imu();
     }
 
     /// The phase.
@@ -287,6 +308,17 @@ impl Mission {
     /// Why the mission aborted (or lands in place), if it did.
     pub fn abort_reason(&self) -> Option<AbortReason> {
         self.abort
+    }
+
+    /// The first IMU failure the monitor found after the start, and when (the mission stopped
+    /// or landed for it unless it had already stopped or was landing for another reason).
+    pub fn imu_detection(&self) -> Option<ImuDetection> {
+        self.imu_detection
+    }
+
+    /// Whether the navigation has dropped the IMU (it failed in flight).
+    pub fn imu_dropped(&self) -> bool {
+        self.navigator.imu_dropped()
     }
 
     /// Largest thrust of one robot's rotor, N (0 when unloaded).
@@ -378,6 +410,21 @@ impl Mission {
         self.tick += 1;
         let dt = self.clock.step(input.time_us);
         self.phase_time += dt;
+        let imu_failure = self.imu_monitor.check(&input.imu);
+        let started = !matches!(self.phase, Phase::Idle | Phase::Disarmed | Phase::Aborted);
+        if let Some(failure) = imu_failure
+            && started
+            && self.imu_detection.is_none()
+        {
+            self.imu_detection = Some(ImuDetection {
+                failure,
+                time_us: input.time_us,
+            });
+        }
+        if (imu_failure.is_some() || input.faults.imu) && matches!(self.phase, Phase::Flying(_)) {
+            // From this sample on the IMU is not to be trusted: land on motion capture.
+            self.navigator.drop_imu();
+        }
         self.navigator.update(&input.imu, dt, input.time_us);
         // The fix after the sample: a fix is never newer than the tick it arrives in.
         if let Some(fix) = &input.mocap {
@@ -390,8 +437,12 @@ impl Mission {
             None => (None, None),
         };
         let mut fault_landing = false;
+        let fault = input
+            .faults
+            .reason(self.scenario.robots.count())
+            .or(imu_failure.map(AbortReason::from));
         if transition.is_none()
-            && let Some(why) = input.faults.reason(self.scenario.robots.count())
+            && let Some(why) = fault
         {
             match self.phase {
                 Phase::Idle | Phase::Disarmed | Phase::Aborted => {}
@@ -693,6 +744,8 @@ impl Mission {
                         Some(
                             why @ (AbortReason::OperatorAbort
                             | AbortReason::ImuFault
+                            | AbortReason::ImuStuck
+                            | AbortReason::ImuNoisy
                             | AbortReason::RobotStalled { .. }),
                         ) => Reason::Abort(why),
                         _ => Reason::LandNow,
@@ -708,9 +761,12 @@ impl Mission {
             FlightEvent::Stopped(FlightStop::NoPosition) => {
                 (Phase::Aborted, Reason::Abort(AbortReason::PositionLost))
             }
-            FlightEvent::Stopped(FlightStop::OperatorGrounded) => {
-                (Phase::Aborted, Reason::Abort(AbortReason::OperatorAbort))
-            }
+            // Asked to land before the payload left the ground: by the operator, or for a
+            // fault whose reason is kept.
+            FlightEvent::Stopped(FlightStop::OperatorGrounded) => (
+                Phase::Aborted,
+                Reason::Abort(self.abort.unwrap_or(AbortReason::OperatorAbort)),
+            ),
             FlightEvent::Stopped(FlightStop::Killed) => {
                 (Phase::Aborted, Reason::Abort(AbortReason::Killed))
             }

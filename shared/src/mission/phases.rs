@@ -3,6 +3,7 @@
 //! the caller can log it.
 
 use crate::control::allocation::AllocationError;
+use crate::control::imu_monitor::ImuFailure;
 use crate::control::trajectory::FlightPhase;
 use crate::estimation::estimator::OutsideGrid;
 use crate::estimation::{EstimationError, Measurement};
@@ -112,6 +113,13 @@ pub enum AbortReason {
     /// The IMU failed (stalled, saturated or implausible): on the ground the mission stops,
     /// in flight it lands where it is.
     ImuFault,
+    /// The IMU repeats one sample ([`crate::control::imu_monitor`]): on the ground the
+    /// mission stops, in flight it lands on motion capture alone.
+    ImuStuck,
+    /// The IMU's samples jump far beyond sensor noise and the vehicle's motion
+    /// ([`crate::control::imu_monitor`]): on the ground the mission stops, in flight it lands
+    /// on motion capture alone.
+    ImuNoisy,
     /// A robot's stepper stalled on the rail: the robot is not where the plan put it.
     RobotStalled {
         /// The robot, counted from 0.
@@ -157,6 +165,8 @@ impl core::fmt::Display for AbortReason {
             Self::JobOverrun => write!(f, "a computation did not finish by its deadline"),
             Self::NoFlightTarget => write!(f, "the payload description has no flight target"),
             Self::ImuFault => write!(f, "IMU fault (stalled, saturated or implausible)"),
+            Self::ImuStuck => write!(f, "{}", ImuFailure::Stuck),
+            Self::ImuNoisy => write!(f, "{}", ImuFailure::Noisy),
             Self::RobotStalled { robot } => write!(
                 f,
                 "robot {} stalled on the rail: it is not where the plan put it",
@@ -238,6 +248,15 @@ impl core::fmt::Display for Reason {
             Self::LandNow => write!(f, "landing now, as commanded"),
             Self::Landed => write!(f, "landed, rotors stopped"),
             Self::Abort(why) => write!(f, "ABORT: {why}"),
+        }
+    }
+}
+
+impl From<ImuFailure> for AbortReason {
+    fn from(failure: ImuFailure) -> Self {
+        match failure {
+            ImuFailure::Stuck => Self::ImuStuck,
+            ImuFailure::Noisy => Self::ImuNoisy,
         }
     }
 }

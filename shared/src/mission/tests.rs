@@ -5,6 +5,7 @@
 
 use std::vec::Vec;
 
+use crate::control::imu_monitor::ImuFailure;
 use crate::control::navigator::{ImuSample, MocapFix};
 use crate::control::trajectory::FlightPhase;
 use crate::control::vector::{Quat, Vec3};
@@ -50,6 +51,8 @@ struct World {
     ceiling: f32,
     /// What the drivers report.
     faults: HardwareFaults,
+    /// The IMU repeats this sample instead of measuring.
+    frozen_imu: Option<ImuSample>,
 }
 
 impl World {
@@ -65,19 +68,29 @@ impl World {
             mocap: true,
             ceiling: f32::INFINITY,
             faults: HardwareFaults::NONE,
+            frozen_imu: None,
+        }
+    }
+
+    /// The IMU's sample at `tick`: the truth with a little noise (a real sensor never repeats
+    /// itself; the mission's IMU monitor flags one that does).
+    fn imu(&self, tick: u64) -> ImuSample {
+        let attitude = Quat::from_euler(self.tilt, 0.0, 0.0);
+        let accel = attitude.inverse_rotate(Vec3::new(0.0, 0.0, -GRAVITY - self.climb));
+        let h = tick.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40;
+        let dither = (h as f32 / (1u64 << 24) as f32 - 0.5) * 2e-3;
+        ImuSample {
+            gyro: Vec3::new(self.tilt_rate, 0.0, dither),
+            accel,
         }
     }
 
     fn input(&self, tick: u64, command: Option<OperatorCommand>) -> TickInput {
         let time_us = tick * DT_US;
         let attitude = Quat::from_euler(self.tilt, 0.0, 0.0);
-        let accel = attitude.inverse_rotate(Vec3::new(0.0, 0.0, -GRAVITY - self.climb));
         TickInput {
             time_us,
-            imu: ImuSample {
-                gyro: Vec3::new(self.tilt_rate, 0.0, 0.0),
-                accel,
-            },
+            imu: self.frozen_imu.unwrap_or_else(|| self.imu(tick)),
             mocap: (self.mocap && tick % 4 == 0).then_some(MocapFix {
                 position: Vec3::new(0.0, 0.0, -self.height),
                 attitude,
@@ -794,5 +807,84 @@ fn an_imu_fault_in_flight_lands() {
     );
     assert_eq!(r.mission.phase(), Phase::Disarmed, "landed, then disarmed");
     assert_eq!(r.mission.abort_reason(), Some(AbortReason::ImuFault));
+    assert!(world.height < 0.05);
+}
+
+/// The IMU freezes while the robots move to their first lift: the monitor finds it within
+/// 100 ms and the mission stops on the ground with the reason, rotors never armed.
+#[test]
+fn a_frozen_imu_on_the_ground_stops_the_mission() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    let mut frozen_at = None;
+    let r = run_with(
+        &s,
+        MissionConfig::default(),
+        &mut world,
+        Jobs::OnTime,
+        &[(1, OperatorCommand::Start)],
+        |tick, out, w| {
+            if out.phase == Phase::MovingRobots && frozen_at.is_none() {
+                frozen_at = Some(tick);
+                w.frozen_imu = Some(w.imu(tick));
+            }
+        },
+        200_000,
+    );
+    let frozen_at = frozen_at.expect("the robots moved");
+    assert_eq!(r.mission.abort_reason(), Some(AbortReason::ImuStuck));
+    assert_eq!(r.mission.phase(), Phase::Aborted);
+    let (stopped, _, _) = r.transitions.last().copied().expect("an abort");
+    assert!(
+        stopped - frozen_at <= 40,
+        "stopped {} ticks after the freeze",
+        stopped - frozen_at
+    );
+    let found = r.mission.imu_detection().expect("recorded");
+    assert_eq!(found.failure, ImuFailure::Stuck);
+    assert_eq!(found.time_us, stopped * DT_US);
+    assert!(!phases(&r).contains(&Phase::Lifting));
+    assert!(!r.last.armed && r.last.thrusts.iter().all(|&t| t == 0.0));
+    assert_eq!(
+        std::format!("{}", AbortReason::ImuStuck),
+        "IMU frozen: the same gyro and accelerometer sample for 50 ms"
+    );
+}
+
+/// The IMU freezes in flight: the vehicle lands where it is on motion capture alone (the IMU
+/// dropped), then disarms, and the reason is the frozen IMU.
+#[test]
+fn a_frozen_imu_in_flight_lands_on_motion_capture() {
+    let s = scenario(3.5);
+    let at = takeoff_tick(&s) + 1200;
+    let mut world = World::new(&s);
+    let r = run_with(
+        &s,
+        MissionConfig::default(),
+        &mut world,
+        Jobs::OnTime,
+        &[(1, OperatorCommand::Start)],
+        |tick, _, w| {
+            if tick == at {
+                assert!(w.height > 0.2, "flying when the IMU froze");
+                w.frozen_imu = Some(w.imu(tick));
+            }
+        },
+        200_000,
+    );
+    let landing = r
+        .transitions
+        .iter()
+        .find(|(_, reason, _)| *reason == Reason::Abort(AbortReason::ImuStuck))
+        .expect("a landing for the IMU");
+    assert_eq!(landing.2, Phase::Flying(FlightPhase::Land));
+    assert!(
+        landing.0 - at <= 40,
+        "tick {} for a freeze at {at}",
+        landing.0
+    );
+    assert!(r.mission.imu_dropped(), "landed on motion capture alone");
+    assert_eq!(r.mission.phase(), Phase::Disarmed, "landed, then disarmed");
+    assert_eq!(r.mission.abort_reason(), Some(AbortReason::ImuStuck));
     assert!(world.height < 0.05);
 }
