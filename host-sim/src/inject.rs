@@ -1,6 +1,8 @@
 //! Failure injection on the command line: `--inject KIND@SECONDS` (seconds after take-off
-//! began; repeatable). Each kind is parsed and range-checked here, with an error that names
-//! the flag and what is wrong; the plant loop ([`crate::mission_run`]) applies it.
+//! began; repeatable). The IMU's faults may also come on the ground: `KIND@start+SECONDS` is
+//! that many seconds after the mission's start (the plant's time zero; `@start+0` from the
+//! first sample). Each kind is parsed and range-checked here, with an error that names the
+//! flag and what is wrong; the plant loop ([`crate::mission_run`]) applies it.
 //!
 //! Kinds (robots numbered from 1, as the mission's texts number them):
 //! - `load-shift:DX,DY@T`: the payload's COM moves by (DX, DY) m over half a second, a load
@@ -15,6 +17,11 @@ use shared::scenario::MAX_ROBOTS;
 
 /// Largest load shift, m: beyond the paper's payloads (1.76 m long at most).
 pub const MAX_LOAD_SHIFT: f32 = 1.0;
+/// Largest IMU noise factor: at 1000 times the simulated sensor's, the accelerometer's noise
+/// (50 m/s^2) reaches a third of the ICM-42688-P's range (+-16 g) and the gyro's (5 rad/s)
+/// a seventh of its +-2000 deg/s; beyond, a real sensor would read at full scale, which the
+/// board's driver reports.
+pub const MAX_IMU_NOISE: f32 = 1000.0;
 /// Latest injection, s after take-off: the mission's own time limit.
 pub const MAX_INJECT_TIME: f32 = crate::mission_run::MISSION_TIME_LIMIT;
 
@@ -26,6 +33,20 @@ pub enum Fault {
     /// This robot's stepper (index from 0; the command line numbers robots from 1, as the
     /// mission's texts do) stalls halfway through the rearrangement.
     StepperStall(usize),
+    /// The IMU repeats its last sample.
+    ImuStuck,
+    /// White noise of this many times the simulated sensor's is added to the IMU's samples.
+    ImuNoise(f32),
+}
+
+/// What an injection's time counts from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Since {
+    /// The take-off's beginning (`@T`).
+    #[default]
+    Takeoff,
+    /// The mission's start, the plant's time zero (`@start+T`; IMU faults only).
+    Start,
 }
 
 /// One injection: a fault at a time.
@@ -33,15 +54,23 @@ pub enum Fault {
 pub struct Injection {
     /// The fault.
     pub fault: Fault,
-    /// When, s after take-off began.
+    /// When, s after [`Self::since`].
     pub after: f32,
+    /// What `after` counts from.
+    pub since: Since,
 }
 
 impl fmt::Display for Injection {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.fault {
-            Fault::LoadShift(d) => write!(f, "load-shift:{},{}@{}", d.x, d.y, self.after),
-            Fault::StepperStall(robot) => write!(f, "stepper-stall:{}", robot + 1),
+            Fault::LoadShift(d) => write!(f, "load-shift:{},{}@", d.x, d.y),
+            Fault::StepperStall(robot) => return write!(f, "stepper-stall:{}", robot + 1),
+            Fault::ImuStuck => write!(f, "imu-stuck@"),
+            Fault::ImuNoise(x) => write!(f, "imu-noise:{x}@"),
+        }?;
+        match self.since {
+            Since::Takeoff => write!(f, "{}", self.after),
+            Since::Start => write!(f, "start+{}", self.after),
         }
     }
 }
@@ -73,15 +102,24 @@ impl Injection {
             return Ok(Self {
                 fault: Fault::StepperStall(robot - 1),
                 after: 0.0,
+                since: Since::Takeoff,
             });
         }
         let (kind, at) = text
             .rsplit_once('@')
             .ok_or_else(|| format!("`{text}`: expected KIND@SECONDS, e.g. load-shift:0.15,0@11"))?;
+        let (since, at) = match at.trim().strip_prefix("start+") {
+            Some(rest) => (Since::Start, rest),
+            None => (Since::Takeoff, at),
+        };
         let after = number(at, "time")?;
+        let from = match since {
+            Since::Takeoff => "take-off",
+            Since::Start => "the start",
+        };
         if !(0.0..=MAX_INJECT_TIME).contains(&after) {
             return Err(format!(
-                "`{text}`: time {after} s must be from 0 to {MAX_INJECT_TIME} s after take-off"
+                "`{text}`: time {after} s must be from 0 to {MAX_INJECT_TIME} s after {from}"
             ));
         }
         let (name, arg) = kind.split_once(':').unwrap_or((kind, ""));
@@ -99,13 +137,35 @@ impl Injection {
                 }
                 Fault::LoadShift(d)
             }
+            "imu-stuck" if arg.is_empty() => Fault::ImuStuck,
+            "imu-stuck" => return Err(format!("`{text}`: imu-stuck takes no argument")),
+            "imu-noise" => {
+                let x = number(arg, "noise factor X").map_err(|e| {
+                    format!("`{text}`: imu-noise:X takes X times the sensor's noise: {e}")
+                })?;
+                if !(x > 0.0 && x <= MAX_IMU_NOISE) {
+                    return Err(format!(
+                        "`{text}`: imu-noise factor {x} must be above 0 and at most {MAX_IMU_NOISE} (times the sensor's noise)"
+                    ));
+                }
+                Fault::ImuNoise(x)
+            }
             other => {
                 return Err(format!(
-                    "`{text}`: unknown fault `{other}` (known: load-shift:DX,DY@T, stepper-stall:J)"
+                    "`{text}`: unknown fault `{other}` (known: load-shift:DX,DY@T, stepper-stall:J, imu-stuck@T, imu-noise:X@T; IMU faults also @start+T)"
                 ));
             }
         };
-        Ok(Self { fault, after })
+        if since == Since::Start && !matches!(fault, Fault::ImuStuck | Fault::ImuNoise(_)) {
+            return Err(format!(
+                "`{text}`: only the IMU's faults take @start+T; a load shift happens in flight (@T, after take-off)"
+            ));
+        }
+        Ok(Self {
+            fault,
+            after,
+            since,
+        })
     }
 }
 
@@ -122,6 +182,18 @@ mod tests {
         let stall = Injection::parse("stepper-stall:2").expect("valid");
         assert_eq!(stall.fault, Fault::StepperStall(1));
         assert_eq!(stall.to_string(), "stepper-stall:2");
+        let stuck = Injection::parse("imu-stuck@4.5").expect("valid");
+        assert_eq!(
+            (stuck.fault, stuck.after, stuck.since),
+            (Fault::ImuStuck, 4.5, Since::Takeoff)
+        );
+        assert_eq!(stuck.to_string(), "imu-stuck@4.5");
+        let noisy = Injection::parse("imu-noise:50@start+2").expect("valid");
+        assert_eq!(
+            (noisy.fault, noisy.after, noisy.since),
+            (Fault::ImuNoise(50.0), 2.0, Since::Start)
+        );
+        assert_eq!(noisy.to_string(), "imu-noise:50@start+2");
         for (bad, says) in [
             ("load-shift:0.15,0", "KIND@SECONDS"),
             ("load-shift:0.15@3", "DX,DY"),
@@ -133,6 +205,15 @@ mod tests {
             ("stepper-stall:2@3", "no time"),
             ("stepper-stall:99", "numbered 1 to"),
             ("stepper-stall:0", "numbered 1 to"),
+            ("imu-stuck:3@1", "no argument"),
+            ("imu-noise@1", "not a number"),
+            ("imu-noise:0@1", "above 0"),
+            ("imu-noise:-5@1", "above 0"),
+            ("imu-noise:1001@1", "at most 1000"),
+            ("imu-noise:inf@1", "finite"),
+            ("imu-stuck@start+x", "not a number"),
+            ("imu-stuck@start+-1", "after the start"),
+            ("load-shift:0.1,0@start+3", "only the IMU's faults"),
         ] {
             let err = Injection::parse(bad).expect_err(bad);
             assert!(err.contains(says), "{bad}: {err}");

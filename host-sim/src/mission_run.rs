@@ -10,6 +10,7 @@
 //! flight whichever runs the mission.
 
 use anyhow::{Result, anyhow};
+use shared::control::imu_monitor::ImuFailure;
 use shared::control::navigator::{ImuSample, MocapFix};
 use shared::control::vector::Vec3;
 use shared::estimation::Measurement;
@@ -22,7 +23,7 @@ use shared::mission::{
 use shared::scenario::Scenario;
 
 use crate::harness::{CONTROL_HZ, DROP_TILT_DEG};
-use crate::plant::sensors::Sensors;
+use crate::plant::sensors::{ImuNoise, Sensors};
 use crate::plant::{PHYSICS_DT, Plant, PlantConfig};
 
 /// Longest mission simulated, s.
@@ -51,6 +52,29 @@ pub struct MissionSetup {
     /// Failure injection: this robot's stepper stalls halfway through the rearrangement and
     /// its driver says so (StallGuard on the board).
     pub stepper_stall: Option<usize>,
+    /// Failure injection: the IMU freezes or grows noisy.
+    pub imu_fault: Option<ImuInjection>,
+}
+
+/// An IMU that fails: from `after` seconds after take-off began (or after the mission's start,
+/// `from_start`) every sample the autopilot gets is faulty.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuInjection {
+    /// How it fails.
+    pub kind: ImuFaultKind,
+    /// When, s.
+    pub after: f32,
+    /// `after` counts from the mission's start (the plant's time zero), not from take-off.
+    pub from_start: bool,
+}
+
+/// How an injected IMU fails.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ImuFaultKind {
+    /// It repeats the last sample it gave before the fault.
+    Stuck,
+    /// White noise of this many times the sensor's own is added to every axis.
+    Noise(f32),
 }
 
 /// A load that shifts in flight: the payload's true COM moves by `offset` over
@@ -113,6 +137,7 @@ impl Default for MissionSetup {
             time_limit: MISSION_TIME_LIMIT,
             load_shift: None,
             stepper_stall: None,
+            imu_fault: None,
         }
     }
 }
@@ -205,6 +230,11 @@ pub struct PlantRecord {
     pub max_thrust_fraction: f32,
     /// When the load shift began, s, if one was injected and happened.
     pub shift_at: Option<f32>,
+    /// When the injected IMU fault began (its first faulty sample), s, if it happened.
+    pub imu_fault_at: Option<f32>,
+    /// Horizontal distance from where the payload was when the injected IMU fault began to
+    /// where it ended, m.
+    pub moved_after_imu_fault_m: Option<f32>,
     /// Each in-flight re-formation.
     pub adaptations: Vec<Adaptation>,
     /// The flight, sampled at 100 Hz from take-off.
@@ -263,6 +293,13 @@ pub fn fly(
     let mut shift_from = truth.com;
     let mut stall = setup.stepper_stall.map(StepperStall::new);
     let mut faults = HardwareFaults::NONE;
+    let mut last_imu: Option<ImuSample> = None;
+    let mut imu_fault_position: Option<Vec3> = None;
+    let mut frozen: Option<ImuSample> = None;
+    let mut imu_noise = match setup.imu_fault.map(|f| f.kind) {
+        Some(ImuFaultKind::Noise(x)) => Some(ImuNoise::new(setup.seed, x)),
+        _ => None,
+    };
     loop {
         let t = plant.time();
         if t >= limit {
@@ -280,7 +317,25 @@ pub fn fly(
             }
         }
         let truth_now = plant.state();
-        let imu = sensors.imu(&truth_now, dt);
+        let mut imu = sensors.imu(&truth_now, dt);
+        if let Some(fault) = &setup.imu_fault {
+            let begin = if fault.from_start {
+                fault.after
+            } else {
+                takeoff_at + fault.after
+            };
+            if t >= begin {
+                if record.imu_fault_at.is_none() {
+                    record.imu_fault_at = Some(t);
+                    imu_fault_position = Some(truth_now.position);
+                }
+                imu = match fault.kind {
+                    ImuFaultKind::Stuck => *frozen.get_or_insert(last_imu.unwrap_or(imu)),
+                    ImuFaultKind::Noise(_) => imu_noise.as_mut().map_or(imu, |n| n.add(imu)),
+                };
+            }
+        }
+        last_imu = Some(imu);
         let mocap = sensors
             .mocap(&truth_now, plant.time_us())
             .filter(|_| t < mocap_lost_at);
@@ -411,6 +466,10 @@ pub fn fly(
     }
     let landing = Vec3::new(flight.target[0], flight.target[1], start.z);
     record.final_position_error_m = (plant.state().position - landing).norm();
+    record.moved_after_imu_fault_m = imu_fault_position.map(|p| {
+        let d = plant.state().position - p;
+        d.x.hypot(d.y)
+    });
     record.simulated_s = end;
     Ok(record)
 }
@@ -605,6 +664,13 @@ pub struct MissionOutcome {
     pub max_thrust_fraction: f32,
     /// When the injected load shift began, s.
     pub shift_at: Option<f32>,
+    /// When the injected IMU fault began, s.
+    pub imu_fault_at: Option<f32>,
+    /// Horizontal distance from where the payload was when the IMU fault began to where it
+    /// ended (landing in place: the landing error), m.
+    pub moved_after_imu_fault_m: Option<f32>,
+    /// What the mission's IMU monitor found after the start, and when, s.
+    pub imu_detected: Option<(ImuFailure, f32)>,
     /// Each in-flight re-formation.
     pub adaptations: Vec<Adaptation>,
     /// The flight sampled at 100 Hz.
@@ -647,6 +713,11 @@ pub fn run(
         max_tilt_deg: record.max_tilt_deg,
         max_thrust_fraction: record.max_thrust_fraction,
         shift_at: record.shift_at,
+        imu_fault_at: record.imu_fault_at,
+        moved_after_imu_fault_m: record.moved_after_imu_fault_m,
+        imu_detected: mission
+            .imu_detection()
+            .map(|d| (d.failure, d.time_us as f32 * 1e-6)),
         adaptations: record.adaptations,
         series: record.series,
     };

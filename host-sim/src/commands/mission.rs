@@ -9,15 +9,18 @@ use std::time::Instant;
 use anyhow::{Result, bail};
 use clap::Args;
 use serde_json::json;
+use shared::control::imu_monitor::ImuFailure;
 use shared::estimation::{EstimatorOptions, ThrustScaleAxis};
 use shared::flight::AdaptConfig;
 use shared::mission::MissionConfig;
 
 use crate::cli::{Outcome, check_map_error, check_range};
 use crate::commands::fly::MixerArg;
-use crate::inject::{Fault, Injection};
+use crate::inject::{Fault, Injection, Since};
 use crate::mission_figures;
-use crate::mission_run::{self, LoadShift, MISSION_TIME_LIMIT, MissionOutcome, MissionSetup};
+use crate::mission_run::{
+    self, ImuFaultKind, ImuInjection, LoadShift, MISSION_TIME_LIMIT, MissionOutcome, MissionSetup,
+};
 use crate::report::print_json;
 use crate::say;
 use crate::scenario_file;
@@ -64,8 +67,9 @@ pub struct MissionArgs {
     mixer: MixerArg,
     /// Failure injection, seconds after take-off began: `load-shift:DX,DY@T` moves the
     /// payload's COM by (DX, DY) m over half a second; `stepper-stall:J` (no time) stalls robot
-    /// J's (from 1) stepper halfway through the rearrangement (repeatable: the last one of a kind
-    /// counts).
+    /// J's (from 1) stepper halfway through the rearrangement; `imu-stuck@T` freezes the IMU,
+    /// `imu-noise:X@T` adds X times its noise (0 < X <= 1000); IMU faults also `@start+T`, T s
+    /// after the mission's start (repeatable: the last one of a kind counts).
     #[arg(long, value_name = "KIND@SECONDS", value_parser = Injection::parse)]
     inject: Vec<Injection>,
     /// Switch off the formation's in-flight adaptation to a load that shifts.
@@ -161,6 +165,22 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
                 _ => None,
             })
             .next_back(),
+        imu_fault: args
+            .inject
+            .iter()
+            .filter_map(|i| {
+                let kind = match i.fault {
+                    Fault::ImuStuck => ImuFaultKind::Stuck,
+                    Fault::ImuNoise(x) => ImuFaultKind::Noise(x),
+                    _ => return None,
+                };
+                Some(ImuInjection {
+                    kind,
+                    after: i.after,
+                    from_start: i.since == Since::Start,
+                })
+            })
+            .next_back(),
         ..MissionSetup::default()
     };
     let json = args.json;
@@ -210,6 +230,14 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
                 "positions": a.positions,
                 "rebalanced_s": a.rebalanced_at,
             })).collect::<Vec<_>>(),
+            "imu_fault": outcome.imu_fault_at.map(|at| json!({
+                "injected_s": at,
+                "detected": outcome.imu_detected.map(|(f, _)| match f {
+                    ImuFailure::Stuck => "stuck",
+                    ImuFailure::Noisy => "noisy",
+                }),
+                "detected_s": outcome.imu_detected.map(|(_, d)| d),
+            })),
             "files": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         }))?;
     } else {
@@ -243,6 +271,15 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
         )?;
         if let Some(why) = &outcome.aborted {
             say!("aborted: {why}")?;
+        }
+        if let Some(at) = outcome.imu_fault_at {
+            match outcome.imu_detected {
+                Some((failure, d)) => say!(
+                    "IMU fault injected at {at:.4} s; the monitor found it {:.1} ms later: {failure}",
+                    1000.0 * (d - at)
+                )?,
+                None => say!("IMU fault injected at {at:.4} s; the monitor did not flag it")?,
+            }
         }
         say!(
             "in flight: largest tilt {:.1} deg, largest rotor command {:.0} % of its maximum",

@@ -37,6 +37,33 @@ pub const MOCAP_POSITION_NOISE: f32 = 0.001;
 /// Motion-capture attitude noise, rad per axis (1 sigma).
 pub const MOCAP_ATTITUDE_NOISE: f32 = 0.005;
 
+/// Extra white noise on the IMU's samples (the `imu-noise` injection), from its own seeded
+/// stream so the sensors' noise stays what it is without it.
+pub struct ImuNoise {
+    rng: ChaCha8Rng,
+    scale: f32,
+}
+
+impl ImuNoise {
+    /// Noise of `scale` times [`GYRO_NOISE`] and [`ACCEL_NOISE`], from `seed`.
+    pub fn new(seed: u64, scale: f32) -> Self {
+        Self {
+            rng: ChaCha8Rng::seed_from_u64(seed ^ 0x1A0_0015E),
+            scale,
+        }
+    }
+
+    /// `sample` with the noise added to every axis.
+    pub fn add(&mut self, sample: ImuSample) -> ImuSample {
+        let rng = &mut self.rng;
+        let mut n = |s: f32| Vec3::new(noise(rng, s), noise(rng, s), noise(rng, s));
+        ImuSample {
+            gyro: sample.gyro + n(self.scale * GYRO_NOISE),
+            accel: sample.accel + n(self.scale * ACCEL_NOISE),
+        }
+    }
+}
+
 /// The vehicle's sensors.
 pub struct Sensors {
     rng: ChaCha8Rng,

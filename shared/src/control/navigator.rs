@@ -1,9 +1,14 @@
 //! The vehicle's state estimate as every phase uses it (docs/models.md#state-estimation: the lift-off
 //! detector reads the attitude on the ground, the cascade reads attitude, position and
 //! velocity in flight): the attitude filter and the position observer fed by the IMU every
-//! tick and by motion-capture fixes when they come. Once the IMU is dropped
-//! ([`Navigator::drop_imu`], it failed in flight) both run on motion capture alone: the
-//! attitude and rate from the fixes' attitudes, position and velocity from their positions.
+//! tick and by motion-capture fixes when they come.
+//!
+//! Once the IMU is dropped ([`Navigator::drop_imu`], it failed in flight) both run on motion
+//! capture and on what the rotors were told ([`Navigator::rotor_command`]): the angular
+//! acceleration and specific force the allocated thrusts make on the vehicle model stand in for
+//! the gyro and the accelerometer in the prediction, and the fixes correct it. Without that
+//! model, a rate differentiated from 100 Hz fixes lags too far for the rate loop: in the plant
+//! the cascade oscillated and the payload dropped within a second.
 
 use crate::control::attitude_estimator::{
     AttitudeEstimator, AttitudeEstimatorGains, AttitudeState,
@@ -61,7 +66,15 @@ pub struct Navigator {
     attitude: AttitudeEstimator,
     position: PositionEstimator,
     imu_dropped: bool,
+    /// Without the IMU: body angular acceleration (rad/s^2) and specific force (m/s^2) of the
+    /// last rotor command.
+    commanded: (Vec3, Vec3),
+    delivered: (Vec3, Vec3),
 }
+
+/// Time constant of the rotors' thrust response to a command, s (the plant's motors; a real
+/// propulsion set's is 20 to 50 ms).
+pub const ROTOR_TIME_CONSTANT: f32 = 0.02;
 
 impl Default for Navigator {
     fn default() -> Self {
@@ -76,13 +89,37 @@ impl Navigator {
             attitude: AttitudeEstimator::new(AttitudeEstimatorGains::DEFAULT),
             position: PositionEstimator::new(PositionEstimatorGains::DEFAULT),
             imu_dropped: false,
+            commanded: (Vec3::ZERO, Vec3::ZERO),
+            delivered: (Vec3::ZERO, Vec3::ZERO),
         }
+    }
+
+    /// What the rotors were last commanded, as the vehicle model turns it into motion: body
+    /// angular acceleration (rad/s^2) and specific force (m/s^2, body): the prediction once
+    /// the IMU is dropped (ignored while it is used). Non-finite values are ignored.
+    pub fn rotor_command(&mut self, angular_acceleration: Vec3, specific_force: Vec3) {
+        if angular_acceleration.is_finite() && specific_force.is_finite() {
+            self.commanded = (angular_acceleration, specific_force);
+        }
+    }
+
+    /// The rotor command as the rotors deliver it: a first-order lag of
+    /// [`ROTOR_TIME_CONSTANT`] behind what they were told.
+    fn delivered(&mut self, dt: f32) -> (Vec3, Vec3) {
+        let k = crate::math::clamp(dt / ROTOR_TIME_CONSTANT, 0.0, 1.0);
+        let (alpha, force) = self.commanded;
+        let (a, f) = &mut self.delivered;
+        *a += (alpha - *a) * k;
+        *f += (force - *f) * k;
+        (*a, *f)
     }
 
     /// Stops using the IMU (it failed): from the next update on, its samples are ignored.
     pub fn drop_imu(&mut self) {
         if !self.imu_dropped {
             self.imu_dropped = true;
+            self.delivered = self.commanded;
+            self.position.learn_bias(true);
             self.attitude.forget_rate();
         }
     }
@@ -90,6 +127,7 @@ impl Navigator {
     /// Uses the IMU again (a new mission on a sensor that passes the checks again).
     pub fn restore_imu(&mut self) {
         self.imu_dropped = false;
+        self.position.learn_bias(false);
     }
 
     /// Whether the IMU is dropped.
@@ -104,11 +142,13 @@ impl Navigator {
     }
 
     /// One IMU sample at `now_us`, `dt` seconds after the previous one (ignored once the IMU
-    /// is dropped: the estimate then coasts between fixes, constant rate and velocity).
+    /// is dropped: the rotor command predicts instead).
     pub fn update(&mut self, imu: &ImuSample, dt: f32, now_us: u64) -> NavState {
         if self.imu_dropped {
-            let attitude = self.attitude.update_from_reference(dt, now_us);
-            self.position.predict(Vec3::ZERO, dt, now_us);
+            let (alpha, force) = self.delivered(dt);
+            let attitude = self.attitude.update_from_reference(alpha, dt, now_us);
+            let world = attitude.attitude.rotate(force) + Vec3::DOWN * GRAVITY;
+            self.position.predict(world, dt, now_us);
             return NavState {
                 attitude,
                 position: self.position.state(),

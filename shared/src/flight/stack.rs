@@ -28,6 +28,7 @@ use crate::control::navigator::NavState;
 use crate::control::params::ControlParams;
 use crate::control::trajectory::{FlightPhase, FlightPlan, PlanLimits, Setpoint};
 use crate::control::vector::Vec3;
+use crate::control::vehicle::VehicleModel;
 use crate::flight::model::FlightModel;
 use crate::math;
 use crate::scenario::MAX_ROBOTS;
@@ -198,6 +199,11 @@ impl FlightStack {
     /// The mixer flown.
     pub fn mixer(&self) -> &Mixer {
         &self.mixer
+    }
+
+    /// The vehicle model flown (mass, inertia).
+    pub fn vehicle(&self) -> &VehicleModel {
+        self.controller.model()
     }
 
     /// Flies on with `model` (the robots moved, or the payload is believed otherwise): the

@@ -20,6 +20,7 @@
 use crate::control::imu_monitor::{ImuFailure, ImuMonitor};
 use crate::control::navigator::{ImuSample, MocapFix, NavState, Navigator};
 use crate::control::trajectory::FlightPhase;
+use crate::control::vector::Vec3;
 use crate::estimation::{Estimate, Status};
 use crate::flight::{
     AdaptEvent, Adapter, FlightCommand, FlightEvent, FlightModel, FlightStack, FlightStop,
@@ -732,6 +733,22 @@ impl Mission {
         let out = flight.step(nav, command, dt);
         let n = self.scenario.robots.count();
         thrusts[..n].copy_from_slice(&out.thrusts[..n]);
+        if self.navigator.imu_dropped() {
+            // Without the IMU the navigation predicts from what the rotors were told.
+            let wrench = flight.mixer().wrench_of(&out.thrusts[..n]);
+            let vehicle = flight.vehicle();
+            let per = |torque: f32, inertia: f32| {
+                if inertia > 0.0 { torque / inertia } else { 0.0 }
+            };
+            let i = vehicle.inertia;
+            let alpha = Vec3::new(
+                per(wrench.torque.x, i.x),
+                per(wrench.torque.y, i.y),
+                per(wrench.torque.z, i.z),
+            );
+            let force = Vec3::new(0.0, 0.0, -per(wrench.thrust, vehicle.mass));
+            self.navigator.rotor_command(alpha, force);
+        }
         self.adapt(nav, &out.thrusts[..n], dt);
         let event = out.event?;
         let (to, reason) = match event {
