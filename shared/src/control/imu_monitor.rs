@@ -33,7 +33,7 @@
 //! the tick-to-tick change before flying a new airframe.
 //!
 //! Non-finite samples count as jumps. The state is a previous sample and two counters
-//! (32 bytes): the flight controller's RAM is tight.
+//! (40 bytes): the flight controller's RAM is tight.
 
 use crate::control::navigator::ImuSample;
 use crate::control::vector::Vec3;
@@ -270,6 +270,11 @@ mod tests {
             s
         });
         assert_eq!(verdict, None);
+    }
+
+    #[test]
+    fn the_state_stays_small() {
+        assert!(core::mem::size_of::<ImuMonitor>() <= 40);
     }
 
     #[test]
