@@ -166,6 +166,8 @@ pub struct FlightStack {
     stopped: Option<FlightStop>,
     /// Hold the hover past its planned time (an in-flight adaptation is under way).
     hold_hover: bool,
+    /// Hold where the plan is now, whatever its segment (the ground link is lost).
+    hold_here: bool,
 }
 
 impl FlightStack {
@@ -193,6 +195,7 @@ impl FlightStack {
             landing: None,
             stopped: None,
             hold_hover: false,
+            hold_here: false,
         }
     }
 
@@ -219,6 +222,23 @@ impl FlightStack {
     /// where it was).
     pub fn hold_hover(&mut self, hold: bool) {
         self.hold_hover = hold;
+    }
+
+    /// Holds where the plan is now while `hold` is set: the plan's clock stops and the
+    /// setpoint stays at its point with no feed-forward (a take-off, a transit or a hover
+    /// stops where it is; a landing goes on). The plan then goes on from there.
+    pub fn hold_position(&mut self, hold: bool) {
+        self.hold_here = hold;
+    }
+
+    /// Whether the vehicle holds where it is ([`Self::hold_position`], and not landing).
+    pub fn holding(&self) -> bool {
+        self.hold_here
+            && self.landing.is_none()
+            && self
+                .plan
+                .segment(self.segment)
+                .is_some_and(|s| s.phase != FlightPhase::Land)
     }
 
     /// The plan's phase.
@@ -398,6 +418,9 @@ impl FlightStack {
                 self.begin_landing(LandingCause::TrackingLost, nav)
             };
         };
+        if self.holding() {
+            return None;
+        }
         self.segment_time += dt;
         if self.hold_hover && segment.phase == FlightPhase::Hover && self.landing.is_none() {
             self.segment_time = math::min(self.segment_time, segment.duration);
@@ -426,10 +449,14 @@ impl FlightStack {
 
     /// What the cascade follows now.
     fn setpoint(&self, nav: &NavState) -> Setpoint {
-        let planned = match self.plan.segment(self.segment) {
+        let mut planned = match self.plan.segment(self.segment) {
             Some(segment) => segment.sample(self.segment_time),
             None => self.plan.settled(),
         };
+        if self.holding() {
+            planned.velocity = Vec3::ZERO;
+            planned.acceleration = Vec3::ZERO;
+        }
         if self.failsafe_until.is_some() {
             // Without position, hold a descent rate; the position loop's error stays zero.
             return Setpoint {

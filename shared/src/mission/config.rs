@@ -6,6 +6,7 @@ use crate::estimation::EstimatorOptions;
 use crate::flight::{AdaptConfig, FlightConfig};
 use crate::liftoff::LiftoffConfig;
 use crate::mission::hardware::HardwareConfig;
+use crate::mission::supervision::SupervisionConfig;
 use crate::rail::stepper::MotionLimits;
 
 /// Default standard deviation of a lift reading, N (see [`MissionConfig::lift_noise_sigma`]).
@@ -48,6 +49,8 @@ pub struct MissionConfig {
     pub arm_time: f32,
     /// The drivers' settings (not used by the mission itself).
     pub hardware: HardwareConfig,
+    /// The ground link's and the battery's failsafes.
+    pub supervision: SupervisionConfig,
 }
 
 impl MissionConfig {
@@ -66,6 +69,7 @@ impl MissionConfig {
         confirmations: 1,
         arm_time: 1.0,
         hardware: HardwareConfig::DEFAULT,
+        supervision: SupervisionConfig::DEFAULT,
     };
 }
 

@@ -32,6 +32,10 @@ use crate::math;
 use crate::mission::config::MissionConfig;
 use crate::mission::jobs::{JobRequest, JobResult, LiftPlan, NO_SCENARIO};
 use crate::mission::phases::{AbortReason, Phase, Reason, Transition};
+use crate::mission::supervision::{
+    BatteryLevel, BatteryMonitor, GcsLossAction, LinkChange, LinkMonitor, LinkResponse, Notice,
+    Supervision,
+};
 use crate::rail::moves::{Positions, RailMove};
 use crate::scenario::{GRAVITY, MAX_ROBOTS, Scenario};
 use crate::timing::{CONTROL_RATE_HZ, LoopMonitor, LoopStats};
@@ -72,6 +76,13 @@ pub enum CommandRefusal {
     NotFlying,
     /// No payload description has been loaded.
     NoPayload,
+    /// No ground link: no ground station's heartbeat within `FS_GCS_LOSS_T`.
+    NoGroundLink,
+    /// The battery is below its low threshold (`BAT_LOW_V`).
+    BatteryLow {
+        /// The filtered pack voltage, mV.
+        millivolts: u32,
+    },
 }
 
 impl core::fmt::Display for CommandRefusal {
@@ -81,6 +92,15 @@ impl core::fmt::Display for CommandRefusal {
             Self::Finished => write!(f, "the mission is over"),
             Self::NotFlying => write!(f, "not flying"),
             Self::NoPayload => write!(f, "no payload description is loaded"),
+            Self::NoGroundLink => write!(
+                f,
+                "no ground link: no ground-station heartbeat (no take-off without one)"
+            ),
+            Self::BatteryLow { millivolts } => write!(
+                f,
+                "battery low: {} V, below BAT_LOW_V",
+                crate::numbers::Fixed(*millivolts as f32 * 1e-3, 2)
+            ),
         }
     }
 }
@@ -142,6 +162,8 @@ pub struct TickInput {
     pub command: Option<OperatorCommand>,
     /// What the drivers report failed ([`HardwareFaults::NONE`] in simulation).
     pub faults: HardwareFaults,
+    /// The ground station's heartbeat and the battery's voltage.
+    pub supervision: Supervision,
 }
 
 /// What one tick commands.
@@ -163,6 +185,8 @@ pub struct TickOutput {
     pub job: Option<JobRequest>,
     /// The answer to this tick's operator command, if one came.
     pub reply: Option<CommandReply>,
+    /// What the ground link's and the battery's supervision has to tell people this tick.
+    pub notice: Option<Notice>,
     /// The state estimate after this tick.
     pub nav: NavState,
 }
@@ -209,6 +233,12 @@ pub struct Mission {
     abort: Option<AbortReason>,
     imu_monitor: ImuMonitor,
     imu_detection: Option<ImuDetection>,
+    link: LinkMonitor,
+    battery: BatteryMonitor,
+    /// Time left of the hold after the ground link was lost in flight, s.
+    gcs_hold: Option<f32>,
+    /// A notice that could not go out in its own tick (one goes out per tick).
+    notice: Option<Notice>,
 }
 
 impl Mission {
@@ -253,6 +283,10 @@ impl Mission {
             abort: None,
             imu_monitor: ImuMonitor::new(),
             imu_detection: None,
+            link: LinkMonitor::new(),
+            battery: BatteryMonitor::new(),
+            gcs_hold: None,
+            notice: None,
         }
     }
 
@@ -279,6 +313,7 @@ impl Mission {
         self.abort = None;
         self.imu_detection = None;
         self.navigator.restore_imu();
+        self.gcs_hold = None;
     }
 
     /// The phase.
@@ -320,6 +355,21 @@ impl Mission {
     /// Whether the navigation has dropped the IMU (it failed in flight).
     pub fn imu_dropped(&self) -> bool {
         self.navigator.imu_dropped()
+    }
+
+    /// Whether the ground link is up (a ground station's heartbeat within `FS_GCS_LOSS_T`).
+    pub fn link_up(&self) -> bool {
+        self.link.up()
+    }
+
+    /// The filtered battery voltage, V, once one was read.
+    pub fn battery_volts(&self) -> Option<f32> {
+        self.battery.volts()
+    }
+
+    /// How the battery stands.
+    pub fn battery_level(&self) -> BatteryLevel {
+        self.battery.level()
     }
 
     /// Largest thrust of one robot's rotor, N (0 when unloaded).
@@ -433,10 +483,39 @@ impl Mission {
         }
         let nav = self.navigator.state();
         let mut thrusts = [0.0f32; MAX_ROBOTS];
+        // The supervision first: a heartbeat in the start's own tick counts for it.
+        let sup = self.config.supervision;
+        let link_change = self.link.update(
+            input.time_us,
+            input.supervision.gcs_heartbeat,
+            sup.gcs_timeout,
+        );
+        let battery_change = self
+            .battery
+            .update(input.supervision.battery_volts, dt, &sup);
+        let mut notice = self.notice.take();
         let (reply, mut transition) = match input.command {
             Some(c) => self.command(c),
             None => (None, None),
         };
+        let mut supervision_landing = false;
+        if transition.is_none() {
+            let (t, landing, said) = self.supervise(link_change, battery_change, input.time_us, dt);
+            transition = t;
+            if let Some(why) = landing
+                && self.abort.is_none()
+            {
+                self.abort = Some(why);
+                supervision_landing = true;
+            }
+            for n in said.into_iter().flatten() {
+                if notice.is_none() {
+                    notice = Some(n);
+                } else {
+                    self.notice = Some(n);
+                }
+            }
+        }
         let mut fault_landing = false;
         let fault = input
             .faults
@@ -463,7 +542,7 @@ impl Mission {
                 Some(OperatorCommand::LandNow | OperatorCommand::Abort) => {
                     Some(FlightCommand::LandNow)
                 }
-                _ if fault_landing => Some(FlightCommand::LandNow),
+                _ if fault_landing || supervision_landing => Some(FlightCommand::LandNow),
                 _ => None,
             };
             transition = self.advance(&nav, dt, flight_command, &mut thrusts);
@@ -484,8 +563,118 @@ impl Mission {
             adaptation: self.adaptation.take(),
             job: self.outgoing.take(),
             reply,
+            notice,
             nav,
         }
+    }
+
+    /// What the ground link's and the battery's changes mean in this phase: a transition (on
+    /// the ground after the start: stop), the reason of a landing in place to begin (in
+    /// flight), and what to tell people.
+    fn supervise(
+        &mut self,
+        link: Option<LinkChange>,
+        battery: Option<BatteryLevel>,
+        time_us: u64,
+        dt: f32,
+    ) -> (Option<Transition>, Option<AbortReason>, [Option<Notice>; 2]) {
+        let sup = self.config.supervision;
+        let on_ground = !matches!(
+            self.phase,
+            Phase::Idle | Phase::Disarmed | Phase::Aborted | Phase::Flying(_)
+        );
+        // Whether the flight flies its plan (not yet landing, nothing stopped).
+        let cruising = matches!(
+            self.phase,
+            Phase::Flying(FlightPhase::Takeoff | FlightPhase::Transit | FlightPhase::Hover)
+        ) && self.abort.is_none()
+            && self
+                .flight
+                .as_ref()
+                .is_some_and(|f| f.landing_cause().is_none() && f.stopped().is_none());
+        let watched = sup.gcs_action != GcsLossAction::Off;
+        let mut notices = [None, None];
+        let mut landing = None;
+        match link {
+            Some(LinkChange::Lost) if watched => {
+                if on_ground {
+                    return (Some(self.abort(AbortReason::GcsLost)), None, notices);
+                }
+                let response = match sup.gcs_action {
+                    _ if !cruising => LinkResponse::Nothing,
+                    GcsLossAction::HoldThenLand => {
+                        self.gcs_hold = Some(sup.gcs_hold_time);
+                        if let Some(f) = self.flight.as_mut() {
+                            f.hold_position(true);
+                        }
+                        LinkResponse::Hold(sup.gcs_hold_time)
+                    }
+                    _ => LinkResponse::Continue,
+                };
+                notices[0] = Some(Notice::LinkLost {
+                    silent: self.link.silence(time_us).unwrap_or(0.0),
+                    response,
+                });
+            }
+            Some(LinkChange::Regained) if watched => {
+                let resumed = self.gcs_hold.take().is_some();
+                if let Some(f) = self.flight.as_mut() {
+                    f.hold_position(false);
+                }
+                notices[0] = Some(Notice::LinkRegained { resumed });
+            }
+            _ => {}
+        }
+        if let Some(left) = self.gcs_hold.as_mut() {
+            *left -= dt;
+            if *left <= 0.0 || !cruising {
+                self.gcs_hold = None;
+                if let Some(f) = self.flight.as_mut() {
+                    f.hold_position(false);
+                }
+                if cruising {
+                    landing = Some(AbortReason::GcsLost);
+                }
+            }
+        }
+        let volts = self.battery.volts().unwrap_or(0.0);
+        match battery {
+            Some(BatteryLevel::Low) if on_ground => {
+                return (
+                    Some(self.abort(AbortReason::BatteryLow { volts })),
+                    None,
+                    notices,
+                );
+            }
+            Some(BatteryLevel::Critical) if on_ground => {
+                return (
+                    Some(self.abort(AbortReason::BatteryCritical { volts })),
+                    None,
+                    notices,
+                );
+            }
+            Some(BatteryLevel::Critical) if cruising => {
+                self.gcs_hold = None;
+                if let Some(f) = self.flight.as_mut() {
+                    f.hold_position(false);
+                }
+                landing = Some(AbortReason::BatteryCritical { volts });
+            }
+            Some(BatteryLevel::Critical) => {
+                notices[1] = Some(Notice::BatteryCritical {
+                    volts,
+                    threshold: sup.battery_critical,
+                });
+            }
+            Some(BatteryLevel::Low) => {
+                notices[1] = Some(Notice::BatteryLow {
+                    volts,
+                    threshold: sup.battery_low,
+                });
+            }
+            Some(BatteryLevel::Ok) | None => {}
+        }
+        (None, landing, notices)
     }
 
     /// The operator's command; the transition it makes on the ground, if any (in flight the
@@ -500,7 +689,29 @@ impl Mission {
             OperatorCommand::Start if self.scenario.robots.count() == 0 => {
                 Err(CommandRefusal::NoPayload)
             }
+            OperatorCommand::Start
+                if self.phase == Phase::Idle
+                    && self.config.supervision.gcs_action != GcsLossAction::Off
+                    && !self.link.up() =>
+            {
+                Err(CommandRefusal::NoGroundLink)
+            }
+            OperatorCommand::Start
+                if self.phase == Phase::Idle
+                    && self.battery.volts().is_some_and(|v| {
+                        let low = self.config.supervision.battery_low;
+                        let critical = self.config.supervision.battery_critical;
+                        (low > 0.0 && v < low) || (critical > 0.0 && v < critical)
+                    }) =>
+            {
+                let volts = self.battery.volts().unwrap_or(0.0);
+                Err(CommandRefusal::BatteryLow {
+                    millivolts: (volts * 1000.0) as u32,
+                })
+            }
             OperatorCommand::Start if self.phase == Phase::Idle => {
+                // A pack changed since a low reading is graded afresh.
+                self.battery.regrade(&self.config.supervision);
                 transition = Some(self.enter(Phase::PreflightChecks, Reason::Started));
                 Ok(())
             }
@@ -763,7 +974,9 @@ impl Mission {
                             | AbortReason::ImuFault
                             | AbortReason::ImuStuck
                             | AbortReason::ImuNoisy
-                            | AbortReason::RobotStalled { .. }),
+                            | AbortReason::RobotStalled { .. }
+                            | AbortReason::GcsLost
+                            | AbortReason::BatteryCritical { .. }),
                         ) => Reason::Abort(why),
                         _ => Reason::LandNow,
                     },
@@ -778,8 +991,7 @@ impl Mission {
             FlightEvent::Stopped(FlightStop::NoPosition) => {
                 (Phase::Aborted, Reason::Abort(AbortReason::PositionLost))
             }
-            // Asked to land before the payload left the ground: by the operator, or for a
-            // fault whose reason is kept.
+            // Landing asked for before the payload left the ground: the reason it was asked for.
             FlightEvent::Stopped(FlightStop::OperatorGrounded) => (
                 Phase::Aborted,
                 Reason::Abort(self.abort.unwrap_or(AbortReason::OperatorAbort)),

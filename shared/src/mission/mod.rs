@@ -7,6 +7,7 @@
 //! - [`machine`]: the tick side, stepped at 400 Hz.
 //! - [`jobs`]: the long computations the tick side hands off, and the planner that runs them.
 //! - [`params`]: the tunables as named parameters (the ground link serves them).
+//! - [`supervision`]: the ground link's and the battery's monitors.
 
 pub mod config;
 pub mod hardware;
@@ -14,6 +15,7 @@ pub mod jobs;
 pub mod machine;
 pub mod params;
 pub mod phases;
+pub mod supervision;
 
 pub use config::{DETECTOR_SIGMA, MissionConfig};
 pub use hardware::HardwareConfig;
@@ -23,6 +25,7 @@ pub use machine::{
     TickInput, TickOutput,
 };
 pub use phases::{AbortReason, Phase, Reason, Transition};
+pub use supervision::{Notice, Supervision, SupervisionConfig};
 
 #[cfg(test)]
 mod tests;

@@ -12,6 +12,7 @@
 
 use crate::control::allocation::MixerKind;
 use crate::mission::config::MissionConfig;
+use crate::mission::supervision::GcsLossAction;
 use crate::numbers::Num;
 
 /// Longest parameter name, bytes (MAVLink's `param_id`).
@@ -89,7 +90,7 @@ macro_rules! param {
 }
 
 /// Number of parameters.
-pub const COUNT: usize = 84;
+pub const COUNT: usize = 89;
 
 /// Every parameter, in the order the protocol numbers them (`param_index`).
 pub static TABLE: [ParamSpec; COUNT] = [
@@ -786,6 +787,50 @@ pub static TABLE: [ParamSpec; COUNT] = [
         255.0,
         "StallGuard threshold (SGTHRS): stalled when SG_RESULT <= 2x this at speed; 0 off (tune on the bench)",
         |c| c.hardware.stall_threshold
+    ),
+    // The ground link's and the battery's failsafes (mission::supervision).
+    ParamSpec {
+        name: "FS_GCS_ACT",
+        unit: "-",
+        min: 0.0,
+        max: 2.0,
+        integer: true,
+        #[cfg(feature = "docs")]
+        doc: "ground link lost in flight: 0 not watched (no start refused), 1 fly on to the target and land, 2 hold FS_GCS_HOLD_T then land in place",
+        get: |c| c.supervision.gcs_action as u8 as f32,
+        set: |c, v| c.supervision.gcs_action = GcsLossAction::from_value(v),
+    },
+    param!(
+        "FS_GCS_LOSS_T",
+        "s",
+        1.0,
+        60.0,
+        "time without a ground station's heartbeat before the link counts as lost (PX4's COM_DL_LOSS_T)",
+        |c| c.supervision.gcs_timeout
+    ),
+    param!(
+        "FS_GCS_HOLD_T",
+        "s",
+        0.0,
+        300.0,
+        "with FS_GCS_ACT 2: time held where the vehicle is before it lands in place (a link back meanwhile resumes the plan)",
+        |c| c.supervision.gcs_hold_time
+    ),
+    param!(
+        "BAT_LOW_V",
+        "V",
+        0.0,
+        100.0,
+        "filtered pack voltage below which the battery is low: a warning, and no start; 0 off",
+        |c| c.supervision.battery_low
+    ),
+    param!(
+        "BAT_CRIT_V",
+        "V",
+        0.0,
+        100.0,
+        "filtered pack voltage below which the battery is critical: landing in place (stop on the ground); 0 off",
+        |c| c.supervision.battery_critical
     ),
 ];
 

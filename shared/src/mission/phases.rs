@@ -125,6 +125,20 @@ pub enum AbortReason {
         /// The robot, counted from 0.
         robot: u8,
     },
+    /// The ground link was lost (no ground station's heartbeat for `FS_GCS_LOSS_T`): on the
+    /// ground after the start the mission stops; in flight, after the hold, it lands in place.
+    GcsLost,
+    /// The battery fell below its low threshold before take-off: the mission stops.
+    BatteryLow {
+        /// The filtered pack voltage, V.
+        volts: f32,
+    },
+    /// The battery fell below its critical threshold: in flight the vehicle lands in place,
+    /// on the ground the mission stops.
+    BatteryCritical {
+        /// The filtered pack voltage, V.
+        volts: f32,
+    },
 }
 
 impl core::fmt::Display for AbortReason {
@@ -171,6 +185,17 @@ impl core::fmt::Display for AbortReason {
                 f,
                 "robot {} stalled on the rail: it is not where the plan put it",
                 u32::from(robot) + 1
+            ),
+            Self::GcsLost => write!(f, "ground link lost (no ground-station heartbeat)"),
+            Self::BatteryLow { volts } => write!(
+                f,
+                "battery low before take-off: {} V, below BAT_LOW_V",
+                Fixed(volts, 2)
+            ),
+            Self::BatteryCritical { volts } => write!(
+                f,
+                "battery critical: {} V, below BAT_CRIT_V",
+                Fixed(volts, 2)
             ),
         }
     }

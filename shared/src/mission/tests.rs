@@ -13,7 +13,7 @@ use crate::estimation::Measurement;
 use crate::geometry::Vec2;
 use crate::mission::{
     AbortReason, CommandRefusal, HardwareFaults, JobRequest, Mission, MissionConfig,
-    MissionPlanner, OperatorCommand, Phase, Reason, TickInput, TickOutput,
+    MissionPlanner, OperatorCommand, Phase, Reason, Supervision, TickInput, TickOutput,
 };
 use crate::paper::{checked, rect_sim1};
 use crate::scenario::{FlightSetup, GRAVITY, Scenario, Truth};
@@ -53,6 +53,11 @@ struct World {
     faults: HardwareFaults,
     /// The IMU repeats this sample instead of measuring.
     frozen_imu: Option<ImuSample>,
+    /// The ground station sends its heartbeat (once a second, from the first tick) before
+    /// this tick.
+    gcs_until: u64,
+    /// The battery's voltage, V.
+    battery: Option<f32>,
 }
 
 impl World {
@@ -68,6 +73,8 @@ impl World {
             mocap: true,
             ceiling: f32::INFINITY,
             faults: HardwareFaults::NONE,
+            gcs_until: u64::MAX,
+            battery: None,
             frozen_imu: None,
         }
     }
@@ -98,6 +105,10 @@ impl World {
             }),
             command,
             faults: self.faults,
+            supervision: Supervision {
+                gcs_heartbeat: tick < self.gcs_until && tick % 400 == 1,
+                battery_volts: self.battery,
+            },
         }
     }
 
@@ -888,3 +899,4 @@ fn a_frozen_imu_in_flight_lands_on_motion_capture() {
     assert_eq!(r.mission.abort_reason(), Some(AbortReason::ImuStuck));
     assert!(world.height < 0.05);
 }
+mod supervision;
