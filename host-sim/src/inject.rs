@@ -1,14 +1,21 @@
 //! Failure injection on the command line: `--inject KIND@SECONDS` (seconds after take-off
-//! began; repeatable). The IMU's faults may also come on the ground: `KIND@start+SECONDS` is
-//! that many seconds after the mission's start (the plant's time zero; `@start+0` from the
-//! first sample). Each kind is parsed and range-checked here, with an error that names the
-//! flag and what is wrong; the plant loop ([`crate::mission_run`]) applies it.
+//! began; repeatable). Faults that can come on the ground also take `KIND@start+SECONDS`, that
+//! many seconds after the mission's start (the plant's time zero; `@start+0` from the first
+//! sample). Each kind is parsed and range-checked here, with an error that names the flag and
+//! what is wrong; the plant loop ([`crate::mission_run`]) applies it (docs/system.md#failsafes).
 //!
 //! Kinds (robots numbered from 1, as the mission's texts number them):
 //! - `load-shift:DX,DY@T`: the payload's COM moves by (DX, DY) m over half a second, a load
 //!   sliding on the plate (the in-flight adaptation's test);
 //! - `stepper-stall:J`: robot J's stepper stalls halfway through the rearrangement before
-//!   take-off and its driver reports it, as StallGuard does on the board (issue 15; no time).
+//!   take-off and its driver reports it, as StallGuard does on the board (no time);
+//! - `imu-stuck@T`: the IMU repeats its last sample; `imu-noise:X@T`: white noise of X times
+//!   the simulated sensor's is added to every sample;
+//! - `gcs-loss@T`: the simulated ground station stops sending its heartbeat (and, with
+//!   `hil --gcs`, nothing from the real one reaches the vehicle any more); without a time, there
+//!   is no ground station from the start;
+//! - `battery:V@T`: the pack's open-circuit voltage drops to V volts; without a time, the pack
+//!   is at V from the start.
 
 use std::fmt;
 
@@ -22,6 +29,8 @@ pub const MAX_LOAD_SHIFT: f32 = 1.0;
 /// a seventh of its +-2000 deg/s; beyond, a real sensor would read at full scale, which the
 /// board's driver reports.
 pub const MAX_IMU_NOISE: f32 = 1000.0;
+/// Highest pack voltage `battery:V` takes, V (a 24-cell pack).
+pub const MAX_PACK_VOLTS: f32 = 100.0;
 /// Latest injection, s after take-off: the mission's own time limit.
 pub const MAX_INJECT_TIME: f32 = crate::mission_run::MISSION_TIME_LIMIT;
 
@@ -37,6 +46,20 @@ pub enum Fault {
     ImuStuck,
     /// White noise of this many times the simulated sensor's is added to the IMU's samples.
     ImuNoise(f32),
+    /// The ground station's heartbeat stops.
+    GcsLoss,
+    /// The pack's voltage drops to this, V.
+    Battery(f32),
+}
+
+impl Fault {
+    /// Whether the fault can come on the ground, before take-off (`@start+T`, or no time).
+    fn on_the_ground(self) -> bool {
+        matches!(
+            self,
+            Self::ImuStuck | Self::ImuNoise(_) | Self::GcsLoss | Self::Battery(_)
+        )
+    }
 }
 
 /// What an injection's time counts from.
@@ -45,7 +68,8 @@ pub enum Since {
     /// The take-off's beginning (`@T`).
     #[default]
     Takeoff,
-    /// The mission's start, the plant's time zero (`@start+T`; IMU faults only).
+    /// The mission's start, the plant's time zero (`@start+T`, or no time for `gcs-loss` and
+    /// `battery:V`).
     Start,
 }
 
@@ -62,15 +86,20 @@ pub struct Injection {
 
 impl fmt::Display for Injection {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let from_start = self.since == Since::Start && self.after == 0.0;
         match self.fault {
-            Fault::LoadShift(d) => write!(f, "load-shift:{},{}@", d.x, d.y),
+            Fault::LoadShift(d) => write!(f, "load-shift:{},{}", d.x, d.y),
             Fault::StepperStall(robot) => return write!(f, "stepper-stall:{}", robot + 1),
-            Fault::ImuStuck => write!(f, "imu-stuck@"),
-            Fault::ImuNoise(x) => write!(f, "imu-noise:{x}@"),
+            Fault::ImuStuck => write!(f, "imu-stuck"),
+            Fault::ImuNoise(x) => write!(f, "imu-noise:{x}"),
+            Fault::GcsLoss if from_start => return write!(f, "gcs-loss"),
+            Fault::GcsLoss => write!(f, "gcs-loss"),
+            Fault::Battery(v) if from_start => return write!(f, "battery:{v}"),
+            Fault::Battery(v) => write!(f, "battery:{v}"),
         }?;
         match self.since {
-            Since::Takeoff => write!(f, "{}", self.after),
-            Since::Start => write!(f, "start+{}", self.after),
+            Since::Takeoff => write!(f, "@{}", self.after),
+            Since::Start => write!(f, "@start+{}", self.after),
         }
     }
 }
@@ -84,6 +113,60 @@ fn number(text: &str, what: &str) -> Result<f32, String> {
         Ok(v)
     } else {
         Err(format!("{what} `{text}` is not a finite number"))
+    }
+}
+
+fn pack_volts(v: &str, text: &str) -> Result<f32, String> {
+    let volts = number(v, "V")?;
+    if !(0.0..=MAX_PACK_VOLTS).contains(&volts) {
+        return Err(format!(
+            "`{text}`: a pack voltage is from 0 to {MAX_PACK_VOLTS} V"
+        ));
+    }
+    Ok(volts)
+}
+
+/// The fault named by `kind` (`NAME` or `NAME:ARG`, no time).
+fn fault(kind: &str, text: &str) -> Result<Fault, String> {
+    let (name, arg) = kind.split_once(':').unwrap_or((kind, ""));
+    let no_argument = |fault| {
+        if arg.is_empty() {
+            Ok(fault)
+        } else {
+            Err(format!("`{text}`: {name} takes no argument"))
+        }
+    };
+    match name {
+        "load-shift" => {
+            let (x, y) = arg.split_once(',').ok_or_else(|| {
+                format!("`{text}`: load-shift takes DX,DY in metres, e.g. load-shift:0.15,0")
+            })?;
+            let d = Vec2::new(number(x, "DX")?, number(y, "DY")?);
+            if d.norm() > MAX_LOAD_SHIFT {
+                return Err(format!(
+                    "`{text}`: a load shift of {:.3} m is beyond {MAX_LOAD_SHIFT} m",
+                    d.norm()
+                ));
+            }
+            Ok(Fault::LoadShift(d))
+        }
+        "imu-stuck" => no_argument(Fault::ImuStuck),
+        "imu-noise" => {
+            let x = number(arg, "noise factor X").map_err(|e| {
+                format!("`{text}`: imu-noise:X takes X times the sensor's noise: {e}")
+            })?;
+            if !(x > 0.0 && x <= MAX_IMU_NOISE) {
+                return Err(format!(
+                    "`{text}`: imu-noise factor {x} must be above 0 and at most {MAX_IMU_NOISE} (times the sensor's noise)"
+                ));
+            }
+            Ok(Fault::ImuNoise(x))
+        }
+        "gcs-loss" => no_argument(Fault::GcsLoss),
+        "battery" => Ok(Fault::Battery(pack_volts(arg, text)?)),
+        other => Err(format!(
+            "`{text}`: unknown fault `{other}` (known: load-shift:DX,DY@T, stepper-stall:J, imu-stuck@T, imu-noise:X@T, gcs-loss[@T], battery:V[@T]; the IMU, ground-station and battery faults also @start+T)"
+        )),
     }
 }
 
@@ -105,9 +188,19 @@ impl Injection {
                 since: Since::Takeoff,
             });
         }
-        let (kind, at) = text
-            .rsplit_once('@')
-            .ok_or_else(|| format!("`{text}`: expected KIND@SECONDS, e.g. load-shift:0.15,0@11"))?;
+        let Some((kind, at)) = text.rsplit_once('@') else {
+            // Without a time: from the start, for the faults that have a state from the start.
+            return match fault(text, text)? {
+                fault @ (Fault::GcsLoss | Fault::Battery(_)) => Ok(Self {
+                    fault,
+                    after: 0.0,
+                    since: Since::Start,
+                }),
+                _ => Err(format!(
+                    "`{text}`: expected KIND@SECONDS, e.g. load-shift:0.15,0@11"
+                )),
+            };
+        };
         let (since, at) = match at.trim().strip_prefix("start+") {
             Some(rest) => (Since::Start, rest),
             None => (Since::Takeoff, at),
@@ -122,43 +215,10 @@ impl Injection {
                 "`{text}`: time {after} s must be from 0 to {MAX_INJECT_TIME} s after {from}"
             ));
         }
-        let (name, arg) = kind.split_once(':').unwrap_or((kind, ""));
-        let fault = match name {
-            "load-shift" => {
-                let (x, y) = arg.split_once(',').ok_or_else(|| {
-                    format!("`{text}`: load-shift takes DX,DY in metres, e.g. load-shift:0.15,0")
-                })?;
-                let d = Vec2::new(number(x, "DX")?, number(y, "DY")?);
-                if d.norm() > MAX_LOAD_SHIFT {
-                    return Err(format!(
-                        "`{text}`: a load shift of {:.3} m is beyond {MAX_LOAD_SHIFT} m",
-                        d.norm()
-                    ));
-                }
-                Fault::LoadShift(d)
-            }
-            "imu-stuck" if arg.is_empty() => Fault::ImuStuck,
-            "imu-stuck" => return Err(format!("`{text}`: imu-stuck takes no argument")),
-            "imu-noise" => {
-                let x = number(arg, "noise factor X").map_err(|e| {
-                    format!("`{text}`: imu-noise:X takes X times the sensor's noise: {e}")
-                })?;
-                if !(x > 0.0 && x <= MAX_IMU_NOISE) {
-                    return Err(format!(
-                        "`{text}`: imu-noise factor {x} must be above 0 and at most {MAX_IMU_NOISE} (times the sensor's noise)"
-                    ));
-                }
-                Fault::ImuNoise(x)
-            }
-            other => {
-                return Err(format!(
-                    "`{text}`: unknown fault `{other}` (known: load-shift:DX,DY@T, stepper-stall:J, imu-stuck@T, imu-noise:X@T; IMU faults also @start+T)"
-                ));
-            }
-        };
-        if since == Since::Start && !matches!(fault, Fault::ImuStuck | Fault::ImuNoise(_)) {
+        let fault = fault(kind, text)?;
+        if since == Since::Start && !fault.on_the_ground() {
             return Err(format!(
-                "`{text}`: only the IMU's faults take @start+T; a load shift happens in flight (@T, after take-off)"
+                "`{text}`: this fault happens in flight: give its time after take-off (@T), not @start+T"
             ));
         }
         Ok(Self {
@@ -174,7 +234,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_load_shift_parses_and_bad_ones_say_why() {
+    fn injections_parse_and_bad_ones_say_why() {
         let i = Injection::parse("load-shift:0.15,-0.05@11").expect("valid");
         assert_eq!(i.fault, Fault::LoadShift(Vec2::new(0.15, -0.05)));
         assert_eq!(i.after, 11.0);
@@ -182,29 +242,37 @@ mod tests {
         let stall = Injection::parse("stepper-stall:2").expect("valid");
         assert_eq!(stall.fault, Fault::StepperStall(1));
         assert_eq!(stall.to_string(), "stepper-stall:2");
-        let stuck = Injection::parse("imu-stuck@4.5").expect("valid");
-        assert_eq!(
-            (stuck.fault, stuck.after, stuck.since),
-            (Fault::ImuStuck, 4.5, Since::Takeoff)
-        );
-        assert_eq!(stuck.to_string(), "imu-stuck@4.5");
-        let noisy = Injection::parse("imu-noise:50@start+2").expect("valid");
-        assert_eq!(
-            (noisy.fault, noisy.after, noisy.since),
-            (Fault::ImuNoise(50.0), 2.0, Since::Start)
-        );
-        assert_eq!(noisy.to_string(), "imu-noise:50@start+2");
+        for (text, fault, after, since) in [
+            ("imu-stuck@4.5", Fault::ImuStuck, 4.5, Since::Takeoff),
+            (
+                "imu-noise:50@start+2",
+                Fault::ImuNoise(50.0),
+                2.0,
+                Since::Start,
+            ),
+            ("gcs-loss@4", Fault::GcsLoss, 4.0, Since::Takeoff),
+            ("gcs-loss", Fault::GcsLoss, 0.0, Since::Start),
+            ("gcs-loss@start+3", Fault::GcsLoss, 3.0, Since::Start),
+            ("battery:12.5@3", Fault::Battery(12.5), 3.0, Since::Takeoff),
+            ("battery:13", Fault::Battery(13.0), 0.0, Since::Start),
+        ] {
+            let i = Injection::parse(text).expect(text);
+            assert_eq!((i.fault, i.after, i.since), (fault, after, since), "{text}");
+            assert_eq!(i.to_string(), text);
+        }
         for (bad, says) in [
             ("load-shift:0.15,0", "KIND@SECONDS"),
             ("load-shift:0.15@3", "DX,DY"),
             ("load-shift:nan,0@3", "finite"),
             ("load-shift:5,0@3", "beyond"),
             ("load-shift:0.1,0@-1", "from 0"),
+            ("load-shift:0.1,0@start+3", "in flight"),
             ("rotor-gone@3", "unknown fault"),
             ("stepper-stall:x", "robot's number"),
             ("stepper-stall:2@3", "no time"),
             ("stepper-stall:99", "numbered 1 to"),
             ("stepper-stall:0", "numbered 1 to"),
+            ("imu-stuck", "KIND@SECONDS"),
             ("imu-stuck:3@1", "no argument"),
             ("imu-noise@1", "not a number"),
             ("imu-noise:0@1", "above 0"),
@@ -212,8 +280,13 @@ mod tests {
             ("imu-noise:1001@1", "at most 1000"),
             ("imu-noise:inf@1", "finite"),
             ("imu-stuck@start+x", "not a number"),
-            ("imu-stuck@start+-1", "after the start"),
-            ("load-shift:0.1,0@start+3", "only the IMU's faults"),
+            ("imu-stuck@start+-1", "from 0"),
+            ("gcs-loss:2@3", "no argument"),
+            ("battery@3", "not a number"),
+            ("battery:x@3", "not a number"),
+            ("battery:-1@3", "from 0 to"),
+            ("battery:500", "from 0 to"),
+            ("battery:nan", "finite"),
         ] {
             let err = Injection::parse(bad).expect_err(bad);
             assert!(err.contains(says), "{bad}: {err}");

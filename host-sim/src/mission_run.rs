@@ -17,8 +17,8 @@ use shared::estimation::Measurement;
 use shared::flight::AdaptEvent;
 use shared::geometry::{Rail, Vec2};
 use shared::mission::{
-    AbortReason, HardwareFaults, JobRequest, Mission, MissionConfig, MissionPlanner,
-    OperatorCommand, Phase, Reason, TickInput,
+    AbortReason, CommandRefusal, HardwareFaults, JobRequest, Mission, MissionConfig,
+    MissionPlanner, OperatorCommand, Phase, Reason, Supervision, TickInput,
 };
 use shared::scenario::Scenario;
 
@@ -52,6 +52,10 @@ pub struct MissionSetup {
     /// Failure injection: this robot's stepper stalls halfway through the rearrangement and
     /// its driver says so (StallGuard on the board).
     pub stepper_stall: Option<usize>,
+    /// Failure injection: the simulated ground station stops sending its heartbeat.
+    pub gcs_loss: Option<Onset>,
+    /// Failure injection: the pack's voltage drops.
+    pub battery_drop: Option<BatteryDrop>,
     /// Failure injection: the IMU freezes or grows noisy.
     pub imu_fault: Option<ImuInjection>,
 }
@@ -76,6 +80,44 @@ pub enum ImuFaultKind {
     /// White noise of this many times the sensor's own is added to every axis.
     Noise(f32),
 }
+
+/// When an injected failure begins.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Onset {
+    /// Before the start: the mission never sees it otherwise.
+    FromStart,
+    /// This many seconds after the mission's start (the plant's time zero).
+    AfterStart(f32),
+    /// This many seconds after take-off began.
+    AfterTakeoff(f32),
+}
+
+impl Onset {
+    /// Whether it has begun at `t`, take-off having begun at `takeoff_at` (infinite before).
+    pub fn begun(self, t: f32, takeoff_at: f32) -> bool {
+        match self {
+            Self::FromStart => true,
+            Self::AfterStart(after) => t >= after,
+            Self::AfterTakeoff(after) => t >= takeoff_at + after,
+        }
+    }
+}
+
+/// A drop of the pack's open-circuit voltage.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BatteryDrop {
+    /// The voltage it drops to, V.
+    pub volts: f32,
+    /// When.
+    pub onset: Onset,
+}
+
+/// The simulated pack's open-circuit voltage, V: a 4S lithium-polymer pack near full (the
+/// prototype's pack is not described; a 4S pack fits its 14.2 N rotors).
+pub const PACK_VOLTS: f32 = 16.0;
+/// The pack's sag with every rotor at full thrust, V (about 20 mOhm at 40 A); in proportion
+/// below that.
+pub const PACK_SAG_VOLTS: f32 = 0.8;
 
 /// A load that shifts in flight: the payload's true COM moves by `offset` over
 /// [`LOAD_SHIFT_TIME`], starting `after` seconds after take-off began (a mass sliding along
@@ -104,6 +146,8 @@ pub struct FlightSample {
     pub roll_pitch_deg: [f32; 2],
     /// Height above the start, m.
     pub height: f32,
+    /// Horizontal position from the start (world x, y), m.
+    pub xy: [f32; 2],
 }
 
 /// Ticks between two [`FlightSample`]s (100 Hz).
@@ -138,6 +182,8 @@ impl Default for MissionSetup {
             load_shift: None,
             stepper_stall: None,
             imu_fault: None,
+            gcs_loss: None,
+            battery_drop: None,
         }
     }
 }
@@ -155,6 +201,10 @@ pub struct Sensed {
     pub command: Option<OperatorCommand>,
     /// What the board's drivers report failed (the plant stands in for them).
     pub faults: HardwareFaults,
+    /// The simulated ground station's heartbeat (once a second) is due with this tick.
+    pub gcs_heartbeat: bool,
+    /// The pack's voltage at its terminals, V.
+    pub battery_volts: f32,
 }
 
 /// Something the autopilot reported this tick.
@@ -175,6 +225,10 @@ pub enum Event {
     Adapted(AdaptEvent),
     /// The formation the robots move to before take-off, arc lengths, m.
     FormationChosen(Vec<f32>),
+    /// Something the mission's supervision tells people (ground link, battery), as it says it.
+    Notice(String),
+    /// The start command was refused: why, as the autopilot says it. The run ends.
+    StartRefused(String),
 }
 
 /// What the autopilot commands each tick.
@@ -239,10 +293,21 @@ pub struct PlantRecord {
     pub adaptations: Vec<Adaptation>,
     /// The flight, sampled at 100 Hz from take-off.
     pub series: Vec<FlightSample>,
+    /// What the supervision said, with when, s.
+    pub notices: Vec<(f32, String)>,
+    /// Why the start was refused, if it was.
+    pub start_refused: Option<String>,
+    /// When the simulated ground station stopped, s.
+    pub gcs_lost_at: Option<f32>,
+    /// When the pack's voltage dropped, s.
+    pub battery_dropped_at: Option<f32>,
+    /// Lowest pack voltage at the terminals, V.
+    pub min_battery_volts: f32,
 }
 
 /// Flies `autopilot` in the plant of `scenario`'s truth until its mission is over, the
-/// payload drops or the time limit; `on_phase` sees each phase (time, name, reason).
+/// payload drops or the time limit; `on_phase` sees each phase (time, name, reason), and
+/// each notice of the supervision and a refused start (time, `notice` or `refused`, text).
 pub fn fly(
     scenario: &Scenario,
     setup: &MissionSetup,
@@ -282,6 +347,7 @@ pub fn fly(
     let mut record = PlantRecord {
         final_thrusts: vec![0.0; n],
         final_rail: robots.initial.to_vec(),
+        min_battery_volts: f32::INFINITY,
         ..PlantRecord::default()
     };
     let mut entered = 0.0f32;
@@ -346,12 +412,36 @@ pub fn fly(
             command = Some(c);
             next_command += 1;
         }
+        // The ground station: a heartbeat once a second from the first tick, until it is lost.
+        let gcs_lost = setup
+            .gcs_loss
+            .is_some_and(|onset| onset.begun(t, takeoff_at));
+        if gcs_lost && record.gcs_lost_at.is_none() {
+            record.gcs_lost_at = Some(t);
+        }
+        let gcs_heartbeat = !gcs_lost && record.ticks.is_multiple_of(u64::from(CONTROL_HZ));
+        // The pack: its open-circuit voltage, less a sag in proportion to the thrust.
+        let open_circuit = match setup.battery_drop {
+            Some(drop) if drop.onset.begun(t, takeoff_at) => {
+                if record.battery_dropped_at.is_none() {
+                    record.battery_dropped_at = Some(t);
+                }
+                drop.volts
+            }
+            _ => PACK_VOLTS,
+        };
+        let full = robots.max_thrust * n as f32;
+        let load = record.final_thrusts.iter().sum::<f32>() / full.max(f32::MIN_POSITIVE);
+        let battery_volts = (open_circuit - PACK_SAG_VOLTS * load.clamp(0.0, 1.0)).max(0.0);
+        record.min_battery_volts = record.min_battery_volts.min(battery_volts);
         let out = autopilot.step(&Sensed {
             time_us: plant.time_us(),
             imu,
             mocap,
             command: command.take(),
             faults,
+            gcs_heartbeat,
+            battery_volts,
         })?;
         record.ticks += 1;
         record.armed |= out.armed;
@@ -409,7 +499,18 @@ pub fn fly(
                         stall.formation_chosen(rail, &record.final_rail, target);
                     }
                 }
+                Event::Notice(text) => {
+                    on_phase(t, "notice", text);
+                    record.notices.push((t, text.clone()));
+                }
+                Event::StartRefused(why) => {
+                    on_phase(t, "refused", why);
+                    record.start_refused = Some(why.clone());
+                }
             }
+        }
+        if record.start_refused.is_some() {
+            break;
         }
         let mut wanted: Vec<f32> = out.rail.iter().take(n).map(|&p| rail.wrap(p)).collect();
         if let Some(stall) = &mut stall
@@ -444,6 +545,10 @@ pub fn fly(
                     thrust: record.final_thrusts.clone(),
                     roll_pitch_deg: [euler.x.to_degrees(), euler.y.to_degrees()],
                     height: start.z - truth_now.position.z,
+                    xy: [
+                        truth_now.position.x - start.x,
+                        truth_now.position.y - start.y,
+                    ],
                 });
             }
         }
@@ -549,6 +654,8 @@ pub struct InProcess {
     pub reasons: Vec<Reason>,
     /// Every job asked for, in order.
     pub jobs: Vec<JobRequest>,
+    /// Every refused start, in order.
+    pub refusals: Vec<CommandRefusal>,
 }
 
 impl InProcess {
@@ -561,6 +668,7 @@ impl InProcess {
             max_thrust: scenario.robots.max_thrust,
             reasons: Vec::new(),
             jobs: Vec::new(),
+            refusals: Vec::new(),
         })
     }
 
@@ -578,6 +686,10 @@ impl Autopilot for InProcess {
             mocap: sensed.mocap,
             command: sensed.command,
             faults: sensed.faults,
+            supervision: Supervision {
+                gcs_heartbeat: sensed.gcs_heartbeat,
+                battery_volts: Some(sensed.battery_volts),
+            },
         });
         if let Some(job) = &out.job {
             // The firmware runs it off the tick; its result is taken at its deadline tick
@@ -608,6 +720,16 @@ impl Autopilot for InProcess {
         }
         if let Some(a) = out.adaptation {
             events.push(Event::Adapted(a));
+        }
+        if let Some(n) = out.notice {
+            events.push(Event::Notice(n.to_string()));
+        }
+        if let Some(reply) = out.reply
+            && reply.command == OperatorCommand::Start
+            && let Err(why) = reply.outcome
+        {
+            self.refusals.push(why);
+            events.push(Event::StartRefused(why.to_string()));
         }
         let n = out.robots.len();
         Ok(Commanded {
@@ -675,6 +797,16 @@ pub struct MissionOutcome {
     pub adaptations: Vec<Adaptation>,
     /// The flight sampled at 100 Hz.
     pub series: Vec<FlightSample>,
+    /// What the supervision said (ground link, battery), with when, s.
+    pub notices: Vec<(f32, String)>,
+    /// Why the start was refused, if it was (the mission then never began).
+    pub start_refused: Option<CommandRefusal>,
+    /// When the simulated ground station stopped, s.
+    pub gcs_lost_at: Option<f32>,
+    /// When the pack's voltage dropped, s.
+    pub battery_dropped_at: Option<f32>,
+    /// Lowest pack voltage at the terminals, V.
+    pub min_battery_volts: f32,
 }
 
 /// A flight counts as delivered within this distance of the target, m.
@@ -720,6 +852,11 @@ pub fn run(
             .map(|d| (d.failure, d.time_us as f32 * 1e-6)),
         adaptations: record.adaptations,
         series: record.series,
+        notices: record.notices,
+        start_refused: autopilot.refusals.first().copied(),
+        gcs_lost_at: record.gcs_lost_at,
+        battery_dropped_at: record.battery_dropped_at,
+        min_battery_volts: record.min_battery_volts,
     };
     Ok((outcome, autopilot))
 }

@@ -19,7 +19,8 @@ use crate::commands::fly::MixerArg;
 use crate::inject::{Fault, Injection, Since};
 use crate::mission_figures;
 use crate::mission_run::{
-    self, ImuFaultKind, ImuInjection, LoadShift, MISSION_TIME_LIMIT, MissionOutcome, MissionSetup,
+    self, BatteryDrop, ImuFaultKind, ImuInjection, LoadShift, MISSION_TIME_LIMIT, MissionOutcome,
+    MissionSetup, Onset,
 };
 use crate::report::print_json;
 use crate::say;
@@ -68,8 +69,11 @@ pub struct MissionArgs {
     /// Failure injection, seconds after take-off began: `load-shift:DX,DY@T` moves the
     /// payload's COM by (DX, DY) m over half a second; `stepper-stall:J` (no time) stalls robot
     /// J's (from 1) stepper halfway through the rearrangement; `imu-stuck@T` freezes the IMU,
-    /// `imu-noise:X@T` adds X times its noise (0 < X <= 1000); IMU faults also `@start+T`, T s
-    /// after the mission's start (repeatable: the last one of a kind counts).
+    /// `imu-noise:X@T` adds X times its noise (0 < X <= 1000); `gcs-loss@T` stops the simulated
+    /// ground station's heartbeat; `battery:V@T` drops the pack to V volts. The IMU, ground
+    /// station and battery faults also take `@start+T`, T s after the mission's start (and
+    /// `gcs-loss` or `battery:V` without a time: from the start). Repeatable: the last one of a
+    /// kind counts.
     #[arg(long, value_name = "KIND@SECONDS", value_parser = Injection::parse)]
     inject: Vec<Injection>,
     /// Switch off the formation's in-flight adaptation to a load that shifts.
@@ -82,13 +86,42 @@ pub struct MissionArgs {
     output: Option<PathBuf>,
 }
 
-/// How a mission came out, for the exit code: dropped, aborted, delivered or not.
+/// How a mission came out, for the exit code: dropped, aborted (or its start refused),
+/// delivered or not.
 pub fn outcome_of(mission: &MissionOutcome) -> Outcome {
     Outcome::of_run(
         mission.dropped,
-        mission.aborted.is_some(),
+        mission.aborted.is_some() || mission.start_refused.is_some(),
         mission.delivered,
     )
+}
+
+/// The ground-link and battery injections of `inject` as the plant loop takes them (the last
+/// one of a kind counts).
+pub fn supervision_faults(inject: &[Injection]) -> (Option<Onset>, Option<BatteryDrop>) {
+    let onset = |i: &Injection| {
+        if i.since == Since::Start {
+            Onset::AfterStart(i.after)
+        } else {
+            Onset::AfterTakeoff(i.after)
+        }
+    };
+    let gcs = inject
+        .iter()
+        .filter(|i| i.fault == Fault::GcsLoss)
+        .map(onset)
+        .next_back();
+    let battery = inject
+        .iter()
+        .filter_map(|i| match i.fault {
+            Fault::Battery(volts) => Some(BatteryDrop {
+                volts,
+                onset: onset(i),
+            }),
+            _ => None,
+        })
+        .next_back();
+    (gcs, battery)
 }
 
 /// Runs the command.
@@ -141,7 +174,10 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
         },
         ..MissionConfig::default()
     };
+    let (gcs_loss, battery_drop) = supervision_faults(&args.inject);
     let setup = MissionSetup {
+        gcs_loss,
+        battery_drop,
         seed: args.seed,
         map_error,
         config,
@@ -239,6 +275,11 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
                 "detected_s": outcome.imu_detected.map(|(_, d)| d),
             })),
             "files": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+            "notices": outcome.notices.iter().map(|(t, text)| json!({"time_s": t, "text": text})).collect::<Vec<_>>(),
+            "start_refused": outcome.start_refused.map(|r| r.to_string()),
+            "gcs_lost_at_s": outcome.gcs_lost_at,
+            "battery_dropped_at_s": outcome.battery_dropped_at,
+            "min_battery_volts": outcome.min_battery_volts.is_finite().then_some(outcome.min_battery_volts),
         }))?;
     } else {
         for (g, r, m) in &outcome.lifts {
@@ -280,6 +321,9 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
                 )?,
                 None => say!("IMU fault injected at {at:.4} s; the monitor did not flag it")?,
             }
+        }
+        if let Some(why) = &outcome.start_refused {
+            say!("start refused: {why}")?;
         }
         say!(
             "in flight: largest tilt {:.1} deg, largest rotor command {:.0} % of its maximum",

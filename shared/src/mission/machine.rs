@@ -99,7 +99,10 @@ impl core::fmt::Display for CommandRefusal {
             Self::BatteryLow { millivolts } => write!(
                 f,
                 "battery low: {} V, below BAT_LOW_V",
-                crate::numbers::Fixed(*millivolts as f32 * 1e-3, 2)
+                crate::numbers::Fixed(
+                    crate::mission::supervision::hundredths_down(*millivolts as f32 * 1e-3),
+                    2
+                )
             ),
         }
     }

@@ -190,12 +190,12 @@ impl core::fmt::Display for AbortReason {
             Self::BatteryLow { volts } => write!(
                 f,
                 "battery low before take-off: {} V, below BAT_LOW_V",
-                Fixed(volts, 2)
+                Fixed(crate::mission::supervision::hundredths_down(volts), 2)
             ),
             Self::BatteryCritical { volts } => write!(
                 f,
                 "battery critical: {} V, below BAT_CRIT_V",
-                Fixed(volts, 2)
+                Fixed(crate::mission::supervision::hundredths_down(volts), 2)
             ),
         }
     }

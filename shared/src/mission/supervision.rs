@@ -309,6 +309,12 @@ pub enum LinkResponse {
     Hold(f32),
 }
 
+/// `volts` rounded down to hundredths: a voltage just below a threshold never reads as the
+/// threshold itself (13.998 V below 14 V reads 13.99 V).
+pub fn hundredths_down(volts: f32) -> f32 {
+    crate::math::floor(volts * 100.0) / 100.0
+}
+
 impl core::fmt::Display for Notice {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
@@ -333,13 +339,13 @@ impl core::fmt::Display for Notice {
             Self::BatteryLow { volts, threshold } => write!(
                 f,
                 "battery low: {} V, below {} V (BAT_LOW_V)",
-                Fixed(volts, 2),
+                Fixed(hundredths_down(volts), 2),
                 Fixed(threshold, 2)
             ),
             Self::BatteryCritical { volts, threshold } => write!(
                 f,
                 "battery critical: {} V, below {} V (BAT_CRIT_V)",
-                Fixed(volts, 2),
+                Fixed(hundredths_down(volts), 2),
                 Fixed(threshold, 2)
             ),
         }
@@ -433,12 +439,12 @@ mod tests {
             "ground link lost: no ground-station heartbeat for 5.0 s; holding 10 s, then landing in place"
         );
         let low = Notice::BatteryLow {
-            volts: 13.95,
+            volts: 13.998,
             threshold: 14.0,
         };
         assert_eq!(
             low.to_string(),
-            "battery low: 13.95 V, below 14.00 V (BAT_LOW_V)"
+            "battery low: 13.99 V, below 14.00 V (BAT_LOW_V)"
         );
         assert_eq!(GcsLossAction::from_value(0.0), GcsLossAction::Off);
         assert_eq!(GcsLossAction::from_value(1.0), GcsLossAction::Continue);
