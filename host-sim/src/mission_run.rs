@@ -203,6 +203,9 @@ pub struct Sensed {
     pub faults: HardwareFaults,
     /// The simulated ground station's heartbeat (once a second) is due with this tick.
     pub gcs_heartbeat: bool,
+    /// The ground link is lost (injected): nothing from any ground station reaches the
+    /// vehicle.
+    pub gcs_lost: bool,
     /// The pack's voltage at its terminals, V.
     pub battery_volts: f32,
 }
@@ -441,6 +444,7 @@ pub fn fly(
             command: command.take(),
             faults,
             gcs_heartbeat,
+            gcs_lost,
             battery_volts,
         })?;
         record.ticks += 1;

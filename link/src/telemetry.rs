@@ -218,6 +218,10 @@ pub struct VehicleSnapshot {
     /// The control loop's load: the worst step since the last `SYS_STATUS`, in thousandths
     /// of the step's period.
     pub load_permille: u16,
+    /// The pack's filtered voltage, mV (`u16::MAX`: not measured).
+    pub battery_mv: u16,
+    /// The battery is above its low threshold.
+    pub battery_ok: bool,
 }
 
 impl VehicleSnapshot {
@@ -234,15 +238,18 @@ impl VehicleSnapshot {
         robots: 0,
         rail: [0.0; MAX_ROBOTS],
         load_permille: 0,
+        battery_mv: u16::MAX,
+        battery_ok: true,
     };
 
     fn time_boot_ms(&self) -> u32 {
         (self.time_us / 1000) as u32
     }
 
-    /// `SYS_STATUS`: gyro, accelerometer, motion capture (as vision position) and the motor
-    /// outputs; health clear for a failed IMU or no recent fix. No battery is measured yet
-    /// (voltage `u16::MAX`, current and remaining -1, as MAVLink marks unknown values).
+    /// `SYS_STATUS`: gyro, accelerometer, motion capture (as vision position), the motor
+    /// outputs and, once measured, the battery (its voltage; healthy above its low threshold);
+    /// health clear for a failed IMU or no recent fix. Current and remaining are not measured
+    /// (-1, as MAVLink marks unknown values; so is a voltage not measured, `u16::MAX`).
     pub fn sys_status(&self) -> SYS_STATUS_DATA {
         let imu = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_GYRO
             | MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_ACCEL;
@@ -260,12 +267,21 @@ impl VehicleSnapshot {
         if self.position_valid {
             health |= mocap;
         }
+        let (mut present, mut enabled) = (present, enabled);
+        if self.battery_mv != u16::MAX {
+            let battery = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_BATTERY;
+            present |= battery;
+            enabled |= battery;
+            if self.battery_ok {
+                health |= battery;
+            }
+        }
         SYS_STATUS_DATA {
             onboard_control_sensors_present: present,
             onboard_control_sensors_enabled: enabled,
             onboard_control_sensors_health: health,
             load: self.load_permille.min(1000),
-            voltage_battery: u16::MAX,
+            voltage_battery: self.battery_mv,
             current_battery: -1,
             battery_remaining: -1,
             ..Default::default()
@@ -446,6 +462,8 @@ mod tests {
                 0.5, 1.25, 2.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0,
             ],
             load_permille: 1500,
+            battery_mv: u16::MAX,
+            battery_ok: true,
         };
         let (array, data, len) = snap.rail_positions();
         assert_eq!(
@@ -478,5 +496,28 @@ mod tests {
         let resting = VehicleSnapshot::START.sys_status();
         assert!(resting.onboard_control_sensors_health.contains(gyro));
         assert!(!resting.onboard_control_sensors_health.contains(vision));
+        let battery = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_BATTERY;
+        assert!(!resting.onboard_control_sensors_present.contains(battery));
+    }
+
+    #[test]
+    fn a_measured_battery_is_reported_with_its_health() {
+        let battery = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_BATTERY;
+        let good = VehicleSnapshot {
+            battery_mv: 15_730,
+            ..VehicleSnapshot::START
+        }
+        .sys_status();
+        assert_eq!(good.voltage_battery, 15_730);
+        assert!(good.onboard_control_sensors_present.contains(battery));
+        assert!(good.onboard_control_sensors_health.contains(battery));
+        let low = VehicleSnapshot {
+            battery_mv: 13_100,
+            battery_ok: false,
+            ..VehicleSnapshot::START
+        }
+        .sys_status();
+        assert!(low.onboard_control_sensors_enabled.contains(battery));
+        assert!(!low.onboard_control_sensors_health.contains(battery));
     }
 }

@@ -11,9 +11,10 @@ use crate::ftp::{FtpMessage, PAYLOAD_LEN};
 use crate::hil::{HilError, ImuSample, MocapFix};
 use crate::msg::{
     ACTUATOR_OUTPUT_STATUS_DATA, ATT_POS_MOCAP_DATA, ATTITUDE_QUATERNION_DATA,
-    AUTOPILOT_VERSION_DATA, COMMAND_ACK_DATA, COMMAND_LONG_DATA, DEBUG_FLOAT_ARRAY_DATA,
-    FILE_TRANSFER_PROTOCOL_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA, HIL_SENSOR_DATA,
-    LOCAL_POSITION_NED_DATA, MISSION_COUNT_DATA, MISSION_REQUEST_LIST_DATA, NAMED_VALUE_FLOAT_DATA,
+    AUTOPILOT_VERSION_DATA, BATTERY_STATUS_DATA, COMMAND_ACK_DATA, COMMAND_LONG_DATA,
+    DEBUG_FLOAT_ARRAY_DATA, FILE_TRANSFER_PROTOCOL_DATA, HEARTBEAT_DATA,
+    HIL_ACTUATOR_CONTROLS_DATA, HIL_SENSOR_DATA, LOCAL_POSITION_NED_DATA, MISSION_COUNT_DATA,
+    MISSION_REQUEST_LIST_DATA, MavAutopilot, MavBatteryFunction, MavType, NAMED_VALUE_FLOAT_DATA,
     NAMED_VALUE_INT_DATA, ODOMETRY_DATA, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA,
     PARAM_SET_DATA, PARAM_VALUE_DATA, SETUP_SIGNING_DATA, STATUSTEXT_DATA, SYS_STATUS_DATA,
     TIMESYNC_DATA,
@@ -58,6 +59,7 @@ crc_extras!(
     TIMESYNC_DATA,
     SETUP_SIGNING_DATA,
     DEBUG_FLOAT_ARRAY_DATA,
+    BATTERY_STATUS_DATA,
 );
 
 /// Who sent a frame.
@@ -124,8 +126,19 @@ pub enum Inbound {
     /// `MISSION_REQUEST_LIST` addressed to the vehicle (it has no mission items: the answer
     /// is `MISSION_COUNT` 0).
     MissionList(Sender),
-    /// A ground station's `HEARTBEAT`.
+    /// A ground station's `HEARTBEAT` (type `MAV_TYPE_GCS`, from another system than the
+    /// vehicle's): the ground link is up.
+    GcsHeartbeat(Sender),
+    /// Any other `HEARTBEAT` (a companion computer, another vehicle, an echo).
     Heartbeat(Sender),
+    /// `BATTERY_STATUS`: a pack's voltage. The vehicle takes it only in hardware-in-the-loop,
+    /// from the plant (on a board its own ADC measures the pack).
+    Battery {
+        /// The pack's voltage, V.
+        volts: f32,
+        /// Its sender.
+        from: Sender,
+    },
     /// A HIL message that does not hold (the text says why).
     Invalid(HilError),
     /// Not for the vehicle, or not a message it handles.
@@ -242,8 +255,88 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
             Some(m) if for_us(m.target_system, m.target_component) => Inbound::MissionList(from),
             _ => ignored,
         },
-        HEARTBEAT_DATA::ID => Inbound::Heartbeat(from),
+        HEARTBEAT_DATA::ID => {
+            // `type` follows `custom_mode` (MAVLink 2 drops trailing zero bytes: absent is 0).
+            let kind = frame.payload().get(HEARTBEAT_TYPE_OFFSET).copied();
+            if kind == Some(MavType::MAV_TYPE_GCS as u8) && from.system != crate::VEHICLE_SYSTEM_ID
+            {
+                Inbound::GcsHeartbeat(from)
+            } else {
+                Inbound::Heartbeat(from)
+            }
+        }
+        BATTERY_STATUS_DATA::ID => {
+            battery_volts(frame.payload()).map_or(ignored, |volts| Inbound::Battery { volts, from })
+        }
         _ => ignored,
+    }
+}
+
+/// Offset of `HEARTBEAT`'s `type` in its payload.
+const HEARTBEAT_TYPE_OFFSET: usize = 4;
+/// Offset of `BATTERY_STATUS`'s `voltages` in its payload (after two `int32` and an `int16`).
+const BATTERY_VOLTAGES_OFFSET: usize = 10;
+
+/// The pack voltage of a `BATTERY_STATUS` payload, V, as MAVLink puts it: the whole pack in
+/// `voltages[0]` (mV) when the cells are not measured, continued in `voltages[1]` when it
+/// reaches 65,534 mV; with cells measured, their sum. `None` when no voltage is given.
+pub fn battery_volts(payload: &[u8]) -> Option<f32> {
+    let cell = |i: usize| {
+        let at = BATTERY_VOLTAGES_OFFSET + 2 * i;
+        // Trailing zero bytes dropped by MAVLink 2 read as zero.
+        let lo = payload.get(at).copied().unwrap_or(0);
+        let hi = payload.get(at + 1).copied().unwrap_or(0);
+        u16::from_le_bytes([lo, hi])
+    };
+    let first = cell(0);
+    if first == u16::MAX {
+        return None;
+    }
+    let mut millivolts = u32::from(first);
+    // The pack beyond 65,534 mV, or the other cells: summed until the first unused one.
+    for i in 1..10 {
+        let c = cell(i);
+        if c == u16::MAX || (c == 0 && first != u16::MAX - 1) {
+            break;
+        }
+        millivolts += u32::from(c);
+    }
+    Some(millivolts as f32 * 1e-3)
+}
+
+/// A ground station's `HEARTBEAT` (type `MAV_TYPE_GCS`, autopilot `MAV_AUTOPILOT_INVALID`), as
+/// QGroundControl sends it once a second; the HIL plant sends it as the simulated ground
+/// station.
+pub fn gcs_heartbeat() -> HEARTBEAT_DATA {
+    HEARTBEAT_DATA {
+        mavtype: MavType::MAV_TYPE_GCS,
+        autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
+        mavlink_version: 3,
+        ..Default::default()
+    }
+}
+
+/// `BATTERY_STATUS` of a pack at `volts` whose cells are not measured (the whole pack in
+/// `voltages[0]`, the others unused), as the HIL plant reports its simulated pack.
+pub fn battery_status(volts: f32) -> BATTERY_STATUS_DATA {
+    let mv = volts * 1000.0;
+    // Not a number: 0; below zero: 0 (`as` saturates); above: the largest pack entry.
+    let millivolts = if mv.is_nan() {
+        0
+    } else {
+        mv.min(65_534.0) as u16
+    };
+    let mut voltages = [u16::MAX; 10];
+    voltages[0] = millivolts;
+    BATTERY_STATUS_DATA {
+        voltages,
+        current_consumed: -1,
+        energy_consumed: -1,
+        temperature: i16::MAX,
+        current_battery: -1,
+        battery_remaining: -1,
+        battery_function: MavBatteryFunction::MAV_BATTERY_FUNCTION_ALL,
+        ..Default::default()
     }
 }
 
@@ -400,6 +493,63 @@ mod tests {
             through_the_wire(&missions),
             Inbound::MissionList(_)
         ));
+    }
+
+    #[test]
+    fn a_ground_stations_heartbeat_is_told_from_others() {
+        let from_plant = Sender {
+            system: crate::PLANT_SYSTEM_ID,
+            component: crate::PLANT_COMPONENT_ID,
+        };
+        assert_eq!(
+            through_the_wire(&gcs_heartbeat()),
+            Inbound::GcsHeartbeat(from_plant)
+        );
+        // A vehicle's heartbeat (a quadrotor's, an onboard computer's) is not a link.
+        let other = HEARTBEAT_DATA {
+            mavtype: MavType::MAV_TYPE_QUADROTOR,
+            ..gcs_heartbeat()
+        };
+        assert_eq!(through_the_wire(&other), Inbound::Heartbeat(from_plant));
+        // Nor is a GCS-typed heartbeat from the vehicle's own system (an echo).
+        let mut f = Frame::default();
+        Encoder::new(crate::VEHICLE_SYSTEM_ID, 191).encode(&gcs_heartbeat(), &mut f);
+        let mut p = Parser::new(crc_extra);
+        let got = f
+            .bytes()
+            .iter()
+            .find_map(|&b| p.push(b).map(|(fr, i)| dispatch(fr, i)));
+        assert!(matches!(got, Some(Inbound::Heartbeat(_))), "{got:?}");
+    }
+
+    #[test]
+    fn a_packs_voltage_comes_through_battery_status() {
+        let got = through_the_wire(&battery_status(15.734));
+        assert!(
+            matches!(got, Inbound::Battery { volts, .. } if (volts - 15.734).abs() < 1e-3),
+            "{got:?}"
+        );
+        // Cells measured: their sum.
+        let mut cells = battery_status(0.0);
+        cells.voltages = [4100, 4050, 4000, 3950, u16::MAX, 0, 0, 0, 0, 0];
+        let near = |got: Option<f32>, want: f32| got.is_some_and(|v| (v - want).abs() < 1e-3);
+        assert!(near(battery_volts(&payload_of(&cells)), 16.1));
+        // A pack above 65.534 V continues in the second entry.
+        cells.voltages = [65_534, 1_000, u16::MAX, 0, 0, 0, 0, 0, 0, 0];
+        assert!(near(battery_volts(&payload_of(&cells)), 66.534));
+        // No voltage, or a payload cut short: nothing, or zero volts.
+        cells.voltages = [u16::MAX; 10];
+        assert_eq!(battery_volts(&payload_of(&cells)), None);
+        assert_eq!(battery_volts(&[0u8; 4]), Some(0.0));
+        assert_eq!(battery_status(f32::NAN).voltages[0], 0);
+        assert_eq!(battery_status(1e9).voltages[0], 65_534);
+    }
+
+    /// A message's payload as it goes on the wire.
+    fn payload_of<M: MessageData>(m: &M) -> std::vec::Vec<u8> {
+        let mut f = Frame::default();
+        Encoder::new(crate::PLANT_SYSTEM_ID, crate::PLANT_COMPONENT_ID).encode(m, &mut f);
+        f.payload().to_vec()
     }
 
     #[test]

@@ -26,9 +26,10 @@ use link::telemetry::VehicleSnapshot;
 use shared::control::navigator::{ImuSample, MocapFix as Fix};
 use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
+use shared::mission::supervision::BatteryLevel;
 use shared::mission::{
-    AbortReason, CommandRefusal, HardwareFaults, Mission, MissionConfig, MissionPlanner,
-    OperatorCommand as Command, Phase, Reason, TickInput as MissionInput,
+    AbortReason, CommandRefusal, HardwareFaults, Mission, MissionConfig, MissionPlanner, Notice,
+    OperatorCommand as Command, Phase, Reason, Supervision, TickInput as MissionInput,
 };
 use shared::scenario::Scenario;
 
@@ -61,6 +62,8 @@ pub struct TickInput<'a> {
     pub job: Option<JobResult>,
     /// What the board's drivers report failed.
     pub faults: HardwareFaults,
+    /// A ground station's heartbeat since the last step, and the pack's voltage.
+    pub supervision: Supervision,
 }
 
 /// How a command was taken (its `COMMAND_ACK`).
@@ -260,6 +263,7 @@ impl Autonomy {
             mocap: input.mocap.as_ref().map(fix),
             command: input.command.map(command),
             faults: input.faults,
+            supervision: input.supervision,
         });
         let ack = input.command.zip(out.reply).map(|(given, reply)| {
             let result = match reply.outcome {
@@ -279,9 +283,11 @@ impl Autonomy {
         });
         if let Some(t) = out.transition {
             let severity = match t.reason {
-                Reason::Abort(AbortReason::Killed | AbortReason::TakeoffFailed { .. }) => {
-                    Severity::Critical
-                }
+                Reason::Abort(
+                    AbortReason::Killed
+                    | AbortReason::TakeoffFailed { .. }
+                    | AbortReason::BatteryCritical { .. },
+                ) => Severity::Critical,
                 Reason::Abort(_) => Severity::Warning,
                 _ => Severity::Info,
             };
@@ -311,6 +317,14 @@ impl Autonomy {
         }
         if let Some(event) = out.adaptation {
             report.text(Severity::Notice, format_args!("adapt: {event}"));
+        }
+        if let Some(notice) = out.notice {
+            let severity = match notice {
+                Notice::BatteryCritical { .. } => Severity::Critical,
+                Notice::LinkRegained { .. } => Severity::Notice,
+                _ => Severity::Warning,
+            };
+            report.text(severity, format_args!("{notice}"));
         }
         let robots = if self.loaded {
             out.robots.len().min(MAX_ROBOTS)
@@ -343,6 +357,11 @@ impl Autonomy {
             armed: out.armed,
             robots: robots as u8,
             rail,
+            battery_mv: self
+                .mission
+                .battery_volts()
+                .map_or(u16::MAX, |v| (v * 1000.0).min(65_534.0) as u16),
+            battery_ok: self.mission.battery_level() == BatteryLevel::Ok,
             ..VehicleSnapshot::START
         };
         TickOutput {

@@ -38,8 +38,8 @@ use static_cell::StaticCell;
 
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
 use super::{
-    ARMED, COMMANDS, IN_HIL, MISSION_CONFIG, MISSION_STATE, MOCAP, OUTBOX, RELOAD, SENSOR,
-    TELEMETRY_CHANGED, TO_LOAD, VEHICLE, signing, telemetry, timesync,
+    ARMED, COMMANDS, GCS_HEARTBEAT, IN_HIL, LINK_BATTERY_MV, MISSION_CONFIG, MISSION_STATE, MOCAP,
+    OUTBOX, RELOAD, SENSOR, TELEMETRY_CHANGED, TO_LOAD, VEHICLE, signing, telemetry, timesync,
 };
 use crate::board::{Board, Selected};
 
@@ -528,6 +528,11 @@ async fn handle(
                     format_args!("HIL message refused: {e}"),
                 ))
                 .await;
+        }
+        // The ground link is up: the next control step takes it.
+        Inbound::GcsHeartbeat(_) => GCS_HEARTBEAT.store(true, Ordering::Relaxed),
+        Inbound::Battery { volts, .. } => {
+            LINK_BATTERY_MV.store((volts * 1000.0) as u32, Ordering::Relaxed);
         }
         Inbound::Heartbeat(_) | Inbound::Ignored { .. } => {}
     }

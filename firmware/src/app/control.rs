@@ -22,11 +22,11 @@ use link::hil::{Actuators, JobDeadline, VehicleClock};
 use super::autonomy::{Autonomy, CommandResult, JobResult, Severity, TickInput, TickOutput, Value};
 use super::comms::{Outbound, SensorSample};
 use super::{
-    ARMED, COMMANDS, IN_HIL, JOB_REQUESTS, JOB_RESULTS, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD,
-    SENSOR, VEHICLE,
+    ARMED, COMMANDS, GCS_HEARTBEAT, IN_HIL, JOB_REQUESTS, JOB_RESULTS, LINK_BATTERY_MV,
+    MISSION_STATE, MOCAP, OUTBOX, PAYLOAD, SENSOR, VEHICLE,
 };
 use crate::board::{ActuatorOutputs, Board, Selected};
-use shared::mission::HardwareFaults;
+use shared::mission::{HardwareFaults, Supervision};
 
 /// Steps between reports of the worst step cost (1 s at 400 Hz).
 const COST_REPORT_STEPS: u64 = 400;
@@ -98,6 +98,18 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 HardwareFaults::NONE
             } else {
                 <Selected as Board>::hardware_faults()
+            },
+            supervision: Supervision {
+                gcs_heartbeat: GCS_HEARTBEAT.swap(false, Ordering::Relaxed),
+                // In HIL the plant's pack; on a board its own measurement.
+                battery_volts: if sample.hil {
+                    match LINK_BATTERY_MV.load(Ordering::Relaxed) {
+                        u32::MAX => None,
+                        mv => Some(mv as f32 * 1e-3),
+                    }
+                } else {
+                    <Selected as Board>::battery_volts()
+                },
             },
         };
         let imu_failed = input.faults.imu;

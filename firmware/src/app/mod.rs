@@ -15,7 +15,7 @@ pub mod comms;
 pub mod control;
 pub mod jobs;
 
-use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU8, AtomicU32, Ordering};
 
 use core::cell::Cell;
 use embassy_executor::{InterruptExecutor, SendSpawner, Spawner, raw};
@@ -137,6 +137,12 @@ pub static MISSION_STATE: AtomicU8 = AtomicU8::new(0);
 pub static ARMED: AtomicBool = AtomicBool::new(false);
 /// Whether the vehicle runs in hardware-in-the-loop (a `HIL_SENSOR` has arrived).
 pub static IN_HIL: AtomicBool = AtomicBool::new(false);
+
+/// A ground station's heartbeat arrived since the control task last looked (it takes it).
+pub static GCS_HEARTBEAT: AtomicBool = AtomicBool::new(false);
+/// The pack voltage the HIL plant last sent (`BATTERY_STATUS`), mV; `u32::MAX`: none yet.
+/// Taken only in HIL: on a board the pack is measured by its own ADC.
+pub static LINK_BATTERY_MV: AtomicU32 = AtomicU32::new(u32::MAX);
 
 /// The thread-mode wake-up interrupt fired since the executor last looked.
 static THREAD_WOKEN: AtomicBool = AtomicBool::new(false);

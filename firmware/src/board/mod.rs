@@ -82,6 +82,12 @@ pub trait Board: 'static {
     fn hardware_faults() -> shared::mission::HardwareFaults {
         shared::mission::HardwareFaults::NONE
     }
+
+    /// The battery pack's voltage as the board measures it now, V (`None`: the board
+    /// measures none).
+    fn battery_volts() -> Option<f32> {
+        None
+    }
 }
 
 /// The robots' actuators: each rotor's ESC and each robot's stepper. In hardware-in-the-loop

@@ -18,11 +18,13 @@ use link::status::MissionState;
 use serde_json::json;
 
 use crate::cli::{Outcome, check_map_error, check_range};
+use crate::commands::mission::supervision_faults;
 use crate::hil::gcs::GcsBridge;
 use crate::hil::qemu::Qemu;
 use crate::hil::run::{HilOutcome, HilSetup, run as run_hil};
 use crate::hil::session::LoggedText;
 use crate::hil::transport::{Endpoint, Link};
+use crate::inject::{Fault, Injection};
 use crate::mission_run::MISSION_TIME_LIMIT;
 use crate::report::print_json;
 use crate::say;
@@ -85,6 +87,11 @@ pub struct HilArgs {
     /// Failure injection: motion capture stops this many seconds after take-off.
     #[arg(long, value_name = "S")]
     pub mocap_lost_after: Option<f64>,
+    /// Failure injection, as `mission --inject`: `gcs-loss[@T]` (the plant's heartbeat stops
+    /// and nothing from --gcs passes), `battery:V[@T]` (the pack's voltage the plant sends as
+    /// BATTERY_STATUS drops to V volts).
+    #[arg(long, value_name = "KIND@SECONDS", value_parser = Injection::parse)]
+    pub inject: Vec<Injection>,
 }
 
 /// A MAVLink 2 signing key from 64 hexadecimal digits.
@@ -139,8 +146,18 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
         3600.0,
         "s",
     )?;
+    if let Some(i) = args
+        .inject
+        .iter()
+        .find(|i| !matches!(i.fault, Fault::GcsLoss | Fault::Battery(_)))
+    {
+        bail!("--inject {i}: hil injects gcs-loss and battery:V (use mission for the others)");
+    }
+    let (gcs_loss, battery_drop) = supervision_faults(&args.inject);
     let loaded = scenario_file::load(&args.scenario)?;
     let setup = HilSetup {
+        gcs_loss,
+        battery_drop,
         seed: args.seed,
         speed: speed.map(f64::from),
         duration_s: duration.map(f64::from),

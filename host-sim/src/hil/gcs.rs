@@ -38,6 +38,8 @@ pub struct GcsBridge {
     socket: UdpSocket,
     peer: Arc<Mutex<SocketAddr>>,
     stop: Arc<AtomicBool>,
+    /// The ground link is cut (`--inject gcs-loss`): nothing from the ground station passes.
+    cut: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -65,16 +67,19 @@ impl GcsBridge {
         socket.set_read_timeout(Some(Duration::from_millis(100)))?;
         let peer = Arc::new(Mutex::new(ground));
         let stop = Arc::new(AtomicBool::new(false));
+        let cut = Arc::new(AtomicBool::new(false));
         let thread = {
             let socket = socket.try_clone()?;
             let peer = Arc::clone(&peer);
             let stop = Arc::clone(&stop);
-            thread::spawn(move || from_ground(&socket, &peer, &writer, &stop))
+            let cut = Arc::clone(&cut);
+            thread::spawn(move || from_ground(&socket, &peer, &writer, &stop, &cut))
         };
         Ok(Self {
             socket,
             peer,
             stop,
+            cut,
             thread: Some(thread),
         })
     }
@@ -82,6 +87,12 @@ impl GcsBridge {
     /// The local address the bridge sends from (and the ground station answers to).
     pub fn local_addr(&self) -> Result<SocketAddr> {
         self.socket.local_addr().map_err(|e| anyhow!(e))
+    }
+
+    /// Cuts the link from the ground station to the vehicle (`true`) or mends it: an injected
+    /// loss of the ground link (what the ground station sends is dropped).
+    pub fn cut(&self, cut: bool) {
+        self.cut.store(cut, Ordering::Relaxed);
     }
 
     /// Sends one frame from the firmware to the ground station (HIL frames are skipped by the
@@ -98,6 +109,7 @@ fn from_ground(
     peer: &Mutex<SocketAddr>,
     writer: &SharedWriter,
     stop: &AtomicBool,
+    cut: &AtomicBool,
 ) {
     let mut parser = Parser::new(crc_extra);
     let mut buf = [0u8; 2048];
@@ -105,6 +117,9 @@ fn from_ground(
         let Ok((n, from)) = socket.recv_from(&mut buf) else {
             continue;
         };
+        if cut.load(Ordering::Relaxed) {
+            continue;
+        }
         if let Ok(mut p) = peer.lock() {
             *p = from;
         }

@@ -25,8 +25,12 @@ use super::gcs::GcsBridge;
 use super::session::{FirmwareLog, LoggedText, Session};
 use super::transport::Link;
 use crate::mission_run::{
-    self, Autopilot, Commanded, DELIVERY_RADIUS, Event, MISSION_TIME_LIMIT, MissionSetup, Sensed,
+    self, Autopilot, BatteryDrop, Commanded, DELIVERY_RADIUS, Event, MISSION_TIME_LIMIT,
+    MissionSetup, Onset, Sensed,
 };
+
+/// Plant steps between two `BATTERY_STATUS` (10 Hz, as PX4's battery status goes out).
+const BATTERY_EVERY: u64 = 40;
 use crate::scenario_file::LoadedScenario;
 
 /// One run's set-up.
@@ -49,6 +53,11 @@ pub struct HilSetup {
     /// The ground station (through `gcs`) starts the mission, not the plant: the plant
     /// uploads the payload and steps the idle vehicle until the firmware reports it running.
     pub ground_start: bool,
+    /// Failure injection: the ground link is lost (the plant's heartbeat stops and nothing
+    /// from a bridged ground station passes).
+    pub gcs_loss: Option<Onset>,
+    /// Failure injection: the pack's voltage drops.
+    pub battery_drop: Option<BatteryDrop>,
 }
 
 impl Default for HilSetup {
@@ -62,6 +71,8 @@ impl Default for HilSetup {
             map_error: 1.0,
             ground_start: false,
             mocap_lost_after_takeoff: None,
+            gcs_loss: None,
+            battery_drop: None,
         }
     }
 }
@@ -131,6 +142,15 @@ struct Firmware {
 
 impl Autopilot for Firmware {
     fn step(&mut self, sensed: &Sensed) -> Result<Commanded> {
+        // The plant is the ground station too: its heartbeat and the pack's voltage go before
+        // the step's command, so the vehicle has them when the start comes.
+        self.session.cut_ground(sensed.gcs_lost);
+        if sensed.gcs_heartbeat {
+            self.session.send_gcs_heartbeat()?;
+        }
+        if self.session.steps().is_multiple_of(BATTERY_EVERY) {
+            self.session.send_battery(sensed.battery_volts)?;
+        }
         if let Some(command) = sensed.command {
             // With the ground station starting the mission, the plant's own start is not sent.
             if !(self.ground_start && command == OperatorCommand::Start) {
@@ -268,6 +288,8 @@ pub fn run(
         map_error: setup.map_error,
         mocap_lost_after_takeoff: setup.mocap_lost_after_takeoff,
         time_limit: setup.duration_s.map_or(MISSION_TIME_LIMIT, |d| d as f32),
+        gcs_loss: setup.gcs_loss,
+        battery_drop: setup.battery_drop,
         ..MissionSetup::default()
     };
     let wall = Instant::now();

@@ -255,6 +255,23 @@ impl Session {
         }
     }
 
+    /// Sends the simulated ground station's heartbeat (`MAV_TYPE_GCS`, once a second).
+    pub fn send_gcs_heartbeat(&mut self) -> Result<()> {
+        self.link.send(&link::vehicle::gcs_heartbeat())
+    }
+
+    /// Sends the simulated pack's voltage (`BATTERY_STATUS`).
+    pub fn send_battery(&mut self, volts: f32) -> Result<()> {
+        self.link.send(&link::vehicle::battery_status(volts))
+    }
+
+    /// Cuts (or mends) the bridge from the real ground station, if there is one.
+    pub fn cut_ground(&mut self, cut: bool) {
+        if let Some(gcs) = &self.gcs {
+            gcs.cut(cut);
+        }
+    }
+
     /// Sends an operator command (acknowledged with the next step's reply).
     pub fn send_command(&mut self, command: OperatorCommand) -> Result<()> {
         self.link.send(&command.to_command_long())
