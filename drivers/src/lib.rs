@@ -14,6 +14,7 @@
 //! | [`tmc2209`] | the TMC2209 stepper driver's single-wire UART: datagrams, CRC, registers |
 //! | [`stepper`] | a robot's rail axis on a TMC2209: velocity commands, arc length, stalls |
 //! | [`reset`] | why the STM32H7 last reset (RCC_RSR), for the start-up report |
+//! | [`battery`] | the power module's pack voltage from ADC counts (divider, reference) |
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -21,6 +22,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod battery;
 pub mod dshot;
 pub mod esc_gate;
 pub mod icm42688;

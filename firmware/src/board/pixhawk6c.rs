@@ -156,6 +156,13 @@ impl Board for Pixhawk6c {
         LINK_IS_USB.load(core::sync::atomic::Ordering::Relaxed)
     }
 
+    fn battery_volts() -> Option<f32> {
+        match BATTERY_MV.load(core::sync::atomic::Ordering::Relaxed) {
+            u32::MAX => None,
+            mv => Some(mv as f32 * 1e-3),
+        }
+    }
+
     fn hardware_faults() -> HardwareFaults {
         HardwareFaults {
             imu: super::imu_spi::FAULTED.load(core::sync::atomic::Ordering::Relaxed),
@@ -191,6 +198,8 @@ pub fn clock_config() -> Config {
     rcc.voltage_scale = VoltageScale::Scale0; // required above 400 MHz
     // USB's 48 MHz from HSI48 (on by default).
     rcc.mux.usbsel = embassy_stm32::rcc::mux::Usbsel::HSI48;
+    // The ADC's kernel clock from per_ck (HSI, 64 MHz; the driver divides it to its limit).
+    rcc.mux.adcsel = embassy_stm32::rcc::mux::Adcsel::PER;
     config
 }
 
@@ -200,6 +209,33 @@ pub struct Leds {
     pub red: Output<'static>,
     /// Blue LED (PD11): heartbeat.
     pub blue: Output<'static>,
+    /// The power module's voltage input (POWER1 `BAT1 VOLTAGE`: PC5 on ADC1, channel 8),
+    /// read with the heartbeat.
+    pub battery: BatteryInput,
+}
+
+/// The power module's voltage input: ADC1 and its pin.
+pub struct BatteryInput {
+    adc: embassy_stm32::adc::Adc<'static, peripherals::ADC1>,
+    pin: embassy_stm32::Peri<'static, peripherals::PC5>,
+}
+
+/// The pack's voltage last read, mV (`u32::MAX`: not read yet).
+static BATTERY_MV: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(u32::MAX);
+
+impl BatteryInput {
+    /// One reading (16 conversions averaged by the ADC), into [`BATTERY_MV`].
+    fn read(&mut self) {
+        use embassy_stm32::adc::SampleTime;
+        let counts = self
+            .adc
+            .blocking_read(&mut self.pin, SampleTime::CYCLES64_5);
+        let volts = drivers::battery::BatteryScale::PIXHAWK6C.volts(counts);
+        BATTERY_MV.store(
+            (volts * 1000.0) as u32,
+            core::sync::atomic::Ordering::Relaxed,
+        );
+    }
 }
 
 bind_interrupts!(struct LinkIrqs {
@@ -309,6 +345,16 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
     let leds = Leds {
         red: Output::new(p.PD10, Level::High, Speed::Low),
         blue: Output::new(p.PD11, Level::High, Speed::Low),
+        battery: BatteryInput {
+            adc: embassy_stm32::adc::Adc::new_with_config(
+                p.ADC1,
+                embassy_stm32::adc::AdcConfig {
+                    resolution: Some(embassy_stm32::adc::Resolution::BITS16),
+                    averaging: Some(embassy_stm32::adc::Averaging::Samples16),
+                },
+            ),
+            pin: p.PC5,
+        },
     };
     // The link: USB if a cable powers VBUS (PA9) at start, TELEM1 otherwise.
     let (link_rx, link_tx, usb_device) = {
@@ -546,19 +592,25 @@ fn JPEG() {
 
 /// Spawns the board's own tasks (the heartbeat LED) in thread mode.
 pub fn spawn_tasks(spawner: Spawner, leds: Leds) {
-    let Leds { red: _red, blue } = leds;
-    match heartbeat(blue) {
+    let Leds {
+        red: _red,
+        blue,
+        battery,
+    } = leds;
+    match heartbeat(blue, battery) {
         Ok(token) => spawner.spawn(token),
         Err(e) => defmt::error!("heartbeat task not spawned: {}", e),
     }
 }
 
-/// Blinks `led` (active low) 100 ms on, 900 ms off, forever: the executor runs.
+/// Blinks `led` (active low) 100 ms on, 900 ms off, forever: the executor runs; reads the
+/// pack's voltage every 100 ms meanwhile (a few microseconds, blocking).
 #[embassy_executor::task]
-async fn heartbeat(mut led: Output<'static>) {
+async fn heartbeat(mut led: Output<'static>, mut battery: BatteryInput) {
     let mut ticker = Ticker::every(Duration::from_millis(100));
     loop {
         for tenth in 0..10u8 {
+            battery.read();
             if tenth == 0 {
                 led.set_low();
             } else {
