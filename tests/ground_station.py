@@ -77,6 +77,17 @@ class Vehicle:
             f"udpin:127.0.0.1:{port}", source_system=255, source_component=190,
             dialect="common")
         self.texts = []
+        self.last_beat = 0.0
+
+    def beat(self):
+        """A ground station's HEARTBEAT once a second, as QGroundControl sends it: the
+        vehicle refuses to start without one and, in flight, counts the link lost when they
+        stop (FS_GCS_LOSS_T)."""
+        now = time.monotonic()
+        if now - self.last_beat >= 1.0:
+            self.last_beat = now
+            self.conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID,
+                                         0, 0, 0)
 
     def recv(self, types, timeout, condition=None):
         """The next message of one of `types` meeting `condition`, or None after `timeout`;
@@ -84,6 +95,7 @@ class Vehicle:
         end = time.monotonic() + timeout
         listen = list(set(types) | {"STATUSTEXT"})
         while time.monotonic() < end:
+            self.beat()
             m = self.conn.recv_match(type=listen, blocking=True, timeout=0.2)
             if m is None:
                 continue
