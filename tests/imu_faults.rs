@@ -175,7 +175,7 @@ fn the_command_line_injects_and_reports_imu_faults() {
     for (bad, says) in [
         ("imu-noise:0@3", "above 0"),
         ("imu-noise:2000@3", "at most 1000"),
-        ("load-shift:0.1,0@start+3", "only the IMU's faults"),
+        ("load-shift:0.1,0@start+3", "happens in flight"),
     ] {
         let out = host_sim(&["mission", "--inject", bad]);
         assert_eq!(out.status.code(), Some(2), "{bad}: clap's value parser");
