@@ -26,7 +26,7 @@ fn fly(name: &str, formation: FormationChoice, mixer: MixerKind) -> FlightOutcom
         seed: 7,
         map_error: 1.0,
     };
-    harness::fly(&s, &setup).expect("flight runs")
+    harness::fly_formation(&s, &setup).expect("flight runs")
 }
 
 fn line(name: &str, label: &str, f: &FlightOutcome) -> String {

@@ -358,7 +358,7 @@ fn a_take_off_that_does_not_leave_the_ground_stops_the_rotors() {
         // held back further by the collective limit.
         map_error: 2.5,
     };
-    let out = harness::fly(&s, &setup).expect("flight runs");
+    let out = harness::fly_formation(&s, &setup).expect("flight runs");
     assert!(
         matches!(out.stop, Some(FlightStop::TakeoffFailed { .. })),
         "{:?}",

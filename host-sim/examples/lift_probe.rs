@@ -20,7 +20,7 @@ fn main() -> anyhow::Result<()> {
             ("initial", s.robots.initial.to_vec()),
             ("after last pair", after_last.clone()),
         ] {
-            match host_sim::harness::lift_from(&s, group, &from, 3, map_error) {
+            match host_sim::harness::run_lift_from(&s, group, &from, 3, map_error) {
                 Ok(o) => println!(
                     "pair {group:2} from {label:<15}: model {:6.3} N, read {:?}",
                     o.model, o.measured

@@ -153,8 +153,9 @@ pub fn formation_positions(
     }
 }
 
-/// Flies `setup` on `scenario`'s truth and flight set-up.
-pub fn fly(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
+/// Flies one fixed formation (`setup`, no estimation before it) on `scenario`'s truth and
+/// flight set-up: take-off, the plan to the target, hover and landing.
+pub fn fly_formation(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightOutcome> {
     let Some(truth) = scenario.truth else {
         bail!("[truth]: the scenario has no truth to simulate");
     };
@@ -324,14 +325,19 @@ pub struct LiftOutcome {
     pub duration_s: f32,
 }
 
-/// Lifts with group `group` (robots placed by `shared::rail::moves::lift_targets` from the
+/// Runs one estimation lift of group `group` (robots placed by `shared::rail::moves::lift_targets` from the
 /// scenario's initial formation) on the plant, reading lift-off with `shared`'s detector.
-pub fn lift(scenario: &Scenario, group: usize, seed: u64, map_error: f32) -> Result<LiftOutcome> {
-    lift_from(scenario, group, &scenario.robots.initial, seed, map_error)
+pub fn run_lift(
+    scenario: &Scenario,
+    group: usize,
+    seed: u64,
+    map_error: f32,
+) -> Result<LiftOutcome> {
+    run_lift_from(scenario, group, &scenario.robots.initial, seed, map_error)
 }
 
-/// [`lift`] with the robots starting from `from` instead of the initial formation.
-pub fn lift_from(
+/// [`run_lift`] with the robots starting from `from` instead of the initial formation.
+pub fn run_lift_from(
     scenario: &Scenario,
     group: usize,
     from: &[f32],
@@ -339,8 +345,8 @@ pub fn lift_from(
     map_error: f32,
 ) -> Result<LiftOutcome> {
     use shared::estimation::groups::lift_group;
-    use shared::liftoff::{LiftState, LiftoffConfig, LiftoffDetector};
-    use shared::statics::lift_off_thrust;
+    use shared::liftoff_detector::{LiftState, LiftoffConfig, LiftoffDetector};
+    use shared::liftoff_thrust::lift_off_thrust;
 
     let Some(truth) = scenario.truth else {
         bail!("[truth]: the scenario has no truth to simulate");

@@ -471,7 +471,7 @@ pub fn fly(
                 Event::LiftRead(reading) => {
                     let model = shared::estimation::groups::lift_group(scenario, group)
                         .and_then(|g| {
-                            shared::statics::lift_off_thrust(
+                            shared::liftoff_thrust::lift_off_thrust(
                                 &scenario.payload.hull,
                                 truth.com,
                                 truth.mass,

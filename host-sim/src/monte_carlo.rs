@@ -14,8 +14,8 @@ use rayon::prelude::*;
 use shared::estimation::groups::lift_group;
 use shared::estimation::{Estimator, EstimatorOptions, Measurement, Status};
 use shared::geometry::Vec2;
+use shared::liftoff_thrust::lift_off_thrust;
 use shared::scenario::Scenario;
-use shared::statics::lift_off_thrust;
 
 /// Most trials of one run. The paper runs 100; 10,000 pin a fraction such as
 /// `within_one_resolution` to within about 1 % (95 % confidence: `2 sqrt(p (1 - p) / n)`

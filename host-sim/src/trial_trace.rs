@@ -11,8 +11,8 @@ use shared::estimation::grid::Grid;
 use shared::estimation::groups::lift_group;
 use shared::estimation::{Estimator, Measurement};
 use shared::geometry::Vec2;
+use shared::liftoff_thrust::lift_off_thrust;
 use shared::scenario::Scenario;
-use shared::statics::lift_off_thrust;
 
 use crate::monte_carlo::{self, MonteCarloSetup};
 

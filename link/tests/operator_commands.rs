@@ -40,6 +40,7 @@ use shared::control::navigator::{ImuSample, MocapFix};
 use shared::control::trajectory::FlightPhase;
 use shared::control::vector::{Quat, Vec3};
 use shared::geometry::Vec2;
+use shared::liftoff_thrust::lift_off_thrust;
 use shared::mission::params::{COUNT, NAME_LEN, ParamValues, TABLE};
 use shared::mission::{
     HardwareFaults, JobResult, Mission, MissionConfig, MissionPlanner, OperatorCommand, Phase,
@@ -47,7 +48,6 @@ use shared::mission::{
 };
 use shared::paper::{checked, rect_sim1};
 use shared::scenario::{FlightSetup, GRAVITY, MAX_ROBOTS, Scenario, Truth};
-use shared::statics::lift_off_thrust;
 use std::cell::RefCell;
 
 /// The control period, us (400 Hz).

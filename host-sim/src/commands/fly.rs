@@ -170,7 +170,7 @@ pub fn run(args: &FlyArgs) -> Result<Outcome> {
         map_error,
     };
     let started = Instant::now();
-    let outcome = harness::fly(s, &setup)?;
+    let outcome = harness::fly_formation(s, &setup)?;
     let wall_s = started.elapsed().as_secs_f64();
     let mut written = Vec::new();
     let mut other = None;
@@ -181,7 +181,7 @@ pub fn run(args: &FlyArgs) -> Result<Outcome> {
                 formation: setup.formation.other(),
                 ..setup
             };
-            let flight = harness::fly(s, &other_setup)?;
+            let flight = harness::fly_formation(s, &other_setup)?;
             written.extend(report::write_flight(
                 dir,
                 &loaded.name,

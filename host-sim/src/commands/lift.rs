@@ -1,4 +1,4 @@
-//! `host-sim lift --pair I --com X,Y --mass M`: the lift-off thrust model of `shared::statics`
+//! `host-sim lift --pair I --com X,Y --mass M`: the lift-off thrust model of `shared::liftoff_thrust`
 //! for adjacent candidate pair `I` (candidates `I` and `I+1`, wrapping).
 
 use anyhow::{Result, bail};
@@ -6,7 +6,7 @@ use clap::Args;
 use serde_json::json;
 use shared::estimation::groups::{group_count, lift_group};
 use shared::geometry::Vec2;
-use shared::statics::lift_off_thrust;
+use shared::liftoff_thrust::lift_off_thrust;
 
 use crate::cli::{Common, Outcome, check_mass, pair};
 use crate::report::print_json;

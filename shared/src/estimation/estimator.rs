@@ -14,10 +14,10 @@ use crate::estimation::information::{InformationScratch, mutual_information};
 use crate::estimation::likelihood::{LiftLikelihood, Measurement};
 use crate::estimation::posterior::{CellModel, Concentration, Posterior, concentration};
 use crate::geometry::{ConvexHull, Vec2};
+use crate::liftoff_thrust::lift_fraction;
 use crate::math;
 use crate::numbers::Fixed;
 use crate::scenario::{MAX_CANDIDATES, MAX_GRID_POINTS, Scenario};
-use crate::statics::lift_fraction;
 
 /// Choices of the estimator beyond the scenario.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -530,8 +530,8 @@ impl Estimator {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::liftoff_thrust::lift_off_thrust;
     use crate::paper::{checked, l_sim1, rect_sim1};
-    use crate::statics::lift_off_thrust;
 
     /// The model's reading for the scenario's truth (no noise).
     fn true_reading(scenario: &Scenario, group: usize, scale: f32) -> Measurement {

@@ -9,8 +9,8 @@
 use heapless::Vec;
 
 use crate::geometry::Vec2;
+use crate::liftoff_thrust::group_centroid;
 use crate::scenario::{MAX_ROBOTS, Scenario};
-use crate::statics::group_centroid;
 
 /// One lifting group of adjacent candidates.
 #[derive(Clone, Debug, PartialEq)]

@@ -194,8 +194,8 @@ mod tests {
     use crate::estimation::grid::Grid;
     use crate::estimation::likelihood::LiftLikelihood;
     use crate::estimation::posterior::Posterior;
+    use crate::liftoff_thrust::group_centroid;
     use crate::paper::{checked, rect_sim1};
-    use crate::statics::group_centroid;
 
     /// The guard band is the grid one point wider, restricted to its outer layers: after the
     /// same readings, each face's mass relative to the inner grid must be what a posterior on

@@ -157,9 +157,9 @@ mod tests {
     use super::*;
     use crate::estimation::grid::Grid;
     use crate::estimation::groups::lift_group;
+    use crate::liftoff_thrust::lift_fraction;
     use crate::paper::{checked, rect_sim1};
     use crate::scenario::MAX_GRID_POINTS;
-    use crate::statics::lift_fraction;
     use proptest::prelude::*;
 
     /// Independent formulation: `I = H(z) - H(z|theta)` with both entropies by dense

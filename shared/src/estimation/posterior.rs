@@ -10,9 +10,9 @@ use heapless::Vec;
 use crate::estimation::grid::Grid;
 use crate::estimation::likelihood::{LiftLikelihood, Measurement};
 use crate::geometry::{ConvexHull, Vec2};
+use crate::liftoff_thrust::{lift_fraction, thrust_from_fraction};
 use crate::math;
 use crate::scenario::MAX_GRID_POINTS;
-use crate::statics::{lift_fraction, thrust_from_fraction};
 
 /// Predicted lift-off reading at grid point (COM with share `fraction`, mass `im`, scale `is`):
 /// the thrust the flight controller believes it applies, `s * (m_r g + M g f)`.

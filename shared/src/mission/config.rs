@@ -4,7 +4,7 @@
 use crate::control::allocation::MixerKind;
 use crate::estimation::EstimatorOptions;
 use crate::flight::{AdaptConfig, FlightConfig};
-use crate::liftoff::LiftoffConfig;
+use crate::liftoff_detector::LiftoffConfig;
 use crate::mission::hardware::HardwareConfig;
 use crate::mission::supervision::SupervisionConfig;
 use crate::rail::stepper::MotionLimits;

@@ -27,7 +27,7 @@ use crate::flight::{
     LandingCause,
 };
 use crate::geometry::Vec2;
-use crate::liftoff::{LiftState, LiftoffDetector};
+use crate::liftoff_detector::{LiftState, LiftoffDetector};
 use crate::math;
 use crate::mission::config::MissionConfig;
 use crate::mission::jobs::{JobRequest, JobResult, LiftPlan, NO_SCENARIO};

@@ -11,13 +11,13 @@ use crate::control::trajectory::FlightPhase;
 use crate::control::vector::{Quat, Vec3};
 use crate::estimation::Measurement;
 use crate::geometry::Vec2;
+use crate::liftoff_thrust::lift_off_thrust;
 use crate::mission::{
     AbortReason, CommandRefusal, HardwareFaults, JobRequest, Mission, MissionConfig,
     MissionPlanner, OperatorCommand, Phase, Reason, Supervision, TickInput, TickOutput,
 };
 use crate::paper::{checked, rect_sim1};
 use crate::scenario::{FlightSetup, GRAVITY, Scenario, Truth};
-use crate::statics::lift_off_thrust;
 
 const DT_US: u64 = 2500;
 
