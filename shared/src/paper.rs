@@ -140,6 +140,7 @@ pub fn hovering_flight(mixer: MixerKind) -> Option<(Navigator, FlightStack)> {
     let model = FlightModel {
         mixer: Mixer::build(mixer, &layout).ok()?,
         vehicle: VehicleModel::from_payload(&RECT, com, 3.5, &RECT_ROTORS, 0.1, 14.2),
+        com,
     };
     let above = Vec3::new(0.0, 0.0, -0.5);
     let mut navigator = Navigator::new();

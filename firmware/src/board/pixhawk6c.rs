@@ -167,6 +167,9 @@ impl Board for Pixhawk6c {
         HardwareFaults {
             imu: super::imu_spi::FAULTED.load(core::sync::atomic::Ordering::Relaxed),
             stalled_robots: super::steppers::STALLED.load(core::sync::atomic::Ordering::Relaxed),
+            // No ESC telemetry is read yet (PWM outputs): the rotor monitor finds a stopped
+            // rotor from the vehicle's response.
+            rotors_out: 0,
         }
     }
 }

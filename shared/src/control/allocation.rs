@@ -141,15 +141,36 @@ impl Mixer {
             a[(2, i)] = r.x;
             a[(3, i)] = f32::from(s) * layout.torque_per_thrust;
         }
+        Self::from_effectiveness(kind, count, layout.max_thrust, a, true)
+    }
+
+    /// The mixer of `kind` for effectiveness `a` of `count` rotors; `yaw` false leaves the
+    /// yaw row out of the inverse (the mixer then commands no yaw).
+    fn from_effectiveness(
+        kind: MixerKind,
+        count: usize,
+        max_thrust: f32,
+        a: Effectiveness,
+        yaw: bool,
+    ) -> Result<Self, AllocationError> {
         let mut mixing = Mixing::zeros();
-        match kind {
-            MixerKind::Allocation => {
+        match (kind, yaw) {
+            (MixerKind::Allocation, true) => {
                 let inverse = (a * a.transpose())
                     .try_inverse()
                     .ok_or(AllocationError::Uncontrollable)?;
                 mixing = a.transpose() * inverse;
             }
-            MixerKind::EqualSplit => {
+            (MixerKind::Allocation, false) => {
+                let a3: SMatrix<f32, 3, MAX_ROBOTS> = a.fixed_rows::<3>(0).into_owned();
+                let inverse = (a3 * a3.transpose())
+                    .try_inverse()
+                    .ok_or(AllocationError::Uncontrollable)?;
+                mixing
+                    .fixed_columns_mut::<3>(0)
+                    .copy_from(&(a3.transpose() * inverse));
+            }
+            (MixerKind::EqualSplit, _) => {
                 let b: SMatrix<f32, 3, MAX_ROBOTS> = a.fixed_rows::<3>(1).into_owned();
                 let inverse = (b * b.transpose())
                     .try_inverse()
@@ -166,6 +187,20 @@ impl Mixer {
         if mixing.iter().any(|v| !v.is_finite()) {
             return Err(AllocationError::Uncontrollable);
         }
+        if kind == MixerKind::Allocation {
+            // A nearly singular `A A^T` inverts to garbage in f32: the mixing must reproduce
+            // each axis it claims (the identity on the rows inverted).
+            let product = a * mixing;
+            let rows = if yaw { 4 } else { 3 };
+            for r in 0..rows {
+                for c in 0..rows {
+                    let want = if r == c { 1.0 } else { 0.0 };
+                    if (product[(r, c)] - want).abs() > 1e-3 {
+                        return Err(AllocationError::Uncontrollable);
+                    }
+                }
+            }
+        }
         let mut columns = [[0.0f32; MAX_ROBOTS]; 4];
         for (axis, column) in columns.iter_mut().enumerate() {
             for (i, slot) in column.iter_mut().enumerate().take(count) {
@@ -175,10 +210,52 @@ impl Mixer {
         Ok(Self {
             kind,
             count,
-            max_thrust: layout.max_thrust,
+            max_thrust,
             effectiveness: a,
             columns,
         })
+    }
+
+    /// This mixer's rotors without those in `out` (bit `i` for rotor `i`): their thrust is
+    /// forced to zero and the others take the whole wrench, through the pseudo-inverse of the
+    /// remaining columns whatever this mixer's kind (an equal split over rotors whose centroid
+    /// is no longer the COM would itself make a torque). If the remaining rotors cannot
+    /// produce every axis, yaw is given up: the mixer then delivers thrust, roll and pitch
+    /// and commands no yaw ([`Self::flies_yaw`] is false). `Uncontrollable` if not even
+    /// those three are left. A matrix inverse: once per rotor lost, not every tick.
+    pub fn without(&self, out: u16) -> Result<Self, AllocationError> {
+        let mut a = self.effectiveness;
+        for i in 0..self.count {
+            if out & (1 << i) != 0 {
+                a.column_mut(i).fill(0.0);
+            }
+        }
+        Self::from_effectiveness(MixerKind::Allocation, self.count, self.max_thrust, a, true)
+            .or_else(|_| {
+                Self::from_effectiveness(
+                    MixerKind::Allocation,
+                    self.count,
+                    self.max_thrust,
+                    a,
+                    false,
+                )
+            })
+    }
+
+    /// Whether the mixer delivers yaw torque (false once yaw was given up for a lost rotor).
+    pub fn flies_yaw(&self) -> bool {
+        self.columns[3][..self.count].iter().any(|v| *v != 0.0)
+    }
+
+    /// Rotor `i`'s column of the effectiveness matrix: what one newton of its thrust makes
+    /// (collective N, roll, pitch and yaw torque N m); zeros for a rotor the mixer flies
+    /// without, or beyond [`Self::count`].
+    pub fn column(&self, i: usize) -> [f32; 4] {
+        if i >= self.count {
+            return [0.0; 4];
+        }
+        let c = self.effectiveness.column(i);
+        [c[0], c[1], c[2], c[3]]
     }
 
     /// The mixer's kind.

@@ -16,6 +16,9 @@ pub struct FlightModel {
     pub mixer: Mixer,
     /// Mass, inertia and thrust as the controller believes them.
     pub vehicle: VehicleModel,
+    /// The COM the mixer's torques are about (body frame, from the payload frame's origin,
+    /// where the IMU sits), m.
+    pub com: Vec2,
 }
 
 impl FlightModel {
@@ -50,6 +53,10 @@ impl FlightModel {
             robots.mass,
             robots.max_thrust,
         );
-        Ok(Self { mixer, vehicle })
+        Ok(Self {
+            mixer,
+            vehicle,
+            com,
+        })
     }
 }

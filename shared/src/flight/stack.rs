@@ -16,7 +16,14 @@
 //!   the rotors once the descent from the last known height has reached the ground
 //!   ([`LandingCause::PositionLost`]); lost on the ground: the rotors stop;
 //! - touchdown: the land detector stops the rotors ([`FlightStop::Landed`]); a plan over for
-//!   [`FlightConfig::touchdown_timeout`] near the ground stops them too.
+//!   [`FlightConfig::touchdown_timeout`] near the ground stops them too;
+//! - a rotor that stops in the air ([`FlightStack::watch_rotors`]: found by
+//!   [`crate::flight::rotor_monitor`] or reported by its ESC): the mixer is rebuilt without
+//!   it ([`Mixer::without`]: the others take the wrench, yaw given up first if they cannot
+//!   fly every axis) and the vehicle lands at once straight below where it is
+//!   ([`LandingCause::RotorOut`]). Straight below is the nearest safe point: the flight area
+//!   is a clear floor (the take-off point and the target are on it), a vertical descent asks
+//!   the least of the remaining rotors, and every metre flown on them is risk.
 //!
 //! Operator commands: [`FlightCommand::LandNow`] lands where the vehicle is (or stops the
 //! rotors if it never left the ground); [`FlightCommand::Kill`] stops the rotors at once.
@@ -30,6 +37,8 @@ use crate::control::trajectory::{FlightPhase, FlightPlan, PlanLimits, Setpoint};
 use crate::control::vector::Vec3;
 use crate::control::vehicle::VehicleModel;
 use crate::flight::model::FlightModel;
+use crate::flight::rotor_monitor::{MonitorInput, RotorMonitor, RotorMonitorConfig};
+use crate::geometry::Vec2;
 use crate::math;
 use crate::scenario::MAX_ROBOTS;
 
@@ -54,6 +63,8 @@ pub struct FlightConfig {
     /// Time past the expected touchdown of a descent without position before the rotors stop,
     /// s.
     pub failsafe_margin: f32,
+    /// Tuning of the monitor that finds a rotor stopped in flight.
+    pub rotor_monitor: RotorMonitorConfig,
 }
 
 impl FlightConfig {
@@ -66,6 +77,7 @@ impl FlightConfig {
         arrival_timeout: 10.0,
         touchdown_timeout: 5.0,
         failsafe_margin: 1.0,
+        rotor_monitor: RotorMonitorConfig::DEFAULT,
     };
 }
 
@@ -93,7 +105,26 @@ pub enum LandingCause {
     TrackingLost,
     /// The operator asked for it.
     Operator,
+    /// A rotor stopped in the air: flying on the others.
+    RotorOut {
+        /// The robot whose rotor stopped, from 0.
+        robot: u8,
+    },
 }
+
+/// A rotor found stopped in flight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RotorOut {
+    /// The robot whose rotor stopped, from 0.
+    pub robot: u8,
+    /// When it was found, s since the flight began ([`FlightStack::clock`]).
+    pub at: f32,
+    /// Its ESC reported it (rather than the monitor finding it).
+    pub reported: bool,
+}
+
+/// Rotors found stopped that a flight records.
+const MAX_ROTORS_OUT: usize = 4;
 
 /// Why the rotors stopped: the flight is over.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -168,6 +199,13 @@ pub struct FlightStack {
     hold_hover: bool,
     /// Hold where the plan is now, whatever its segment (the ground link is lost).
     hold_here: bool,
+    /// The COM the mixer's torques are about, m.
+    com: Vec2,
+    monitor: RotorMonitor,
+    /// Rotors found stopped, in order (the first [`MAX_ROTORS_OUT`]).
+    rotors_lost: heapless::Vec<RotorOut, MAX_ROTORS_OUT>,
+    /// A rotor found stopped whose landing has not begun yet.
+    rotor_landing: Option<u8>,
 }
 
 impl FlightStack {
@@ -196,6 +234,10 @@ impl FlightStack {
             stopped: None,
             hold_hover: false,
             hold_here: false,
+            com: model.com,
+            monitor: RotorMonitor::new(config.rotor_monitor),
+            rotors_lost: heapless::Vec::new(),
+            rotor_landing: None,
         }
     }
 
@@ -212,10 +254,81 @@ impl FlightStack {
     /// Flies on with `model` (the robots moved, or the payload is believed otherwise): the
     /// mixer and the controller's vehicle model change, the controller's integrators and the
     /// plan carry on.
+    /// Rotors found stopped stay out of the new mixer.
     pub fn set_model(&mut self, model: FlightModel) {
         self.weight = model.vehicle.hover_thrust();
         self.controller.set_model(model.vehicle);
-        self.mixer = model.mixer;
+        self.com = model.com;
+        let out = self.monitor.out();
+        self.mixer = if out == 0 {
+            model.mixer
+        } else {
+            model.mixer.without(out).unwrap_or(model.mixer)
+        };
+    }
+
+    /// Rotors found stopped in flight, in the order found (the first four).
+    pub fn rotors_lost(&self) -> &[RotorOut] {
+        &self.rotors_lost
+    }
+
+    /// Rotors flown without, bit `i` for rotor `i`.
+    pub fn rotors_out(&self) -> u16 {
+        self.monitor.out()
+    }
+
+    /// After a tick's [`Self::step`]: watches the rotors with the accelerometer's specific
+    /// force `accel` (body frame, m/s^2), the tick's rotor commands `thrusts` and the rotors
+    /// the ESCs report stopped, `reported` (bit `i` for rotor `i`). The monitor judges only in
+    /// the air, clear of the ground. A rotor found stopped is flown without from the next
+    /// tick, and the next tick begins the landing ([`LandingCause::RotorOut`]; under a
+    /// descent without position, that descent goes on). Returns it when this tick found one.
+    pub fn watch_rotors(
+        &mut self,
+        nav: &NavState,
+        accel: Vec3,
+        thrusts: &[f32],
+        reported: u16,
+        dt: f32,
+    ) -> Option<RotorOut> {
+        if self.stopped.is_some() {
+            return None;
+        }
+        let n = self.mixer.count();
+        let all = if n >= 16 { u16::MAX } else { (1u16 << n) - 1 };
+        let clear = nav.height_above(self.ground_z) > 3.0 * LandDetector::LAND_HEIGHT;
+        let newly_reported = reported & all & !self.monitor.out();
+        let vehicle = *self.controller.model();
+        let found = self.monitor.update(&MonitorInput {
+            mixer: &self.mixer,
+            vehicle: &vehicle,
+            com: self.com,
+            thrusts,
+            rate: nav.attitude.rate,
+            accel,
+            active: self.land.airborne() && clear,
+            dt,
+        });
+        let (robot, reported) = match (newly_reported, found) {
+            (0, None) => return None,
+            (0, Some(j)) => (j as u8, false),
+            (bits, _) => (bits.trailing_zeros() as u8, true),
+        };
+        let newly = newly_reported | found.map_or(0, |j| 1u16 << j);
+        self.monitor.mark_out(newly);
+        // Not even thrust, roll and pitch left: fly on with the mixer there is (the lost
+        // rotor's share is lost) and land.
+        if let Ok(mixer) = self.mixer.without(self.monitor.out()) {
+            self.mixer = mixer;
+        }
+        let event = RotorOut {
+            robot,
+            at: self.clock,
+            reported,
+        };
+        let _ = self.rotors_lost.push(event);
+        self.rotor_landing = Some(robot);
+        Some(event)
     }
 
     /// Holds the hover past its planned time while `hold` is set (the plan then goes on from
@@ -363,6 +476,15 @@ impl FlightStack {
                 }
             }
             None => {}
+        }
+        if let Some(robot) = self.rotor_landing.take()
+            && self.land.airborne()
+            && self.failsafe_until.is_none()
+        {
+            self.landing = None;
+            if let Some(event) = self.begin_landing(LandingCause::RotorOut { robot }, nav) {
+                return Some(event);
+            }
         }
         let position = nav.position;
         let descending =

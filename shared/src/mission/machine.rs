@@ -125,6 +125,11 @@ pub struct HardwareFaults {
     pub imu: bool,
     /// Robots whose steppers stalled, bit `j` for robot `j`.
     pub stalled_robots: u8,
+    /// Robots whose ESC reports its rotor stopped while commanded to turn, bit `j` for robot
+    /// `j` (no board reads ESC telemetry yet: 0). Heeded in flight only, where the flight
+    /// flies on without the rotor and lands ([`AbortReason::RotorOut`]); not part of
+    /// [`Self::reason`].
+    pub rotors_out: u8,
 }
 
 impl HardwareFaults {
@@ -132,6 +137,7 @@ impl HardwareFaults {
     pub const NONE: Self = Self {
         imu: false,
         stalled_robots: 0,
+        rotors_out: 0,
     };
 
     /// The abort reason of the first fault that concerns a mission with `robots` robots.
@@ -549,6 +555,9 @@ impl Mission {
                 _ => None,
             };
             transition = self.advance(&nav, dt, flight_command, &mut thrusts);
+        }
+        if matches!(self.phase, Phase::Flying(_)) {
+            self.watch_rotors(input, &nav, &thrusts, dt);
         }
         let armed = matches!(
             self.phase,
@@ -971,6 +980,9 @@ impl Mission {
                 let reason = match cause {
                     LandingCause::PositionLost => Reason::Abort(AbortReason::PositionLost),
                     LandingCause::TrackingLost => Reason::Abort(AbortReason::TrackingLost),
+                    LandingCause::RotorOut { robot } => {
+                        Reason::Abort(AbortReason::RotorOut { robot })
+                    }
                     LandingCause::Operator => match self.abort {
                         Some(
                             why @ (AbortReason::OperatorAbort
@@ -1004,6 +1016,32 @@ impl Mission {
             }
         };
         Some(self.enter(to, reason))
+    }
+
+    /// After this tick's flight step: a rotor found stopped (or reported by its ESC) is flown
+    /// without from the next tick and the flight lands; the formation is not re-solved for
+    /// the rotors left (the adaptation gives up, a re-formation asked for is dropped).
+    fn watch_rotors(
+        &mut self,
+        input: &TickInput,
+        nav: &NavState,
+        thrusts: &[f32; MAX_ROBOTS],
+        dt: f32,
+    ) {
+        let Some(flight) = self.flight.as_mut() else {
+            return;
+        };
+        let n = self.scenario.robots.count();
+        let reported = u16::from(input.faults.rotors_out);
+        if flight
+            .watch_rotors(nav, input.imu.accel, &thrusts[..n], reported, dt)
+            .is_some()
+        {
+            if let Some(adapter) = self.adapter.as_mut() {
+                adapter.give_up();
+            }
+            self.pending = None;
+        }
     }
 
     /// The in-flight adaptation after this tick's flight step: measure in the hover, ask for a

@@ -139,6 +139,12 @@ pub enum AbortReason {
         /// The filtered pack voltage, V.
         volts: f32,
     },
+    /// A robot's rotor stopped in flight: the flight goes on with the other rotors and lands
+    /// where it is.
+    RotorOut {
+        /// The robot, counted from 0.
+        robot: u8,
+    },
 }
 
 impl core::fmt::Display for AbortReason {
@@ -196,6 +202,11 @@ impl core::fmt::Display for AbortReason {
                 f,
                 "battery critical: {} V, below BAT_CRIT_V",
                 Fixed(crate::mission::supervision::hundredths_down(volts), 2)
+            ),
+            Self::RotorOut { robot } => write!(
+                f,
+                "rotor {} stopped in flight: flying on the other rotors and landing where it is",
+                u32::from(robot) + 1
             ),
         }
     }

@@ -1,0 +1,541 @@
+//! A rotor that stops in flight, found from the vehicle's response (issue 15, `rotor-out`).
+//!
+//! What it implements: actuator failure detection and isolation with a momentum residual
+//! (A. De Luca, R. Mattone, "Actuator failure detection and isolation using generalized
+//! momenta", ICRA 2003) and isolation by the residual's direction (J. Gertler, "Fault
+//! Detection and Diagnosis in Engineering Systems", 1998, directional residuals), on the
+//! rigid payload's roll, pitch and collective:
+//!
+//! - Expected wrench: the allocator's effectiveness matrix `A` (one column per rotor,
+//!   [`crate::control::allocation`]) times the rotors' commands passed through the rotors'
+//!   response ([`RotorMonitorConfig::response_time`]: the motor's lag and the IMU's delay).
+//! - Torque residual (roll, pitch): the observer `p_hat' = tau_expected + r - w x I w`,
+//!   `r = K (I w - p_hat)` tracks the torque the model misses with bandwidth `K`, from the
+//!   gyro alone (no differentiated rates).
+//! - Thrust residual: the collective the accelerometer measures (mass times the specific
+//!   force along body z, moved from the IMU at the payload frame's origin to the COM with the
+//!   observer's angular acceleration) minus the expected one, low-passed with the same `K`.
+//! - Change: the residual minus its baseline, which absorbs what the model gets wrong for
+//!   long (a COM or mass estimate off, the command-to-thrust map's bias, a slow
+//!   disturbance): while the change is within [`RotorMonitorConfig::quiet`] the baseline
+//!   follows the residual slowly ([`RotorMonitorConfig::baseline_time`]); beyond, it holds,
+//!   and a change no rotor explains for [`RotorMonitorConfig::rebase_time`] becomes the new
+//!   baseline at once (followed slowly, a step would shrink through every size, one rotor's
+//!   among them).
+//! - Isolation: a rotor `j` that stops takes `T_j a_j` away, `T_j` its expected thrust and
+//!   `a_j` its column (thrust, roll, pitch; torques divided by the rotors' RMS arm so all
+//!   rows are in newtons). Rotor `j` is the one whose column explains the change best (least
+//!   squares, one rotor at a time); it is declared stopped when its column explains at least
+//!   [`RotorMonitorConfig::min_explained`] of the change, the thrust lost is within
+//!   [`RotorMonitorConfig::min_fraction`]..[`RotorMonitorConfig::max_fraction`] of `T_j`,
+//!   and this holds for [`RotorMonitorConfig::confirm_time`].
+//!
+//! The thrust row is what tells a rotor from a load that shifts: a shifted COM changes the
+//! torque about the believed COM as a rotor loss does, but not the collective. The torque rows
+//! are what tell a rotor from a loss of lift (a downdraft): only a rotor close to the COM has
+//! (almost) no torque to show, and a sudden loss of lift of its size cannot be told from it.
+//!
+//! What it cannot tell apart: a force pushing down at one point (an obstacle met from below)
+//! is, to the dynamics, a rotor stopping there.
+//!
+//! The monitor watches only while the caller says the vehicle is clear of the ground (contact
+//! forces are no rotor's), and starts afresh ([`RotorMonitorConfig::settle_time`]) after
+//! take-off and after each rotor it finds, once the mixer has been rebuilt without it.
+//! State: about 150 bytes (the flight controller keeps it in its static mission).
+
+use crate::control::allocation::Mixer;
+use crate::control::vector::Vec3;
+use crate::control::vehicle::VehicleModel;
+use crate::geometry::Vec2;
+use crate::math;
+use crate::scenario::MAX_ROBOTS;
+
+/// Tuning of the rotor monitor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RotorMonitorConfig {
+    /// Whether the monitor judges at all (rotors reported by their ESCs are heeded anyway).
+    pub enabled: bool,
+    /// Bandwidth `K` of the residuals, 1/s.
+    pub bandwidth: f32,
+    /// Time constant from a rotor command to the IMU seeing its effect (the motor's lag and
+    /// the sensor's delay), s.
+    pub response_time: f32,
+    /// Time constant of the baseline the change is measured from, s.
+    pub baseline_time: f32,
+    /// Size of a change (thrust and torques over the rotors' RMS arm, N) within which the
+    /// baseline follows the residual.
+    pub quiet: f32,
+    /// Time a larger change no rotor explains is held before it becomes the baseline, s.
+    pub rebase_time: f32,
+    /// Time after (re)starting before a rotor can be declared stopped, s.
+    pub settle_time: f32,
+    /// Expected thrust below which a rotor is not judged (its loss is too small to see), N.
+    pub min_thrust: f32,
+    /// Share of the change (squared norm) one rotor's column must explain.
+    pub min_explained: f32,
+    /// Smallest thrust lost, as a fraction of the rotor's expected thrust.
+    pub min_fraction: f32,
+    /// Largest thrust lost, as a fraction of the rotor's expected thrust.
+    pub max_fraction: f32,
+    /// Time the same rotor must be found before it is declared stopped, s.
+    pub confirm_time: f32,
+}
+
+impl RotorMonitorConfig {
+    /// The defaults (measured on the paper's payloads in the simulator; tests/rotor_out.rs).
+    pub const DEFAULT: Self = Self {
+        enabled: true,
+        bandwidth: 25.0,
+        response_time: 0.025,
+        baseline_time: 2.0,
+        quiet: 1.0,
+        rebase_time: 0.3,
+        settle_time: 0.5,
+        min_thrust: 1.0,
+        min_explained: 0.8,
+        min_fraction: 0.5,
+        max_fraction: 1.6,
+        confirm_time: 0.05,
+    };
+}
+
+impl Default for RotorMonitorConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// What the monitor reads each tick.
+#[derive(Clone, Copy, Debug)]
+pub struct MonitorInput<'a> {
+    /// The mixer flown (its effectiveness matrix; rotors already out have zero columns).
+    pub mixer: &'a Mixer,
+    /// Mass and inertia as the controller believes them.
+    pub vehicle: &'a VehicleModel,
+    /// The COM the mixer's torques are about, from the IMU (the payload frame's origin), m.
+    pub com: Vec2,
+    /// This tick's rotor commands, N.
+    pub thrusts: &'a [f32],
+    /// Body rate, rad/s.
+    pub rate: Vec3,
+    /// The accelerometer's specific force, body frame, m/s^2.
+    pub accel: Vec3,
+    /// Whether to watch: airborne and clear of the ground.
+    pub active: bool,
+    /// Seconds since the previous tick.
+    pub dt: f32,
+}
+
+/// No candidate rotor.
+const NONE: u8 = u8::MAX;
+
+/// The rotor monitor's state.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RotorMonitor {
+    config: RotorMonitorConfig,
+    /// Each rotor's command through the rotors' response, N.
+    expected: [f32; MAX_ROBOTS],
+    /// The torque observer's momentum (roll, pitch), N m s.
+    momentum: [f32; 2],
+    /// Residuals: thrust (N), roll and pitch torque (N m).
+    residual: [f32; 3],
+    /// Their slow baseline.
+    baseline: [f32; 3],
+    /// Time watched since the last (re)start, s.
+    settled: f32,
+    /// Time the change has been beyond [`RotorMonitorConfig::quiet`], s.
+    loud: f32,
+    /// Time the candidate has been found, s.
+    confirming: f32,
+    candidate: u8,
+    started: bool,
+    /// Rotors known to be out (bit `i` for rotor `i`): never candidates again.
+    out: u16,
+}
+
+impl RotorMonitor {
+    /// A monitor with `config`, nothing seen yet.
+    pub const fn new(config: RotorMonitorConfig) -> Self {
+        Self {
+            config,
+            expected: [0.0; MAX_ROBOTS],
+            momentum: [0.0; 2],
+            residual: [0.0; 3],
+            baseline: [0.0; 3],
+            settled: 0.0,
+            loud: 0.0,
+            confirming: 0.0,
+            candidate: NONE,
+            started: false,
+            out: 0,
+        }
+    }
+
+    /// Rotors known to be out, bit `i` for rotor `i`.
+    pub fn out(&self) -> u16 {
+        self.out
+    }
+
+    /// Takes rotors in `out` as stopped (found here or reported by their ESCs): they are not
+    /// judged again, and the monitor starts afresh for the mixer rebuilt without them.
+    pub fn mark_out(&mut self, out: u16) {
+        if out & !self.out != 0 {
+            self.out |= out;
+            self.restart();
+        }
+    }
+
+    /// The change of the residuals from their baseline: thrust (N), roll and pitch torque
+    /// (N m); zero before the monitor has settled.
+    pub fn change(&self) -> [f32; 3] {
+        if !self.started || self.settled < self.config.settle_time {
+            return [0.0; 3];
+        }
+        let mut d = [0.0; 3];
+        for (i, v) in d.iter_mut().enumerate() {
+            *v = self.residual[i] - self.baseline[i];
+        }
+        d
+    }
+
+    fn restart(&mut self) {
+        self.started = false;
+        self.settled = 0.0;
+        self.loud = 0.0;
+        self.confirming = 0.0;
+        self.candidate = NONE;
+    }
+
+    /// One tick; the rotor (index from 0) newly found stopped, if any. The caller rebuilds
+    /// the mixer without it and calls [`Self::mark_out`] (done here already for the rotor
+    /// returned).
+    pub fn update(&mut self, input: &MonitorInput<'_>) -> Option<usize> {
+        let n = input.mixer.count().min(input.thrusts.len()).min(MAX_ROBOTS);
+        let dt = input.dt;
+        let expected = input.mixer.wrench_of(&self.expected[..n]);
+        // The commands of this tick act from now on: through the rotors' response.
+        let alpha = if dt > 0.0 {
+            math::clamp(dt / math::max(self.config.response_time, dt), 0.0, 1.0)
+        } else {
+            0.0
+        };
+        for (e, &t) in self.expected.iter_mut().zip(input.thrusts).take(n) {
+            if t.is_finite() {
+                *e += alpha * (t - *e);
+            }
+        }
+        let inertia = input.vehicle.inertia;
+        let w = input.rate;
+        let usable = self.config.enabled
+            && input.active
+            && dt > 0.0
+            && w.is_finite()
+            && input.accel.is_finite()
+            && inertia.x > 0.0
+            && inertia.y > 0.0;
+        if !usable {
+            self.restart();
+            return None;
+        }
+        let p = [inertia.x * w.x, inertia.y * w.y];
+        if !self.started {
+            self.momentum = p;
+            self.residual = [0.0; 3];
+            self.baseline = [0.0; 3];
+            self.started = true;
+            return None;
+        }
+        let k = self.config.bandwidth;
+        let gyroscopic = w.cross(inertia.component_mul(w));
+        let torque = [expected.torque.x, expected.torque.y];
+        let gyro = [gyroscopic.x, gyroscopic.y];
+        let mut angular_acceleration = [0.0f32; 2];
+        for axis in 0..2 {
+            self.momentum[axis] += dt * (torque[axis] + self.residual[axis + 1] - gyro[axis]);
+            self.residual[axis + 1] = k * (p[axis] - self.momentum[axis]);
+            let moment = if axis == 0 { inertia.x } else { inertia.y };
+            angular_acceleration[axis] =
+                (torque[axis] + self.residual[axis + 1] - gyro[axis]) / moment;
+        }
+        // The specific force at the COM: the IMU's minus the rotation's part at the COM's
+        // offset (z components of dw/dt x c and w x (w x c), c in the body's xy plane).
+        let c = input.com;
+        let tangential = angular_acceleration[0] * c.y - angular_acceleration[1] * c.x;
+        let centripetal = w.z * (w.x * c.x + w.y * c.y);
+        let measured = -input.vehicle.mass * (input.accel.z - tangential - centripetal);
+        let beta = math::clamp(k * dt, 0.0, 1.0);
+        self.residual[0] += beta * (measured - expected.thrust - self.residual[0]);
+        self.settled += dt;
+        if self.settled < self.config.settle_time {
+            self.baseline = self.residual;
+            return None;
+        }
+        let Some(scale) = torque_scale(input.mixer, n) else {
+            return None;
+        };
+        let found = self.isolate(input.mixer, n, scale);
+        let d = self.change();
+        let size = math::sqrt(d[0] * d[0] + (d[1] * d[1] + d[2] * d[2]) * scale * scale);
+        if size <= self.config.quiet {
+            self.loud = 0.0;
+            let gamma = math::clamp(dt / math::max(self.config.baseline_time, dt), 0.0, 1.0);
+            for (b, r) in self.baseline.iter_mut().zip(self.residual) {
+                *b += gamma * (r - *b);
+            }
+        } else if found.is_none() {
+            self.loud += dt;
+            if self.loud >= self.config.rebase_time {
+                self.loud = 0.0;
+                self.baseline = self.residual;
+            }
+        }
+        match found {
+            Some(j) if usize::from(self.candidate) == j => self.confirming += dt,
+            Some(j) => {
+                self.candidate = j as u8;
+                self.confirming = dt;
+            }
+            None => {
+                self.candidate = NONE;
+                self.confirming = 0.0;
+            }
+        }
+        if found.is_some() && self.confirming >= self.config.confirm_time {
+            let j = usize::from(self.candidate);
+            self.mark_out(1 << j);
+            return Some(j);
+        }
+        None
+    }
+
+    /// The rotor whose loss explains the change, if one does; `scale` is
+    /// [`torque_scale`]'s.
+    fn isolate(&self, mixer: &Mixer, n: usize, scale: f32) -> Option<usize> {
+        let d = self.change();
+        let d = [d[0], d[1] * scale, d[2] * scale];
+        let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        if !(dd > 0.0) {
+            return None;
+        }
+        let mut best: Option<(usize, f32, f32)> = None;
+        for j in 0..n {
+            let c = mixer.column(j);
+            if self.out & (1 << j) != 0 || c[0] == 0.0 || self.expected[j] < self.config.min_thrust
+            {
+                continue;
+            }
+            let a = [c[0], c[1] * scale, c[2] * scale];
+            let aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+            let dot = d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
+            let lost = -dot / aa;
+            if lost <= 0.0 {
+                continue;
+            }
+            let explained = dot * dot / (aa * dd);
+            if best.is_none_or(|(_, e, _)| explained > e) {
+                best = Some((j, explained, lost));
+            }
+        }
+        let (j, explained, lost) = best?;
+        let t = self.expected[j];
+        let fits = explained >= self.config.min_explained
+            && lost >= self.config.min_fraction * t
+            && lost <= self.config.max_fraction * t;
+        fits.then_some(j)
+    }
+}
+
+/// One over the flown rotors' RMS arm, 1/m: torques times it are newtons, as the thrust row.
+fn torque_scale(mixer: &Mixer, n: usize) -> Option<f32> {
+    let (mut arms, mut counted) = (0.0f32, 0.0f32);
+    for i in 0..n {
+        let c = mixer.column(i);
+        if c[0] != 0.0 {
+            arms += c[1] * c[1] + c[2] * c[2];
+            counted += 1.0;
+        }
+    }
+    (counted > 0.0 && arms > 0.0).then(|| 1.0 / math::sqrt(arms / counted))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::allocation::{MixerKind, RotorLayout};
+    use crate::paper::{ALTERNATING_SPIN, RECT_ROTORS};
+    use crate::scenario::GRAVITY;
+
+    const COM: Vec2 = Vec2::new(0.12, 0.01);
+    const DT: f32 = 0.0025;
+
+    fn mixer() -> Mixer {
+        Mixer::build(
+            MixerKind::Allocation,
+            &RotorLayout {
+                points: &RECT_ROTORS,
+                spin: &ALTERNATING_SPIN,
+                com: COM,
+                torque_per_thrust: 0.016,
+                max_thrust: 14.2,
+            },
+        )
+        .expect("controllable")
+    }
+
+    fn vehicle() -> VehicleModel {
+        // The paper's rectangle, 1.76 m x 0.2 m.
+        let plate = [
+            Vec2::new(-0.88, -0.1),
+            Vec2::new(0.88, -0.1),
+            Vec2::new(0.88, 0.1),
+            Vec2::new(-0.88, 0.1),
+        ];
+        VehicleModel::from_payload(&plate, COM, 3.5, &RECT_ROTORS, 0.1, 14.2)
+    }
+
+    /// A rigid payload on the rotors: rotor thrusts follow their commands with a 20 ms lag;
+    /// `lost` rotors make nothing from `lost_at` s; `extra` is a torque (N m) and a thrust
+    /// (N) the model does not know, as a function of time. Rates integrate the true torque;
+    /// the controller is a plain rate damper plus the hover trim. Returns the rotor found and
+    /// when.
+    fn fly(
+        lost: &[usize],
+        lost_at: f32,
+        extra: impl Fn(f32) -> (Vec3, f32),
+        seconds: f32,
+    ) -> Option<(usize, f32)> {
+        let mixer = mixer();
+        let v = vehicle();
+        let mut monitor = RotorMonitor::new(RotorMonitorConfig::DEFAULT);
+        let mut rotor = [0.0f32; MAX_ROBOTS];
+        let mut w = Vec3::ZERO;
+        let mut accel_z = -GRAVITY;
+        let steps = (seconds / DT) as usize;
+        for k in 0..steps {
+            let t = k as f32 * DT;
+            // Damp the rates; hold the weight.
+            let wrench = crate::control::allocation::Wrench {
+                thrust: v.hover_thrust(),
+                torque: Vec3::new(-2.0 * w.x, -2.0 * w.y, 0.0),
+            };
+            let thrusts = mixer.allocate(&wrench).thrusts;
+            let found = monitor.update(&MonitorInput {
+                mixer: &mixer,
+                vehicle: &v,
+                com: Vec2::default(),
+                thrusts: &thrusts[..8],
+                rate: w,
+                accel: Vec3::new(0.0, 0.0, accel_z),
+                active: true,
+                dt: DT,
+            });
+            if let Some(j) = found {
+                return Some((j, t));
+            }
+            for (i, r) in rotor.iter_mut().enumerate().take(8) {
+                let target = if lost.contains(&i) && t >= lost_at {
+                    0.0
+                } else {
+                    thrusts[i]
+                };
+                *r += (target - *r) * DT / 0.02;
+            }
+            let true_wrench = mixer.wrench_of(&rotor[..8]);
+            let (torque, thrust) = extra(t);
+            let torque = true_wrench.torque + torque;
+            w = w + Vec3::new(torque.x / v.inertia.x, torque.y / v.inertia.y, 0.0) * DT;
+            accel_z = -(true_wrench.thrust + thrust) / v.mass;
+        }
+        None
+    }
+
+    #[test]
+    fn every_rotor_that_stops_is_found_quickly_and_no_other() {
+        for j in 0..8 {
+            let (found, at) = fly(&[j], 1.0, |_| (Vec3::ZERO, 0.0), 2.0)
+                .unwrap_or_else(|| panic!("rotor {j} not found"));
+            assert_eq!(found, j);
+            let late = at - 1.0;
+            assert!((0.0..0.15).contains(&late), "rotor {j} found {late} s late");
+        }
+    }
+
+    #[test]
+    fn a_steady_flight_and_slow_or_torque_only_disturbances_are_no_rotor() {
+        assert_eq!(fly(&[], 0.0, |_| (Vec3::ZERO, 0.0), 5.0), None);
+        // The paper's disturbance: 0.3 N m on roll and pitch at 0.37 and 0.53 Hz.
+        let paper = |t: f32| {
+            let tau = 2.0 * core::f32::consts::PI;
+            (
+                Vec3::new(
+                    0.3 * math::sin(tau * 0.37 * t),
+                    0.3 * math::sin(tau * 0.53 * t),
+                    0.0,
+                ),
+                0.0,
+            )
+        };
+        assert_eq!(fly(&[], 0.0, paper, 5.0), None);
+        // A load sliding 0.15 m along x in half a second: a pitch torque the size of a
+        // rotor's, and no change of thrust.
+        let shift = |t: f32| {
+            let x = math::clamp((t - 1.0) / 0.5, 0.0, 1.0) * 0.15;
+            (Vec3::new(0.0, -x * 3.5 * GRAVITY, 0.0), 0.0)
+        };
+        assert_eq!(fly(&[], 0.0, shift, 4.0), None);
+        // A loss of lift four rotors' worth, no torque (a downdraft): too large for one rotor
+        // (a rotor's own worth near the COM could not be told from a rotor there).
+        let gust = |t: f32| (Vec3::ZERO, if t > 1.0 { -20.0 } else { 0.0 });
+        assert_eq!(fly(&[], 0.0, gust, 3.0), None);
+    }
+
+    #[test]
+    fn nothing_is_judged_on_the_ground_or_before_settling() {
+        let mixer = mixer();
+        let v = vehicle();
+        let mut monitor = RotorMonitor::new(RotorMonitorConfig::DEFAULT);
+        let thrusts = [5.0f32; 8];
+        // A huge imbalance, but not active (on the ground): nothing.
+        for _ in 0..400 {
+            let found = monitor.update(&MonitorInput {
+                mixer: &mixer,
+                vehicle: &v,
+                com: COM,
+                thrusts: &thrusts,
+                rate: Vec3::new(3.0, -3.0, 0.0),
+                accel: Vec3::new(0.0, 0.0, 0.0),
+                active: false,
+                dt: DT,
+            });
+            assert_eq!(found, None);
+        }
+        assert_eq!(monitor.change(), [0.0; 3]);
+        // Garbage input: no panic, nothing found.
+        let found = monitor.update(&MonitorInput {
+            mixer: &mixer,
+            vehicle: &v,
+            com: COM,
+            thrusts: &[f32::NAN; 8],
+            rate: Vec3::new(f32::NAN, 0.0, 0.0),
+            accel: Vec3::ZERO,
+            active: true,
+            dt: -1.0,
+        });
+        assert_eq!(found, None);
+    }
+
+    #[test]
+    fn a_rotor_marked_out_is_not_found_again() {
+        let mut monitor = RotorMonitor::new(RotorMonitorConfig::DEFAULT);
+        monitor.mark_out(1 << 3);
+        assert_eq!(monitor.out(), 1 << 3);
+        monitor.mark_out(1 << 5);
+        assert_eq!(monitor.out(), (1 << 3) | (1 << 5));
+    }
+
+    #[test]
+    fn its_state_is_small() {
+        // The flight controller keeps it in its static mission (about 0.6 KiB to spare).
+        assert!(core::mem::size_of::<RotorMonitor>() <= 160);
+    }
+}
