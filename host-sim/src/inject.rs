@@ -15,12 +15,20 @@
 //!   `hil --gcs`, nothing from the real one reaches the vehicle any more); without a time, there
 //!   is no ground station from the start;
 //! - `battery:V@T`: the pack's open-circuit voltage drops to V volts; without a time, the pack
-//!   is at V from the start.
+//!   is at V from the start;
+//! - `rotor-out:J@T`: robot J's rotor stops and makes no thrust from then on, whatever is
+//!   commanded (repeatable: two rotors can stop);
+//! - `mocap-loss@T`: motion capture stops (as `--mocap-lost-after T`).
 
 use std::fmt;
 
 use shared::geometry::Vec2;
 use shared::scenario::MAX_ROBOTS;
+
+use crate::mission_run::{
+    BatteryDrop, ImuFaultKind, ImuInjection, LoadShift, MissionSetup, Onset, RotorStop,
+};
+use crate::scenario_file::LoadedScenario;
 
 /// Largest load shift, m: beyond the paper's payloads (1.76 m long at most).
 pub const MAX_LOAD_SHIFT: f32 = 1.0;
@@ -50,6 +58,10 @@ pub enum Fault {
     GcsLoss,
     /// The pack's voltage drops to this, V.
     Battery(f32),
+    /// This robot's rotor (index from 0) stops: no thrust from then on.
+    RotorOut(usize),
+    /// Motion capture stops.
+    MocapLoss,
 }
 
 impl Fault {
@@ -96,6 +108,8 @@ impl fmt::Display for Injection {
             Fault::GcsLoss => write!(f, "gcs-loss"),
             Fault::Battery(v) if from_start => return write!(f, "battery:{v}"),
             Fault::Battery(v) => write!(f, "battery:{v}"),
+            Fault::RotorOut(robot) => write!(f, "rotor-out:{}", robot + 1),
+            Fault::MocapLoss => write!(f, "mocap-loss"),
         }?;
         match self.since {
             Since::Takeoff => write!(f, "@{}", self.after),
@@ -163,9 +177,23 @@ fn fault(kind: &str, text: &str) -> Result<Fault, String> {
             Ok(Fault::ImuNoise(x))
         }
         "gcs-loss" => no_argument(Fault::GcsLoss),
+        "mocap-loss" => no_argument(Fault::MocapLoss),
+        "rotor-out" => {
+            let robot: usize = arg.trim().parse().map_err(|_| {
+                format!(
+                    "`{text}`: rotor-out takes a robot's number (1, 2, ...), e.g. rotor-out:3@8"
+                )
+            })?;
+            if !(1..=MAX_ROBOTS).contains(&robot) {
+                return Err(format!(
+                    "`{text}`: robots are numbered 1 to {MAX_ROBOTS} at most"
+                ));
+            }
+            Ok(Fault::RotorOut(robot - 1))
+        }
         "battery" => Ok(Fault::Battery(pack_volts(arg, text)?)),
         other => Err(format!(
-            "`{text}`: unknown fault `{other}` (known: load-shift:DX,DY@T, stepper-stall:J, imu-stuck@T, imu-noise:X@T, gcs-loss[@T], battery:V[@T]; the IMU, ground-station and battery faults also @start+T)"
+            "`{text}`: unknown fault `{other}` (known: load-shift:DX,DY@T, rotor-out:J@T, mocap-loss@T, stepper-stall:J, imu-stuck@T, imu-noise:X@T, gcs-loss[@T], battery:V[@T]; the IMU, ground-station and battery faults also @start+T)"
         )),
     }
 }
@@ -229,6 +257,77 @@ impl Injection {
     }
 }
 
+/// Refuses an injection that names a robot `loaded` does not have.
+pub fn check_robots(injections: &[Injection], loaded: &LoadedScenario) -> anyhow::Result<()> {
+    let robots = loaded.scenario.robots.count();
+    for i in injections {
+        if let Fault::StepperStall(robot) | Fault::RotorOut(robot) = i.fault
+            && robot >= robots
+        {
+            anyhow::bail!("--inject {i}: {} has robots 1 to {robots}", loaded.name);
+        }
+    }
+    Ok(())
+}
+
+/// `setup` with `injections` in it, as the plant loop takes them (for `mission` and `hil`
+/// alike): every `rotor-out` counts, the last one of another kind; `mocap-loss@T` replaces
+/// the setup's `mocap_lost_after_takeoff`.
+pub fn apply(injections: &[Injection], mut setup: MissionSetup) -> MissionSetup {
+    let onset = |i: &Injection| match i.since {
+        Since::Start => Onset::AfterStart(i.after),
+        Since::Takeoff => Onset::AfterTakeoff(i.after),
+    };
+    for i in injections {
+        match i.fault {
+            Fault::LoadShift(offset) => {
+                setup.load_shift = Some(LoadShift {
+                    offset,
+                    after: i.after,
+                });
+            }
+            Fault::StepperStall(robot) => setup.stepper_stall = Some(robot),
+            Fault::ImuStuck | Fault::ImuNoise(_) => {
+                let kind = match i.fault {
+                    Fault::ImuNoise(x) => ImuFaultKind::Noise(x),
+                    _ => ImuFaultKind::Stuck,
+                };
+                setup.imu_fault = Some(ImuInjection {
+                    kind,
+                    after: i.after,
+                    from_start: i.since == Since::Start,
+                });
+            }
+            Fault::GcsLoss => setup.gcs_loss = Some(onset(i)),
+            Fault::Battery(volts) => {
+                setup.battery_drop = Some(BatteryDrop {
+                    volts,
+                    onset: onset(i),
+                });
+            }
+            Fault::RotorOut(_) => {}
+            Fault::MocapLoss => setup.mocap_lost_after_takeoff = Some(i.after),
+        }
+    }
+    setup.rotors_out = rotors_out(injections);
+    setup
+}
+
+/// The rotors that `injections` stop, in the plant loop's terms (for
+/// [`crate::mission_run::MissionSetup::rotors_out`], whichever autopilot flies).
+pub fn rotors_out(injections: &[Injection]) -> Vec<RotorStop> {
+    injections
+        .iter()
+        .filter_map(|i| match i.fault {
+            Fault::RotorOut(robot) => Some(RotorStop {
+                robot,
+                after: i.after,
+            }),
+            _ => None,
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -255,6 +354,8 @@ mod tests {
             ("gcs-loss@start+3", Fault::GcsLoss, 3.0, Since::Start),
             ("battery:12.5@3", Fault::Battery(12.5), 3.0, Since::Takeoff),
             ("battery:13", Fault::Battery(13.0), 0.0, Since::Start),
+            ("rotor-out:3@8.5", Fault::RotorOut(2), 8.5, Since::Takeoff),
+            ("mocap-loss@6", Fault::MocapLoss, 6.0, Since::Takeoff),
         ] {
             let i = Injection::parse(text).expect(text);
             assert_eq!((i.fault, i.after, i.since), (fault, after, since), "{text}");
@@ -287,9 +388,34 @@ mod tests {
             ("battery:-1@3", "from 0 to"),
             ("battery:500", "from 0 to"),
             ("battery:nan", "finite"),
+            ("rotor-out:3", "KIND@SECONDS"),
+            ("rotor-out:x@3", "robot's number"),
+            ("rotor-out:0@3", "numbered 1 to"),
+            ("rotor-out:17@3", "numbered 1 to"),
+            ("rotor-out:2@-1", "from 0"),
+            ("rotor-out:2@start+1", "in flight"),
+            ("mocap-loss:2@3", "no argument"),
         ] {
             let err = Injection::parse(bad).expect_err(bad);
             assert!(err.contains(says), "{bad}: {err}");
         }
+        let two = [
+            Injection::parse("rotor-out:3@8.5").expect("valid"),
+            Injection::parse("rotor-out:7@9").expect("valid"),
+            Injection::parse("gcs-loss@2").expect("valid"),
+        ];
+        assert_eq!(
+            rotors_out(&two),
+            vec![
+                RotorStop {
+                    robot: 2,
+                    after: 8.5
+                },
+                RotorStop {
+                    robot: 6,
+                    after: 9.0
+                }
+            ]
+        );
     }
 }

@@ -58,6 +58,19 @@ pub struct MissionSetup {
     pub battery_drop: Option<BatteryDrop>,
     /// Failure injection: the IMU freezes or grows noisy.
     pub imu_fault: Option<ImuInjection>,
+    /// Failure injection: rotors that stop in flight ([`crate::inject::rotors_out`] makes
+    /// them from `--inject rotor-out:J@T`).
+    pub rotors_out: Vec<RotorStop>,
+}
+
+/// A rotor that stops: from `after` seconds after take-off began, robot `robot`'s rotor
+/// (from 0) makes no thrust, whatever is commanded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RotorStop {
+    /// The robot, from 0.
+    pub robot: usize,
+    /// When, s after take-off began.
+    pub after: f32,
 }
 
 /// An IMU that fails: from `after` seconds after take-off began (or after the mission's start,
@@ -184,6 +197,7 @@ impl Default for MissionSetup {
             imu_fault: None,
             gcs_loss: None,
             battery_drop: None,
+            rotors_out: Vec::new(),
         }
     }
 }
@@ -292,6 +306,10 @@ pub struct PlantRecord {
     /// Horizontal distance from where the payload was when the injected IMU fault began to
     /// where it ended, m.
     pub moved_after_imu_fault_m: Option<f32>,
+    /// Each injected rotor stop that happened: robot (from 0), simulated time, s.
+    pub rotors_stopped: Vec<(usize, f32)>,
+    /// When take-off began, s (simulated time), if it did.
+    pub takeoff_at: Option<f32>,
     /// Each in-flight re-formation.
     pub adaptations: Vec<Adaptation>,
     /// The flight, sampled at 100 Hz from take-off.
@@ -369,6 +387,7 @@ pub fn fly(
         Some(ImuFaultKind::Noise(x)) => Some(ImuNoise::new(setup.seed, x)),
         _ => None,
     };
+    let mut dead = vec![false; n];
     loop {
         let t = plant.time();
         if t >= limit {
@@ -383,6 +402,16 @@ pub fn fly(
             let progress = ((t - begin) / LOAD_SHIFT_TIME).clamp(0.0, 1.0);
             if t >= begin && t <= begin + LOAD_SHIFT_TIME + dt {
                 plant.set_com(shift_from + shift.offset * progress);
+            }
+        }
+        for stop in &setup.rotors_out {
+            if t >= takeoff_at + stop.after
+                && let Some(d) = dead.get_mut(stop.robot)
+                && !*d
+            {
+                *d = true;
+                plant.stop_rotor(stop.robot);
+                record.rotors_stopped.push((stop.robot, t));
             }
         }
         let truth_now = plant.state();
@@ -456,6 +485,7 @@ pub fn fly(
                     if name == "takeoff" && takeoff_at.is_infinite() {
                         plant.set_disturbance_peak(flight.disturbance_torque);
                         takeoff_at = t;
+                        record.takeoff_at = Some(t);
                         if let Some(after) = setup.mocap_lost_after_takeoff {
                             mocap_lost_at = t + after;
                         }
@@ -527,7 +557,7 @@ pub fn fly(
             plant.set_rotor_points(&rotor_points(&record.final_rail));
         }
         for (j, c) in record.final_thrusts.iter_mut().enumerate() {
-            let fraction = if out.armed {
+            let fraction = if out.armed && !dead[j] {
                 out.thrust.get(j).copied().unwrap_or(0.0)
             } else {
                 0.0
@@ -797,6 +827,11 @@ pub struct MissionOutcome {
     pub moved_after_imu_fault_m: Option<f32>,
     /// What the mission's IMU monitor found after the start, and when, s.
     pub imu_detected: Option<(ImuFailure, f32)>,
+    /// Each rotor stopped by injection: robot (from 0), simulated time, s.
+    pub rotors_stopped: Vec<(usize, f32)>,
+    /// Each rotor the mission found stopped (by the monitor or its ESC): robot (from 0),
+    /// simulated time, s.
+    pub rotors_found: Vec<(usize, f32)>,
     /// Each in-flight re-formation.
     pub adaptations: Vec<Adaptation>,
     /// The flight sampled at 100 Hz.
@@ -854,6 +889,15 @@ pub fn run(
         imu_detected: mission
             .imu_detection()
             .map(|d| (d.failure, d.time_us as f32 * 1e-6)),
+        rotors_stopped: record.rotors_stopped,
+        rotors_found: match (mission.flight(), record.takeoff_at) {
+            (Some(flight), Some(takeoff)) => flight
+                .rotors_lost()
+                .iter()
+                .map(|r| (usize::from(r.robot), takeoff + r.at))
+                .collect(),
+            _ => Vec::new(),
+        },
         adaptations: record.adaptations,
         series: record.series,
         notices: record.notices,

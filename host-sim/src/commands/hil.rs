@@ -18,7 +18,6 @@ use link::status::MissionState;
 use serde_json::json;
 
 use crate::cli::{Outcome, check_map_error, check_range};
-use crate::commands::mission::supervision_faults;
 use crate::hil::gcs::GcsBridge;
 use crate::hil::qemu::Qemu;
 use crate::hil::run::{HilOutcome, HilSetup, run as run_hil};
@@ -87,9 +86,11 @@ pub struct HilArgs {
     /// Failure injection: motion capture stops this many seconds after take-off.
     #[arg(long, value_name = "S")]
     pub mocap_lost_after: Option<f64>,
-    /// Failure injection, as `mission --inject`: `gcs-loss[@T]` (the plant's heartbeat stops
+    /// Failure injection in the plant, as `mission --inject` (KIND@SECONDS after take-off):
+    /// `rotor-out:J@T`, `load-shift:DX,DY@T`, `mocap-loss@T`, `imu-stuck@T` and
+    /// `imu-noise:X@T` (in the HIL_SENSOR samples), `gcs-loss[@T]` (the plant's heartbeat stops
     /// and nothing from --gcs passes), `battery:V[@T]` (the pack's voltage the plant sends as
-    /// BATTERY_STATUS drops to V volts).
+    /// BATTERY_STATUS drops to V volts); not `stepper-stall` (the link carries no stall report).
     #[arg(long, value_name = "KIND@SECONDS", value_parser = Injection::parse)]
     pub inject: Vec<Injection>,
 }
@@ -149,15 +150,16 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
     if let Some(i) = args
         .inject
         .iter()
-        .find(|i| !matches!(i.fault, Fault::GcsLoss | Fault::Battery(_)))
+        .find(|i| matches!(i.fault, Fault::StepperStall(_)))
     {
-        bail!("--inject {i}: hil injects gcs-loss and battery:V (use mission for the others)");
+        bail!(
+            "--inject {i}: the HIL link carries no stall report (StallGuard is the board's own driver); use mission"
+        );
     }
-    let (gcs_loss, battery_drop) = supervision_faults(&args.inject);
     let loaded = scenario_file::load(&args.scenario)?;
+    crate::inject::check_robots(&args.inject, &loaded)?;
     let setup = HilSetup {
-        gcs_loss,
-        battery_drop,
+        injections: args.inject.clone(),
         seed: args.seed,
         speed: speed.map(f64::from),
         duration_s: duration.map(f64::from),

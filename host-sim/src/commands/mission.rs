@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 use serde_json::json;
 use shared::control::imu_monitor::ImuFailure;
@@ -16,12 +16,9 @@ use shared::mission::MissionConfig;
 
 use crate::cli::{Outcome, check_map_error, check_range};
 use crate::commands::fly::MixerArg;
-use crate::inject::{Fault, Injection, Since};
+use crate::inject::{self, Injection};
 use crate::mission_figures;
-use crate::mission_run::{
-    self, BatteryDrop, ImuFaultKind, ImuInjection, LoadShift, MISSION_TIME_LIMIT, MissionOutcome,
-    MissionSetup, Onset,
-};
+use crate::mission_run::{self, MISSION_TIME_LIMIT, MissionOutcome, MissionSetup};
 use crate::report::print_json;
 use crate::say;
 use crate::scenario_file;
@@ -67,13 +64,14 @@ pub struct MissionArgs {
     #[arg(long, value_enum, default_value = "equal-split")]
     mixer: MixerArg,
     /// Failure injection, seconds after take-off began: `load-shift:DX,DY@T` moves the
-    /// payload's COM by (DX, DY) m over half a second; `stepper-stall:J` (no time) stalls robot
-    /// J's (from 1) stepper halfway through the rearrangement; `imu-stuck@T` freezes the IMU,
+    /// payload's COM by (DX, DY) m over half a second; `rotor-out:J@T` stops robot J's (from
+    /// 1) rotor; `mocap-loss@T` stops motion capture; `stepper-stall:J` (no time) stalls robot
+    /// J's stepper halfway through the rearrangement; `imu-stuck@T` freezes the IMU,
     /// `imu-noise:X@T` adds X times its noise (0 < X <= 1000); `gcs-loss@T` stops the simulated
     /// ground station's heartbeat; `battery:V@T` drops the pack to V volts. The IMU, ground
     /// station and battery faults also take `@start+T`, T s after the mission's start (and
-    /// `gcs-loss` or `battery:V` without a time: from the start). Repeatable: the last one of a
-    /// kind counts.
+    /// `gcs-loss` or `battery:V` without a time: from the start). Repeatable: every rotor-out
+    /// counts, the last one of another kind.
     #[arg(long, value_name = "KIND@SECONDS", value_parser = Injection::parse)]
     inject: Vec<Injection>,
     /// Switch off the formation's in-flight adaptation to a load that shifts.
@@ -96,34 +94,6 @@ pub fn outcome_of(mission: &MissionOutcome) -> Outcome {
     )
 }
 
-/// The ground-link and battery injections of `inject` as the plant loop takes them (the last
-/// one of a kind counts).
-pub fn supervision_faults(inject: &[Injection]) -> (Option<Onset>, Option<BatteryDrop>) {
-    let onset = |i: &Injection| {
-        if i.since == Since::Start {
-            Onset::AfterStart(i.after)
-        } else {
-            Onset::AfterTakeoff(i.after)
-        }
-    };
-    let gcs = inject
-        .iter()
-        .filter(|i| i.fault == Fault::GcsLoss)
-        .map(onset)
-        .next_back();
-    let battery = inject
-        .iter()
-        .filter_map(|i| match i.fault {
-            Fault::Battery(volts) => Some(BatteryDrop {
-                volts,
-                onset: onset(i),
-            }),
-            _ => None,
-        })
-        .next_back();
-    (gcs, battery)
-}
-
 /// Runs the command.
 pub fn run(args: &MissionArgs) -> Result<Outcome> {
     // Every flag is checked before the mission is built.
@@ -144,14 +114,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
         Some(path) => scenario_file::load(path)?,
         None => scenario_file::parse(RECT_EX1, std::path::Path::new("rect-ex1 (built in)"))?,
     };
-    let robots = loaded.scenario.robots.count();
-    for i in &args.inject {
-        if let Fault::StepperStall(robot) = i.fault
-            && robot >= robots
-        {
-            bail!("--inject {i}: {} has robots 1 to {robots}", loaded.name);
-        }
-    }
+    inject::check_robots(&args.inject, &loaded)?;
     // A reading's noise beyond the rotors' whole range would carry no information.
     let max_thrust = f64::from(loaded.scenario.robots.max_thrust);
     let lift_sigma = args
@@ -174,51 +137,16 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
         },
         ..MissionConfig::default()
     };
-    let (gcs_loss, battery_drop) = supervision_faults(&args.inject);
-    let setup = MissionSetup {
-        gcs_loss,
-        battery_drop,
-        seed: args.seed,
-        map_error,
-        config,
-        mocap_lost_after_takeoff: mocap_lost_after,
-        load_shift: args
-            .inject
-            .iter()
-            .filter_map(|i| match i.fault {
-                Fault::LoadShift(offset) => Some(LoadShift {
-                    offset,
-                    after: i.after,
-                }),
-                _ => None,
-            })
-            .next_back(),
-        stepper_stall: args
-            .inject
-            .iter()
-            .filter_map(|i| match i.fault {
-                Fault::StepperStall(robot) => Some(robot),
-                _ => None,
-            })
-            .next_back(),
-        imu_fault: args
-            .inject
-            .iter()
-            .filter_map(|i| {
-                let kind = match i.fault {
-                    Fault::ImuStuck => ImuFaultKind::Stuck,
-                    Fault::ImuNoise(x) => ImuFaultKind::Noise(x),
-                    _ => return None,
-                };
-                Some(ImuInjection {
-                    kind,
-                    after: i.after,
-                    from_start: i.since == Since::Start,
-                })
-            })
-            .next_back(),
-        ..MissionSetup::default()
-    };
+    let setup = inject::apply(
+        &args.inject,
+        MissionSetup {
+            seed: args.seed,
+            map_error,
+            config,
+            mocap_lost_after_takeoff: mocap_lost_after,
+            ..MissionSetup::default()
+        },
+    );
     let json = args.json;
     if !json {
         say!("mission on {}", loaded.name)?;
@@ -259,6 +187,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
             "wall_s": wall_s,
             "max_tilt_deg": outcome.max_tilt_deg,
             "max_thrust_fraction": outcome.max_thrust_fraction,
+            "rotors_out": rotors_out_json(&outcome),
             "adaptations": outcome.adaptations.iter().map(|a| json!({
                 "time_s": a.t,
                 "com": a.com,
@@ -344,9 +273,50 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
                 a.mass
             )?;
         }
+        for (robot, at) in &outcome.rotors_stopped {
+            let found = outcome
+                .rotors_found
+                .iter()
+                .find(|(r, _)| r == robot)
+                .map_or("not found".to_string(), |(_, f)| {
+                    format!("found at {f:.3} s, {:.0} ms later", 1000.0 * (f - at))
+                });
+            say!("  {at:7.2} s  rotor {} stopped: {found}", robot + 1)?;
+        }
+        for (robot, f) in &outcome.rotors_found {
+            if !outcome.rotors_stopped.iter().any(|(r, _)| r == robot) {
+                say!(
+                    "  {f:7.2} s  rotor {} found stopped, but it was not",
+                    robot + 1
+                )?;
+            }
+        }
         for path in &written {
             say!("wrote {}", path.display())?;
         }
     }
     Ok(outcome_of(&outcome))
+}
+
+/// The report's `rotors_out`: each rotor stopped in the plant or found stopped by the
+/// mission (robots from 1), with `stopped_s` (injected) and `detected_s` (found), simulated
+/// seconds, `null` when it did not happen.
+fn rotors_out_json(outcome: &mission_run::MissionOutcome) -> Vec<serde_json::Value> {
+    let mut robots: Vec<usize> = Vec::new();
+    for (r, _) in outcome.rotors_stopped.iter().chain(&outcome.rotors_found) {
+        if !robots.contains(r) {
+            robots.push(*r);
+        }
+    }
+    robots
+        .into_iter()
+        .map(|r| {
+            let at = |list: &[(usize, f32)]| list.iter().find(|(x, _)| *x == r).map(|(_, t)| *t);
+            json!({
+                "robot": r + 1,
+                "stopped_s": at(&outcome.rotors_stopped),
+                "detected_s": at(&outcome.rotors_found),
+            })
+        })
+        .collect()
 }

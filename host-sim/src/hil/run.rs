@@ -24,14 +24,14 @@ use shared::scenario_wire::{MAX_ENCODED_LEN, encode_scenario};
 use super::gcs::GcsBridge;
 use super::session::{FirmwareLog, LoggedText, Session};
 use super::transport::Link;
+use crate::inject::Injection;
 use crate::mission_run::{
-    self, Autopilot, BatteryDrop, Commanded, DELIVERY_RADIUS, Event, MISSION_TIME_LIMIT,
-    MissionSetup, Onset, Sensed,
+    self, Autopilot, Commanded, DELIVERY_RADIUS, Event, MISSION_TIME_LIMIT, MissionSetup, Sensed,
 };
+use crate::scenario_file::LoadedScenario;
 
 /// Plant steps between two `BATTERY_STATUS` (10 Hz, as PX4's battery status goes out).
 const BATTERY_EVERY: u64 = 40;
-use crate::scenario_file::LoadedScenario;
 
 /// One run's set-up.
 #[derive(Clone, Debug)]
@@ -53,11 +53,11 @@ pub struct HilSetup {
     /// The ground station (through `gcs`) starts the mission, not the plant: the plant
     /// uploads the payload and steps the idle vehicle until the firmware reports it running.
     pub ground_start: bool,
-    /// Failure injection: the ground link is lost (the plant's heartbeat stops and nothing
-    /// from a bridged ground station passes).
-    pub gcs_loss: Option<Onset>,
-    /// Failure injection: the pack's voltage drops.
-    pub battery_drop: Option<BatteryDrop>,
+    /// Failure injection in the plant, as `mission --inject` (`crate::inject`): rotors that
+    /// stop, a load that shifts, a frozen or noisy IMU (in the `HIL_SENSOR` samples), motion
+    /// capture lost, the ground link lost (the plant's heartbeat stops and nothing from a
+    /// bridged ground station passes), the pack's voltage (its `BATTERY_STATUS`).
+    pub injections: Vec<Injection>,
 }
 
 impl Default for HilSetup {
@@ -71,8 +71,7 @@ impl Default for HilSetup {
             map_error: 1.0,
             ground_start: false,
             mocap_lost_after_takeoff: None,
-            gcs_loss: None,
-            battery_drop: None,
+            injections: Vec::new(),
         }
     }
 }
@@ -283,15 +282,16 @@ pub fn run(
     };
     autopilot.texts_seen = autopilot.session.log().texts.len();
     autopilot.values_seen = autopilot.session.log().values.len();
-    let plant_setup = MissionSetup {
-        seed: setup.seed,
-        map_error: setup.map_error,
-        mocap_lost_after_takeoff: setup.mocap_lost_after_takeoff,
-        time_limit: setup.duration_s.map_or(MISSION_TIME_LIMIT, |d| d as f32),
-        gcs_loss: setup.gcs_loss,
-        battery_drop: setup.battery_drop,
-        ..MissionSetup::default()
-    };
+    let plant_setup = crate::inject::apply(
+        &setup.injections,
+        MissionSetup {
+            seed: setup.seed,
+            map_error: setup.map_error,
+            mocap_lost_after_takeoff: setup.mocap_lost_after_takeoff,
+            time_limit: setup.duration_s.map_or(MISSION_TIME_LIMIT, |d| d as f32),
+            ..MissionSetup::default()
+        },
+    );
     let wall = Instant::now();
     let record = mission_run::fly(s, &plant_setup, &mut autopilot, &mut |_, _, _| {})?;
     let wall_s = wall.elapsed().as_secs_f64();

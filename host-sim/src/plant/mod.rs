@@ -236,6 +236,14 @@ impl Plant {
         )
     }
 
+    /// Rotor `i` stops now: its thrust is zero at once (the caller commands it zero from
+    /// then on).
+    pub fn stop_rotor(&mut self, i: usize) {
+        if let Some(t) = self.thrusts.get_mut(i) {
+            *t = 0.0;
+        }
+    }
+
     /// One physics step of `PHYSICS_DT` with rotor commands `commands` (N, commanded units).
     pub fn step(&mut self, commands: &[f32]) {
         let alpha = PHYSICS_DT / MOTOR_TIME_CONSTANT;
