@@ -113,6 +113,58 @@ impl core::error::Error for AllocationError {}
 
 type Effectiveness = SMatrix<f32, 4, MAX_ROBOTS>;
 type Mixing = SMatrix<f32, MAX_ROBOTS, 4>;
+/// Thrust, roll and pitch rows of an effectiveness matrix.
+type Rows3 = SMatrix<f32, 3, MAX_ROBOTS>;
+
+/// Whether `product` (effectiveness times mixing) is the identity: a nearly singular
+/// `A A^T` inverts to garbage in f32, and the mixing must reproduce each axis it claims.
+fn reproduces<const R: usize>(product: &SMatrix<f32, R, R>) -> bool {
+    (0..R).all(|r| {
+        (0..R).all(|c| {
+            let want = if r == c { 1.0 } else { 0.0 };
+            (product[(r, c)] - want).abs() <= 1e-3
+        })
+    })
+}
+
+/// The pseudo-inverse `a^T (a a^T)^-1` of thrust, roll and pitch rows, if they are
+/// independent.
+fn right_inverse(a: &Rows3) -> Option<SMatrix<f32, MAX_ROBOTS, 3>> {
+    let m = a.transpose() * (a * a.transpose()).try_inverse()?;
+    (m.iter().all(|v| v.is_finite()) && reproduces(&(a * m))).then_some(m)
+}
+
+/// Smallest share of the hover a flown rotor must carry, as a fraction of the flown rotors'
+/// mean share.
+const MIN_HOVER_SHARE: f32 = 0.2;
+
+/// The rotors of `count` that can hover: in the least-norm thrusts that make one newton of
+/// thrust and no roll or pitch torque, each must carry at least [`MIN_HOVER_SHARE`] of the
+/// mean (none negative, and none so close to zero that the allocator could only lift it off
+/// zero for a torque by raising the whole collective); the one with the smallest share is left
+/// out and the rest solved again. Returns the rows left (the rotors left out with zero
+/// columns) and the pseudo-inverse of those rows; `None` when they can no longer produce the
+/// three axes.
+fn hovering_rotors(a: &Rows3, count: usize) -> Option<(Rows3, SMatrix<f32, MAX_ROBOTS, 3>)> {
+    let mut left = *a;
+    for _ in 0..count {
+        let m = right_inverse(&left)?;
+        let flown = (0..count).filter(|&i| left[(0, i)] != 0.0).count();
+        let least = MIN_HOVER_SHARE / math::max(flown as f32, 1.0);
+        let mut worst: Option<(usize, f32)> = None;
+        for i in (0..count).filter(|&i| left[(0, i)] != 0.0) {
+            let share = m[(i, 0)];
+            if share < least && worst.is_none_or(|(_, w)| share < w) {
+                worst = Some((i, share));
+            }
+        }
+        match worst {
+            None => return Some((left, m)),
+            Some((i, _)) => left.column_mut(i).fill(0.0),
+        }
+    }
+    None
+}
 
 /// A mixer for one formation.
 #[derive(Clone, Debug, PartialEq)]
@@ -141,36 +193,25 @@ impl Mixer {
             a[(2, i)] = r.x;
             a[(3, i)] = f32::from(s) * layout.torque_per_thrust;
         }
-        Self::from_effectiveness(kind, count, layout.max_thrust, a, true)
+        Self::from_effectiveness(kind, count, layout.max_thrust, a)
     }
 
-    /// The mixer of `kind` for effectiveness `a` of `count` rotors; `yaw` false leaves the
-    /// yaw row out of the inverse (the mixer then commands no yaw).
+    /// The mixer of `kind` for effectiveness `a` of `count` rotors.
     fn from_effectiveness(
         kind: MixerKind,
         count: usize,
         max_thrust: f32,
         a: Effectiveness,
-        yaw: bool,
     ) -> Result<Self, AllocationError> {
         let mut mixing = Mixing::zeros();
-        match (kind, yaw) {
-            (MixerKind::Allocation, true) => {
+        match kind {
+            MixerKind::Allocation => {
                 let inverse = (a * a.transpose())
                     .try_inverse()
                     .ok_or(AllocationError::Uncontrollable)?;
                 mixing = a.transpose() * inverse;
             }
-            (MixerKind::Allocation, false) => {
-                let a3: SMatrix<f32, 3, MAX_ROBOTS> = a.fixed_rows::<3>(0).into_owned();
-                let inverse = (a3 * a3.transpose())
-                    .try_inverse()
-                    .ok_or(AllocationError::Uncontrollable)?;
-                mixing
-                    .fixed_columns_mut::<3>(0)
-                    .copy_from(&(a3.transpose() * inverse));
-            }
-            (MixerKind::EqualSplit, _) => {
+            MixerKind::EqualSplit => {
                 let b: SMatrix<f32, 3, MAX_ROBOTS> = a.fixed_rows::<3>(1).into_owned();
                 let inverse = (b * b.transpose())
                     .try_inverse()
@@ -190,15 +231,8 @@ impl Mixer {
         if kind == MixerKind::Allocation {
             // A nearly singular `A A^T` inverts to garbage in f32: the mixing must reproduce
             // each axis it claims (the identity on the rows inverted).
-            let product = a * mixing;
-            let rows = if yaw { 4 } else { 3 };
-            for r in 0..rows {
-                for c in 0..rows {
-                    let want = if r == c { 1.0 } else { 0.0 };
-                    if (product[(r, c)] - want).abs() > 1e-3 {
-                        return Err(AllocationError::Uncontrollable);
-                    }
-                }
+            if !reproduces(&(a * mixing)) {
+                return Err(AllocationError::Uncontrollable);
             }
         }
         let mut columns = [[0.0f32; MAX_ROBOTS]; 4];
@@ -217,29 +251,59 @@ impl Mixer {
     }
 
     /// This mixer's rotors without those in `out` (bit `i` for rotor `i`): their thrust is
-    /// forced to zero and the others take the whole wrench, through the pseudo-inverse of the
-    /// remaining columns whatever this mixer's kind (an equal split over rotors whose centroid
-    /// is no longer the COM would itself make a torque). If the remaining rotors cannot
-    /// produce every axis, yaw is given up: the mixer then delivers thrust, roll and pitch
-    /// and commands no yaw ([`Self::flies_yaw`] is false). `Uncontrollable` if not even
-    /// those three are left. A matrix inverse: once per rotor lost, not every tick.
+    /// forced to zero and the others take the wrench, whatever this mixer's kind (an equal
+    /// split over rotors whose centroid is no longer the COM would itself make a torque).
+    /// Yaw is given up first:
+    /// - thrust, roll and pitch come from the pseudo-inverse of those three rows of the
+    ///   remaining columns, without holding yaw: a hover that balanced the two spins as well
+    ///   can need a negative thrust on a few rotors, which no rotor makes (the allocator would
+    ///   cut the collective to nothing);
+    /// - the hover must need no negative thrust: rotors whose least-norm share of it comes out
+    ///   negative or near zero are not flown (left out, smallest first, while three remain; if
+    ///   no such set is found all are flown, and the payload cannot hover level on them);
+    /// - yaw's column is the full pseudo-inverse's over the rotors flown (pure yaw), or none
+    ///   when they cannot make yaw apart from the rest ([`Self::flies_yaw`] false).
+    ///
+    /// `Uncontrollable` if not even thrust, roll and pitch are left (the rotors left on one
+    /// line). Matrix inverses: once per rotor lost, not every tick.
     pub fn without(&self, out: u16) -> Result<Self, AllocationError> {
+        let count = self.count;
         let mut a = self.effectiveness;
-        for i in 0..self.count {
+        for i in 0..count {
             if out & (1 << i) != 0 {
                 a.column_mut(i).fill(0.0);
             }
         }
-        Self::from_effectiveness(MixerKind::Allocation, self.count, self.max_thrust, a, true)
-            .or_else(|_| {
-                Self::from_effectiveness(
-                    MixerKind::Allocation,
-                    self.count,
-                    self.max_thrust,
-                    a,
-                    false,
-                )
-            })
+        let a3: Rows3 = a.fixed_rows::<3>(0).into_owned();
+        let plain = right_inverse(&a3).ok_or(AllocationError::Uncontrollable)?;
+        // Fly only the rotors that can share the hover: one held at zero by its column could
+        // not go below it for a torque, and the allocator would give up roll and pitch.
+        let (flown, m3) = hovering_rotors(&a3, count).unwrap_or((a3, plain));
+        let mut columns = [[0.0f32; MAX_ROBOTS]; 4];
+        for (axis, column) in columns.iter_mut().take(3).enumerate() {
+            for (i, slot) in column.iter_mut().enumerate().take(count) {
+                *slot = m3[(i, axis)];
+            }
+        }
+        let mut full = a;
+        full.fixed_rows_mut::<3>(0).copy_from(&flown);
+        for i in 0..count {
+            if flown[(0, i)] == 0.0 {
+                full[(3, i)] = 0.0;
+            }
+        }
+        if let Ok(mixer) =
+            Self::from_effectiveness(MixerKind::Allocation, count, self.max_thrust, full)
+        {
+            columns[3] = mixer.columns[3];
+        }
+        Ok(Self {
+            kind: MixerKind::Allocation,
+            count,
+            max_thrust: self.max_thrust,
+            effectiveness: a,
+            columns,
+        })
     }
 
     /// Whether the mixer delivers yaw torque (false once yaw was given up for a lost rotor).

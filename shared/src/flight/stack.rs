@@ -272,6 +272,11 @@ impl FlightStack {
         &self.rotors_lost
     }
 
+    /// The rotor monitor (its residuals, for tests and logs).
+    pub fn rotor_monitor(&self) -> &RotorMonitor {
+        &self.monitor
+    }
+
     /// Rotors flown without, bit `i` for rotor `i`.
     pub fn rotors_out(&self) -> u16 {
         self.monitor.out()
