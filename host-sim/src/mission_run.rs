@@ -308,6 +308,9 @@ pub struct PlantRecord {
     pub moved_after_imu_fault_m: Option<f32>,
     /// Each injected rotor stop that happened: robot (from 0), simulated time, s.
     pub rotors_stopped: Vec<(usize, f32)>,
+    /// Horizontal distance from where the first injected rotor stopped to where the payload
+    /// ended, m (the landing "where it is" measured).
+    pub rotor_landing_offset_m: Option<f32>,
     /// When take-off began, s (simulated time), if it did.
     pub takeoff_at: Option<f32>,
     /// Each in-flight re-formation.
@@ -388,6 +391,7 @@ pub fn fly(
         _ => None,
     };
     let mut dead = vec![false; n];
+    let mut stopped_over: Option<Vec3> = None;
     loop {
         let t = plant.time();
         if t >= limit {
@@ -412,6 +416,7 @@ pub fn fly(
                 *d = true;
                 plant.stop_rotor(stop.robot);
                 record.rotors_stopped.push((stop.robot, t));
+                stopped_over.get_or_insert(plant.state().position);
             }
         }
         let truth_now = plant.state();
@@ -604,9 +609,14 @@ pub fn fly(
         last.1 = end - entered;
     }
     let landing = Vec3::new(flight.target[0], flight.target[1], start.z);
-    record.final_position_error_m = (plant.state().position - landing).norm();
+    let end_position = plant.state().position;
+    record.final_position_error_m = (end_position - landing).norm();
     record.moved_after_imu_fault_m = imu_fault_position.map(|p| {
-        let d = plant.state().position - p;
+        let d = end_position - p;
+        d.x.hypot(d.y)
+    });
+    record.rotor_landing_offset_m = stopped_over.map(|p| {
+        let d = end_position - p;
         d.x.hypot(d.y)
     });
     record.simulated_s = end;
@@ -829,6 +839,9 @@ pub struct MissionOutcome {
     pub imu_detected: Option<(ImuFailure, f32)>,
     /// Each rotor stopped by injection: robot (from 0), simulated time, s.
     pub rotors_stopped: Vec<(usize, f32)>,
+    /// Horizontal distance from where the first injected rotor stopped to where the payload
+    /// ended, m.
+    pub rotor_landing_offset_m: Option<f32>,
     /// Each rotor the mission found stopped (by the monitor or its ESC): robot (from 0),
     /// simulated time, s.
     pub rotors_found: Vec<(usize, f32)>,
@@ -890,6 +903,7 @@ pub fn run(
             .imu_detection()
             .map(|d| (d.failure, d.time_us as f32 * 1e-6)),
         rotors_stopped: record.rotors_stopped,
+        rotor_landing_offset_m: record.rotor_landing_offset_m,
         rotors_found: match (mission.flight(), record.takeoff_at) {
             (Some(flight), Some(takeoff)) => flight
                 .rotors_lost()

@@ -188,6 +188,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
             "max_tilt_deg": outcome.max_tilt_deg,
             "max_thrust_fraction": outcome.max_thrust_fraction,
             "rotors_out": rotors_out_json(&outcome),
+            "rotor_landing_offset_m": outcome.rotor_landing_offset_m,
             "adaptations": outcome.adaptations.iter().map(|a| json!({
                 "time_s": a.t,
                 "com": a.com,
@@ -282,6 +283,9 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
                     format!("found at {f:.3} s, {:.0} ms later", 1000.0 * (f - at))
                 });
             say!("  {at:7.2} s  rotor {} stopped: {found}", robot + 1)?;
+        }
+        if let Some(offset) = outcome.rotor_landing_offset_m {
+            say!("  came down {offset:.3} m from where the first rotor stopped")?;
         }
         for (robot, f) in &outcome.rotors_found {
             if !outcome.rotors_stopped.iter().any(|(r, _)| r == robot) {
