@@ -559,6 +559,92 @@ mod tests {
     }
 
     #[test]
+    fn without_a_rotor_the_others_take_the_wrench() {
+        let m = mixer(MixerKind::EqualSplit, Vec2::new(0.12, 0.01));
+        for out in 0..8 {
+            let d = m.without(1 << out).expect("seven rotors fly");
+            assert_eq!(d.kind(), MixerKind::Allocation);
+            assert_eq!(d.column(out), [0.0; 4]);
+            let w = Wrench {
+                thrust: 38.0,
+                torque: Vec3::new(0.3, -0.4, 0.0),
+            };
+            let a = d.allocate(&w);
+            assert_eq!(a.thrusts[out], 0.0, "rotor {out} forced to zero");
+            assert!(!a.saturation.roll_pitch, "rotor {out}: {:?}", a.saturation);
+            assert!(
+                (a.achieved.thrust - w.thrust).abs() < 1e-2
+                    && (a.achieved.torque.x - w.torque.x).abs() < 1e-2
+                    && (a.achieved.torque.y - w.torque.y).abs() < 1e-2,
+                "rotor {out}: {:?}",
+                a.achieved
+            );
+            assert!(a.thrusts[..8].iter().all(|&t| (0.0..=14.2).contains(&t)));
+        }
+        // Two out as well; the same rotor twice changes nothing.
+        let two = m.without(0b1000_0001).expect("six rotors fly");
+        assert_eq!(two.column(0), [0.0; 4]);
+        assert_eq!(two.column(7), [0.0; 4]);
+        assert_eq!(m.without(1).expect("fly").without(1), m.without(1));
+    }
+
+    #[test]
+    fn without_a_rotor_no_other_is_asked_to_push_down() {
+        // A COM near the edge of what the rotors left enclose: the least-norm hover would ask
+        // a negative thrust of some; those are not flown, and the hover is all positive.
+        let m = mixer(MixerKind::Allocation, Vec2::new(0.45, 0.1));
+        for out in 0..8 {
+            let Ok(d) = m.without(1 << out) else {
+                continue;
+            };
+            let a = d.allocate(&Wrench {
+                thrust: 30.0,
+                torque: Vec3::ZERO,
+            });
+            assert!(a.thrusts[..8].iter().all(|&t| t >= 0.0), "{:?}", a.thrusts);
+            // Roll and pitch can still be commanded both ways around the hover.
+            for (x, y) in [(0.2, 0.0), (-0.2, 0.0), (0.0, 0.2), (0.0, -0.2)] {
+                let a = d.allocate(&Wrench {
+                    thrust: 30.0,
+                    torque: Vec3::new(x, y, 0.0),
+                });
+                assert!(!a.saturation.roll_pitch, "out {out}, ({x}, {y}): {a:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn without_rotors_yaw_goes_first_and_a_line_is_uncontrollable() {
+        // Four rotors, two of each spin: without both of one spin, no yaw apart from thrust.
+        let points = [
+            Vec2::new(-1.0, -0.5),
+            Vec2::new(1.0, -0.5),
+            Vec2::new(1.0, 0.5),
+            Vec2::new(-1.0, 0.5),
+            Vec2::new(0.0, 0.6),
+        ];
+        let layout = RotorLayout {
+            points: &points,
+            spin: &[1, -1, 1, -1, 1],
+            // Inside the triangle of rotors 0, 2 and 4.
+            com: Vec2::new(0.0, 0.1),
+            torque_per_thrust: 0.016,
+            max_thrust: 14.2,
+        };
+        let m = Mixer::build(MixerKind::Allocation, &layout).expect("controllable");
+        assert!(m.flies_yaw());
+        let no_yaw = m.without(0b01010).expect("three rotors of one spin fly");
+        assert!(!no_yaw.flies_yaw());
+        let a = no_yaw.allocate(&Wrench {
+            thrust: 20.0,
+            torque: Vec3::new(0.1, 0.1, 0.05),
+        });
+        assert!((a.achieved.torque.x - 0.1).abs() < 1e-3, "{a:?}");
+        // Rotors 0 and 1 left: one line.
+        assert_eq!(m.without(0b11100), Err(AllocationError::Uncontrollable));
+    }
+
+    #[test]
     fn rotors_on_one_line_are_uncontrollable() {
         let points = [
             Vec2::new(-1.0, 0.0),

@@ -46,7 +46,9 @@
 //! The monitor watches only while the caller says the vehicle is clear of the ground (contact
 //! forces are no rotor's), and starts afresh ([`RotorMonitorConfig::settle_time`]) after
 //! take-off and ([`RotorMonitorConfig::resettle_time`]) after each rotor it finds, once the mixer has been rebuilt without it.
-//! State: about 150 bytes (the flight controller keeps it in its static mission).
+//! State: about 140 bytes (the flight controller keeps it in its static mission); the tuning,
+//! [`RotorMonitorConfig`], comes with each tick's input (the flight stack passes the
+//! defaults, a constant in flash).
 
 use crate::control::allocation::Mixer;
 use crate::control::vector::Vec3;
@@ -58,8 +60,6 @@ use crate::scenario::MAX_ROBOTS;
 /// Tuning of the rotor monitor.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RotorMonitorConfig {
-    /// Whether the monitor judges at all (rotors reported by their ESCs are heeded anyway).
-    pub enabled: bool,
     /// Bandwidth `K` of the residuals, 1/s.
     pub bandwidth: f32,
     /// Time constant from a rotor command to the IMU seeing its effect (the motor's lag and
@@ -93,7 +93,6 @@ pub struct RotorMonitorConfig {
 impl RotorMonitorConfig {
     /// The defaults (measured on the paper's payloads in the simulator; tests/rotor_out.rs).
     pub const DEFAULT: Self = Self {
-        enabled: true,
         bandwidth: 50.0,
         response_time: 0.025,
         baseline_time: 0.5,
@@ -121,6 +120,8 @@ const SMOOTHING_TIME: f32 = 0.01;
 /// What the monitor reads each tick.
 #[derive(Clone, Copy, Debug)]
 pub struct MonitorInput<'a> {
+    /// The tuning.
+    pub config: &'a RotorMonitorConfig,
     /// The mixer flown (its effectiveness matrix; rotors already out have zero columns).
     pub mixer: &'a Mixer,
     /// Mass and inertia as the controller believes them.
@@ -142,7 +143,6 @@ pub struct MonitorInput<'a> {
 /// The rotor monitor's state.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RotorMonitor {
-    config: RotorMonitorConfig,
     /// Each rotor's command through the rotors' response, N.
     expected: [f32; MAX_ROBOTS],
     /// The torque observer's momentum (roll, pitch), N m s.
@@ -154,8 +154,8 @@ pub struct RotorMonitor {
     filtered: [f32; 3],
     /// Their slow baseline.
     baseline: [f32; 3],
-    /// Time watched since the last (re)start, s.
-    settled: f32,
+    /// Time left before judging, s.
+    wait: f32,
     /// Time the change has been beyond [`RotorMonitorConfig::quiet`], s.
     loud: f32,
     /// Time some rotor has explained the change without a break, s.
@@ -167,17 +167,22 @@ pub struct RotorMonitor {
     out: u16,
 }
 
+impl Default for RotorMonitor {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl RotorMonitor {
-    /// A monitor with `config`, nothing seen yet.
-    pub const fn new(config: RotorMonitorConfig) -> Self {
+    /// A monitor that has seen nothing yet (its tuning comes with each tick's input).
+    pub const fn new() -> Self {
         Self {
-            config,
             expected: [0.0; MAX_ROBOTS],
             momentum: [0.0; 2],
             residual: [0.0; 3],
             filtered: [0.0; 3],
             baseline: [0.0; 3],
-            settled: 0.0,
+            wait: 0.0,
             loud: 0.0,
             confirming: 0.0,
             smoothed: [0.0; 3],
@@ -194,11 +199,11 @@ impl RotorMonitor {
     /// Takes rotors in `out` as stopped (found here or reported by their ESCs): they are not
     /// judged again, and the monitor starts afresh for the mixer rebuilt without them, judging
     /// again after [`RotorMonitorConfig::resettle_time`].
-    pub fn mark_out(&mut self, out: u16) {
+    pub fn mark_out(&mut self, out: u16, config: &RotorMonitorConfig) {
         if out & !self.out != 0 {
             self.out |= out;
             self.restart();
-            self.settled = self.config.settle_time - self.config.resettle_time;
+            self.wait = config.resettle_time;
         }
     }
 
@@ -210,7 +215,7 @@ impl RotorMonitor {
     /// The change of the residuals from their baseline: thrust (N), roll and pitch torque
     /// (N m); zero before the monitor has settled.
     pub fn change(&self) -> [f32; 3] {
-        if !self.started || self.settled < self.config.settle_time {
+        if !self.started || self.wait > 0.0 {
             return [0.0; 3];
         }
         let mut d = [0.0; 3];
@@ -222,7 +227,7 @@ impl RotorMonitor {
 
     fn restart(&mut self) {
         self.started = false;
-        self.settled = 0.0;
+        self.wait = 0.0;
         self.loud = 0.0;
         self.confirming = 0.0;
         self.smoothed = [0.0; 3];
@@ -232,12 +237,13 @@ impl RotorMonitor {
     /// the mixer without it and calls [`Self::mark_out`] (done here already for the rotor
     /// returned).
     pub fn update(&mut self, input: &MonitorInput<'_>) -> Option<usize> {
+        let config = input.config;
         let n = input.mixer.count().min(input.thrusts.len()).min(MAX_ROBOTS);
         let dt = input.dt;
         let expected = input.mixer.wrench_of(&self.expected[..n]);
         // The commands of this tick act from now on: through the rotors' response.
         let alpha = if dt > 0.0 {
-            math::clamp(dt / math::max(self.config.response_time, dt), 0.0, 1.0)
+            math::clamp(dt / math::max(config.response_time, dt), 0.0, 1.0)
         } else {
             0.0
         };
@@ -248,8 +254,7 @@ impl RotorMonitor {
         }
         let inertia = input.vehicle.inertia;
         let w = input.rate;
-        let usable = self.config.enabled
-            && input.active
+        let usable = input.active
             && dt > 0.0
             && w.is_finite()
             && input.accel.is_finite()
@@ -266,9 +271,10 @@ impl RotorMonitor {
             self.filtered = [0.0; 3];
             self.baseline = [0.0; 3];
             self.started = true;
+            self.wait = math::max(self.wait, config.settle_time);
             return None;
         }
-        let k = self.config.bandwidth;
+        let k = config.bandwidth;
         let gyroscopic = w.cross(inertia.component_mul(w));
         let torque = [expected.torque.x, expected.torque.y];
         let gyro = [gyroscopic.x, gyroscopic.y];
@@ -299,19 +305,17 @@ impl RotorMonitor {
         for (f, r) in self.filtered.iter_mut().zip(rows) {
             *f += beta * (r - *f);
         }
-        self.settled += dt;
-        if self.settled < self.config.settle_time {
+        self.wait -= dt;
+        if self.wait > 0.0 {
             self.baseline = self.filtered;
             return None;
         }
-        let Some(scale) = torque_scale(input.mixer, n) else {
-            return None;
-        };
+        let scale = torque_scale(input.mixer, n)?;
         let d = self.change();
         let size = math::sqrt(d[0] * d[0] + (d[1] * d[1] + d[2] * d[2]) * scale * scale);
-        if size <= self.config.quiet {
+        if size <= config.quiet {
             self.loud = 0.0;
-            let gamma = math::clamp(dt / math::max(self.config.baseline_time, dt), 0.0, 1.0);
+            let gamma = math::clamp(dt / math::max(config.baseline_time, dt), 0.0, 1.0);
             for (b, r) in self.baseline.iter_mut().zip(self.filtered) {
                 *b += gamma * (r - *b);
             }
@@ -322,9 +326,12 @@ impl RotorMonitor {
         for (m, v) in self.smoothed.iter_mut().zip(d) {
             *m += recent * (v - *m);
         }
-        if self.isolate(&d, input.mixer, n, scale, true).is_none() {
+        if self
+            .isolate(config, &d, input.mixer, n, scale, true)
+            .is_none()
+        {
             self.confirming = 0.0;
-            if self.loud >= self.config.rebase_time {
+            if self.loud >= config.rebase_time {
                 self.loud = 0.0;
                 self.baseline = self.filtered;
             }
@@ -333,11 +340,11 @@ impl RotorMonitor {
         // Some rotor explains it: confirm over time, and name the rotor that explains the
         // recent change (neighbours' columns are close; one tick's noise can pick either).
         self.confirming += dt;
-        if self.confirming < self.config.confirm_time {
+        if self.confirming < config.confirm_time {
             return None;
         }
-        let j = self.isolate(&self.smoothed, input.mixer, n, scale, false)?;
-        self.mark_out(1 << j);
+        let j = self.isolate(config, &self.smoothed, input.mixer, n, scale, false)?;
+        self.mark_out(1 << j, config);
         Some(j)
     }
 
@@ -348,6 +355,7 @@ impl RotorMonitor {
     /// further out can match its size while pointing elsewhere).
     fn isolate(
         &self,
+        config: &RotorMonitorConfig,
         d: &[f32; 3],
         mixer: &Mixer,
         n: usize,
@@ -356,15 +364,15 @@ impl RotorMonitor {
     ) -> Option<usize> {
         let d = [d[0], d[1] * scale, d[2] * scale];
         let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        if !(dd > 0.0) {
+        // Zero, or NaN from a non-finite input: nothing to explain.
+        if dd.is_nan() || dd <= 0.0 {
             return None;
         }
         // Of the rotors whose loss could be the change, the one whose column explains it best.
         let mut best: Option<(usize, f32)> = None;
         for j in 0..n {
             let c = mixer.column(j);
-            if self.out & (1 << j) != 0 || c[0] == 0.0 || self.expected[j] < self.config.min_thrust
-            {
+            if self.out & (1 << j) != 0 || c[0] == 0.0 || self.expected[j] < config.min_thrust {
                 continue;
             }
             let a = [c[0], c[1] * scale, c[2] * scale];
@@ -372,12 +380,8 @@ impl RotorMonitor {
             let dot = d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
             let lost = -dot / aa;
             let t = self.expected[j];
-            let small = if sized {
-                self.config.min_fraction * t
-            } else {
-                0.0
-            };
-            if lost <= small || lost > self.config.max_fraction * t {
+            let small = if sized { config.min_fraction * t } else { 0.0 };
+            if lost <= small || lost > config.max_fraction * t {
                 continue;
             }
             let explained = dot * dot / (aa * dd);
@@ -386,7 +390,7 @@ impl RotorMonitor {
             }
         }
         let (j, explained) = best?;
-        (explained >= self.config.min_explained).then_some(j)
+        (explained >= config.min_explained).then_some(j)
     }
 }
 
@@ -452,7 +456,7 @@ mod tests {
     ) -> Option<(usize, f32)> {
         let mixer = mixer();
         let v = vehicle();
-        let mut monitor = RotorMonitor::new(RotorMonitorConfig::DEFAULT);
+        let mut monitor = RotorMonitor::new();
         let mut rotor = [0.0f32; MAX_ROBOTS];
         let mut w = Vec3::ZERO;
         let mut tilt = Vec3::ZERO;
@@ -468,6 +472,7 @@ mod tests {
             };
             let thrusts = mixer.allocate(&wrench).thrusts;
             let found = monitor.update(&MonitorInput {
+                config: &RotorMonitorConfig::DEFAULT,
                 mixer: &mixer,
                 vehicle: &v,
                 com: COM,
@@ -498,8 +503,8 @@ mod tests {
                 torque.y / (0.7 * v.inertia.y),
                 0.0,
             );
-            w = w + w_dot * DT;
-            tilt = tilt + w * DT;
+            w += w_dot * DT;
+            tilt += w * DT;
             // The IMU at the origin, the COM at `COM` from it: f_imu = f_com - dw/dt x COM
             // (w x (w x COM) has no z part with w in the plane).
             let f_com = -(true_wrench.thrust + thrust) / v.mass;
@@ -555,11 +560,12 @@ mod tests {
     fn nothing_is_judged_on_the_ground_or_before_settling() {
         let mixer = mixer();
         let v = vehicle();
-        let mut monitor = RotorMonitor::new(RotorMonitorConfig::DEFAULT);
+        let mut monitor = RotorMonitor::new();
         let thrusts = [5.0f32; 8];
         // A huge imbalance, but not active (on the ground): nothing.
         for _ in 0..400 {
             let found = monitor.update(&MonitorInput {
+                config: &RotorMonitorConfig::DEFAULT,
                 mixer: &mixer,
                 vehicle: &v,
                 com: COM,
@@ -574,6 +580,7 @@ mod tests {
         assert_eq!(monitor.change(), [0.0; 3]);
         // Garbage input: no panic, nothing found.
         let found = monitor.update(&MonitorInput {
+            config: &RotorMonitorConfig::DEFAULT,
             mixer: &mixer,
             vehicle: &v,
             com: COM,
@@ -588,10 +595,10 @@ mod tests {
 
     #[test]
     fn a_rotor_marked_out_is_not_found_again() {
-        let mut monitor = RotorMonitor::new(RotorMonitorConfig::DEFAULT);
-        monitor.mark_out(1 << 3);
+        let mut monitor = RotorMonitor::new();
+        monitor.mark_out(1 << 3, &RotorMonitorConfig::DEFAULT);
         assert_eq!(monitor.out(), 1 << 3);
-        monitor.mark_out(1 << 5);
+        monitor.mark_out(1 << 5, &RotorMonitorConfig::DEFAULT);
         assert_eq!(monitor.out(), (1 << 3) | (1 << 5));
     }
 
@@ -599,6 +606,6 @@ mod tests {
     fn its_state_is_small() {
         // The flight controller keeps it in its static mission (about 0.6 KiB to spare).
         let size = core::mem::size_of::<RotorMonitor>();
-        assert!(size <= 192, "{size} bytes");
+        assert!(size <= 144, "{size} bytes");
     }
 }

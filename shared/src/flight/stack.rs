@@ -63,8 +63,10 @@ pub struct FlightConfig {
     /// Time past the expected touchdown of a descent without position before the rotors stop,
     /// s.
     pub failsafe_margin: f32,
-    /// Tuning of the monitor that finds a rotor stopped in flight.
-    pub rotor_monitor: RotorMonitorConfig,
+    /// Whether the rotor monitor judges (its tuning is [`RotorMonitorConfig::DEFAULT`], kept in
+    /// flash: every copy of this configuration is static RAM on the flight controller). Rotors
+    /// their ESCs report stopped are heeded either way.
+    pub watch_rotors: bool,
 }
 
 impl FlightConfig {
@@ -77,7 +79,7 @@ impl FlightConfig {
         arrival_timeout: 10.0,
         touchdown_timeout: 5.0,
         failsafe_margin: 1.0,
-        rotor_monitor: RotorMonitorConfig::DEFAULT,
+        watch_rotors: true,
     };
 }
 
@@ -123,8 +125,9 @@ pub struct RotorOut {
     pub reported: bool,
 }
 
-/// Rotors found stopped that a flight records.
-const MAX_ROTORS_OUT: usize = 4;
+/// Rotors found stopped that a flight records (the first two: a third is flown without as
+/// well, but not recorded).
+const MAX_ROTORS_OUT: usize = 2;
 
 /// Why the rotors stopped: the flight is over.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -235,7 +238,7 @@ impl FlightStack {
             hold_hover: false,
             hold_here: false,
             com: model.com,
-            monitor: RotorMonitor::new(config.rotor_monitor),
+            monitor: RotorMonitor::new(),
             rotors_lost: heapless::Vec::new(),
             rotor_landing: None,
         }
@@ -267,7 +270,7 @@ impl FlightStack {
         };
     }
 
-    /// Rotors found stopped in flight, in the order found (the first four).
+    /// Rotors found stopped in flight, in the order found (the first two).
     pub fn rotors_lost(&self) -> &[RotorOut] {
         &self.rotors_lost
     }
@@ -305,13 +308,14 @@ impl FlightStack {
         let newly_reported = reported & all & !self.monitor.out();
         let vehicle = *self.controller.model();
         let found = self.monitor.update(&MonitorInput {
+            config: &RotorMonitorConfig::DEFAULT,
             mixer: &self.mixer,
             vehicle: &vehicle,
             com: self.com,
             thrusts,
             rate: nav.attitude.rate,
             accel,
-            active: self.land.airborne() && clear,
+            active: self.config.watch_rotors && self.land.airborne() && clear,
             dt,
         });
         let (robot, reported) = match (newly_reported, found) {
@@ -320,7 +324,7 @@ impl FlightStack {
             (bits, _) => (bits.trailing_zeros() as u8, true),
         };
         let newly = newly_reported | found.map_or(0, |j| 1u16 << j);
-        self.monitor.mark_out(newly);
+        self.monitor.mark_out(newly, &RotorMonitorConfig::DEFAULT);
         // Not even thrust, roll and pitch left: fly on with the mixer there is (the lost
         // rotor's share is lost) and land.
         if let Ok(mixer) = self.mixer.without(self.monitor.out()) {

@@ -658,7 +658,7 @@ fn a_plan_point_out_of_reach_lands_where_the_vehicle_is() {
     // (as an obstacle pressing down at one point would be in the plant). This test is the
     // plan's net alone.
     let mut config = MissionConfig::default();
-    config.flight.rotor_monitor.enabled = false;
+    config.flight.watch_rotors = false;
     let r = run_with(
         &s,
         config,
@@ -915,4 +915,70 @@ fn a_frozen_imu_in_flight_lands_on_motion_capture() {
     assert_eq!(r.mission.abort_reason(), Some(AbortReason::ImuStuck));
     assert!(world.height < 0.05);
 }
+/// A rotor its ESC reports stopped in flight: flown without from then on (its thrust zero,
+/// the others carrying the payload), a landing where it is, the reason naming the robot;
+/// on the ground the report changes nothing.
+#[test]
+fn a_rotor_reported_stopped_in_flight_is_flown_without_and_lands() {
+    let s = scenario(3.5);
+    let mut world = World::new(&s);
+    world.faults.rotors_out = 1 << 2;
+    let mut reported_at = None;
+    let mut after = Vec::new();
+    let r = run_with(
+        &s,
+        MissionConfig::default(),
+        &mut world,
+        Jobs::OnTime,
+        &[(1, OperatorCommand::Start)],
+        |tick, out, w| {
+            // On the ground (the lifts spin rotors too) the bit is not heeded; it is set from
+            // the start and cleared, then set again once in the hover.
+            if out.phase == Phase::Arming {
+                w.faults = HardwareFaults::NONE;
+            }
+            if out.phase == Phase::Flying(FlightPhase::Hover) && reported_at.is_none() {
+                w.faults.rotors_out = 1 << 2;
+                reported_at = Some(tick);
+            }
+            if reported_at.is_some_and(|at| tick > at + 1) && w.height > 0.1 {
+                after.push(out.thrusts);
+            }
+        },
+        200_000,
+    );
+    assert!(reported_at.is_some(), "reached the hover");
+    assert_eq!(
+        r.mission.abort_reason(),
+        Some(AbortReason::RotorOut { robot: 2 })
+    );
+    assert_eq!(r.mission.phase(), Phase::Disarmed);
+    assert!(world.height < 0.05, "landed: {}", world.height);
+    assert!(!after.is_empty());
+    for thrusts in &after {
+        assert_eq!(thrusts[2], 0.0, "{thrusts:?}");
+        let others: f32 = thrusts[..8].iter().sum();
+        assert!(others > 20.0, "the others carry it: {thrusts:?}");
+    }
+    let flight = r.mission.flight().expect("flew");
+    assert_eq!(flight.rotors_out(), 1 << 2);
+    assert_eq!(flight.rotors_lost().len(), 1);
+    assert!(flight.rotors_lost()[0].reported);
+    // The landing began at once: straight down from where it was.
+    let landing = r
+        .transitions
+        .iter()
+        .find(|(_, reason, _)| *reason == Reason::Abort(AbortReason::RotorOut { robot: 2 }))
+        .expect("landing for the rotor")
+        .0;
+    assert!(
+        landing - reported_at.unwrap_or(0) <= 2,
+        "landing began at once"
+    );
+    assert_eq!(
+        std::format!("{}", AbortReason::RotorOut { robot: 2 }),
+        "rotor 3 stopped in flight: flying on the other rotors and landing where it is"
+    );
+}
+
 mod supervision;
