@@ -256,8 +256,7 @@ impl FlightStack {
 
     /// Flies on with `model` (the robots moved, or the payload is believed otherwise): the
     /// mixer and the controller's vehicle model change, the controller's integrators and the
-    /// plan carry on.
-    /// Rotors found stopped stay out of the new mixer.
+    /// plan carry on. Rotors found stopped stay out of the new mixer.
     pub fn set_model(&mut self, model: FlightModel) {
         self.weight = model.vehicle.hover_thrust();
         self.controller.set_model(model.vehicle);
@@ -318,26 +317,29 @@ impl FlightStack {
             active: self.config.watch_rotors && self.land.airborne() && clear,
             dt,
         });
-        let (robot, reported) = match (newly_reported, found) {
-            (0, None) => return None,
-            (0, Some(j)) => (j as u8, false),
-            (bits, _) => (bits.trailing_zeros() as u8, true),
-        };
         let newly = newly_reported | found.map_or(0, |j| 1u16 << j);
+        if newly == 0 {
+            return None;
+        }
         self.monitor.mark_out(newly, &RotorMonitorConfig::DEFAULT);
         // Not even thrust, roll and pitch left: fly on with the mixer there is (the lost
         // rotor's share is lost) and land.
         if let Ok(mixer) = self.mixer.without(self.monitor.out()) {
             self.mixer = mixer;
         }
-        let event = RotorOut {
-            robot,
-            at: self.clock,
-            reported,
-        };
-        let _ = self.rotors_lost.push(event);
-        self.rotor_landing = Some(robot);
-        Some(event)
+        let mut first = None;
+        for robot in (0..n).filter(|&i| newly & (1 << i) != 0) {
+            let event = RotorOut {
+                robot: robot as u8,
+                at: self.clock,
+                reported: newly_reported & (1 << robot) != 0,
+            };
+            // Beyond the first two, flown without but not recorded.
+            let _ = self.rotors_lost.push(event);
+            first.get_or_insert(event);
+        }
+        self.rotor_landing = first.map(|e| e.robot);
+        first
     }
 
     /// Holds the hover past its planned time while `hold` is set (the plan then goes on from
