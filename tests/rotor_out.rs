@@ -6,7 +6,8 @@
 mod common;
 
 use common::load;
-use host_sim::mission_run::{self, MissionOutcome, MissionSetup, RotorStop};
+use host_sim::mission_run::{self, LoadShift, MissionOutcome, MissionSetup, RotorStop};
+use shared::geometry::Vec2;
 use shared::mission::{AbortReason, MissionConfig};
 
 /// The payload counts as dropped beyond this roll or pitch, degrees (the plant loop's own
@@ -42,6 +43,31 @@ fn fly(name: &str, stops: &[(usize, f32)]) -> MissionOutcome {
     };
     let (outcome, _) = mission_run::run(&s, &setup, &mut |_, _, _| {}).expect("runs");
     outcome
+}
+
+/// No flight without a stopped rotor names one: the paper's scenarios, with and without a
+/// load that shifts in the hover (its torque is a rotor's size; its thrust is unchanged).
+#[test]
+fn no_rotor_is_named_on_the_normal_missions() {
+    for name in ["rect-ex1", "L-sim1", "rect-sim1", "rect-sim2", "L-sim2"] {
+        for shift in [None, Some([0.15, 0.0])] {
+            let setup = MissionSetup {
+                seed: 1,
+                load_shift: shift.map(|[x, y]| LoadShift {
+                    offset: Vec2::new(x, y),
+                    after: 11.0,
+                }),
+                ..MissionSetup::default()
+            };
+            let (o, _) = mission_run::run(&load(name), &setup, &mut |_, _, _| {}).expect("runs");
+            assert!(
+                o.rotors_found.is_empty(),
+                "{name}, shift {shift:?}: named {:?}",
+                o.rotors_found
+            );
+            assert!(o.delivered, "{name}, shift {shift:?}: {:?}", o.aborted);
+        }
+    }
 }
 
 /// Time from the first rotor stopping to the mission naming it, s.
