@@ -44,7 +44,7 @@ use shared::liftoff_thrust::lift_off_thrust;
 use shared::mission::params::{COUNT, NAME_LEN, ParamValues, TABLE};
 use shared::mission::{
     HardwareFaults, JobResult, Mission, MissionConfig, MissionPlanner, OperatorCommand, Phase,
-    TickInput, TickOutput,
+    Supervision, TickInput, TickOutput,
 };
 use shared::paper::{checked, rect_sim1};
 use shared::scenario::{FlightSetup, GRAVITY, MAX_ROBOTS, Scenario, Truth};
@@ -103,10 +103,13 @@ impl World {
         let time_us = tick * DT_US;
         let attitude = Quat::from_euler(self.tilt, 0.0, 0.0);
         let accel = attitude.inverse_rotate(Vec3::new(0.0, 0.0, -GRAVITY - self.climb));
+        // A real sensor never repeats itself (the mission's IMU monitor stops on one that does).
+        let h = tick.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40;
+        let dither = (h as f32 / (1u64 << 24) as f32 - 0.5) * 2e-3;
         TickInput {
             time_us,
             imu: ImuSample {
-                gyro: Vec3::new(self.tilt_rate, 0.0, 0.0),
+                gyro: Vec3::new(self.tilt_rate, 0.0, dither),
                 accel,
             },
             mocap: tick.is_multiple_of(4).then_some(MocapFix {
@@ -116,6 +119,9 @@ impl World {
             }),
             command,
             faults: HardwareFaults::NONE,
+            // The ground station's heartbeat every tick: these properties are the operator's
+            // commands, not the link's loss (tests/ground_loss_battery.rs).
+            supervision: Supervision::LINKED,
         }
     }
 

@@ -64,8 +64,8 @@ pub struct MissionArgs {
     #[arg(long, value_enum, default_value = "equal-split")]
     mixer: MixerArg,
     /// Failure injection, seconds after take-off began: `load-shift:DX,DY@T` moves the
-    /// payload's COM by (DX, DY) m over half a second; `rotor-out:J@T` stops robot J's (from
-    /// 1) rotor; `mocap-loss@T` stops motion capture; `stepper-stall:J` (no time) stalls robot
+    /// payload's COM by (DX, DY) m over half a second; `rotor-out:J@T` stops the rotor of
+    /// robot J (from 1); `mocap-loss@T` stops motion capture; `stepper-stall:J` (no time) stalls robot
     /// J's stepper halfway through the rearrangement; `imu-stuck@T` freezes the IMU,
     /// `imu-noise:X@T` adds X times its noise (0 < X <= 1000); `gcs-loss@T` stops the simulated
     /// ground station's heartbeat; `battery:V@T` drops the pack to V volts. The IMU, ground
