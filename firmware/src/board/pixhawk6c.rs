@@ -287,8 +287,9 @@ const FRAM_SPI_HZ: u32 = 10_000_000;
 
 /// TELEM1's transmit ring: a control step's messages are at most ~1.3 KB (three texts in
 /// chunks, six values, the acknowledgement, the heartbeat, the actuators), 12 ms at 921,600
-/// baud; the send task waits on a full ring, so a larger one only buys latency slack.
-static LINK_TX_BUFFER: StaticCell<[u8; 1024]> = StaticCell::new();
+/// baud; the send task waits on a full ring, so a larger one only buys latency slack. 768
+/// bytes (8 ms) keep static RAM inside its 128 KiB with the failsafes' monitors.
+static LINK_TX_BUFFER: StaticCell<[u8; 768]> = StaticCell::new();
 static USB_EP_OUT_BUFFER: StaticCell<[u8; 256]> = StaticCell::new();
 /// The stepper buses' receive rings.
 static STEPPER_RX: [ConstStaticCell<[u8; 64]>; 2] =
@@ -311,7 +312,7 @@ fn telem1(
         uart,
         rx,
         tx,
-        LINK_TX_BUFFER.init([0; 1024]),
+        LINK_TX_BUFFER.init([0; 768]),
         LINK_RX_BUFFER.init([0; 512]),
         LinkIrqs,
         config,
