@@ -289,13 +289,16 @@ impl FlightStack {
     /// the ESCs report stopped, `reported` (bit `i` for rotor `i`). The monitor judges only in
     /// the air, clear of the ground. A rotor found stopped is flown without from the next
     /// tick, and the next tick begins the landing ([`LandingCause::RotorOut`]; under a
-    /// descent without position, that descent goes on). Returns it when this tick found one.
+    /// descent without position, that descent goes on). With `imu_trusted` false (the IMU
+    /// failed: its samples explain nothing) only the ESCs' reports count. Returns it when this
+    /// tick found one.
     pub fn watch_rotors(
         &mut self,
         nav: &NavState,
         accel: Vec3,
         thrusts: &[f32],
         reported: u16,
+        imu_trusted: bool,
         dt: f32,
     ) -> Option<RotorOut> {
         if self.stopped.is_some() {
@@ -314,7 +317,7 @@ impl FlightStack {
             thrusts,
             rate: nav.attitude.rate,
             accel,
-            active: self.config.watch_rotors && self.land.airborne() && clear,
+            active: self.config.watch_rotors && imu_trusted && self.land.airborne() && clear,
             dt,
         });
         let newly = newly_reported | found.map_or(0, |j| 1u16 << j);

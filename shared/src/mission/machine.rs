@@ -1033,8 +1033,12 @@ impl Mission {
         };
         let n = self.scenario.robots.count();
         let reported = u16::from(input.faults.rotors_out);
+        // A frozen or noisy IMU makes a residual no rotor caused: once it is found, only the
+        // ESCs' word counts.
+        let imu_trusted =
+            !input.faults.imu && self.imu_detection.is_none() && !self.navigator.imu_dropped();
         if flight
-            .watch_rotors(nav, input.imu.accel, &thrusts[..n], reported, dt)
+            .watch_rotors(nav, input.imu.accel, &thrusts[..n], reported, imu_trusted, dt)
             .is_some()
         {
             if let Some(adapter) = self.adapter.as_mut() {
