@@ -1,0 +1,48 @@
+//! The payload-description decoder and its checks (`shared::scenario_wire`, with
+//! `shared::scenario`'s rules): any bytes, as a file uploaded to the vehicle. The first byte
+//! is a mode: odd, the file's last four bytes are replaced by the CRC-32 of the rest, so that
+//! mutated files get past the checksum to the fields and their checks. Never a panic;
+//! a description that passes encodes back to the same bytes (the name aside, which the
+//! encoder may cut) and decodes to the same values; its checked scenario passes the checks
+//! again when encoded from it.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use shared::scenario_wire::{MAX_ENCODED_LEN, decode, decode_and_check, encode, encode_scenario};
+
+const CRC32: crc::Crc<u32, crc::NoTable> =
+    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+
+fuzz_target!(|input: &[u8]| {
+    let Some((&mode, file)) = input.split_first() else {
+        return;
+    };
+    let mut file = file.to_vec();
+    if mode & 1 == 1 && file.len() >= 4 {
+        let n = file.len() - 4;
+        let crc = CRC32.checksum(&file[..n]);
+        file[n..].copy_from_slice(&crc.to_le_bytes());
+    }
+    let data = &file[..];
+    let decoded = decode(data);
+    let checked = decode_and_check(data);
+    match (&decoded, &checked) {
+        (Err(_), Ok(_)) => panic!("decode refuses what decode_and_check takes"),
+        (Ok(wire), Ok((wire2, _))) => assert_eq!(wire, wire2),
+        _ => {}
+    }
+    let Ok(wire) = decoded else {
+        return;
+    };
+    // What was read encodes back to the same bytes.
+    let mut out = [0u8; MAX_ENCODED_LEN];
+    let len = encode(&wire.name, &wire.input(), &mut out).expect("a decoded description encodes");
+    assert_eq!(&out[..len], data, "decode then encode changes the bytes");
+    let Ok((_, scenario)) = checked else {
+        return;
+    };
+    // The checked scenario, encoded again, passes the same checks.
+    let len = encode_scenario(&wire.name, &scenario, &mut out).expect("a checked scenario encodes");
+    let (_, again) = decode_and_check(&out[..len]).expect("a checked scenario passes again");
+    assert_eq!(again.robots.count(), scenario.robots.count());
+});
