@@ -79,7 +79,9 @@ impl LoopMonitor {
         let period_u32 = u32::try_from(period).unwrap_or(u32::MAX);
         s.min_period_us = s.min_period_us.min(period_u32);
         s.max_period_us = s.max_period_us.max(period_u32);
-        if 2 * period > OVERRUN_HALF_PERIODS * nominal {
+        // Saturating: a clock that jumps by more than half of u64 (a hostile HIL_SENSOR time)
+        // is an overrun, not an overflow.
+        if period.saturating_mul(2) > OVERRUN_HALF_PERIODS * nominal {
             s.overruns = s.overruns.saturating_add(1);
         }
         let clamped = period.clamp(nominal / 2, 2 * nominal);
@@ -125,5 +127,18 @@ mod tests {
             (m.step(0) - 0.0025).abs() < 1e-9,
             "clock going back gives nominal"
         );
+    }
+
+    /// Found by the `link_input` fuzz target (issue 15): a `HIL_SENSOR` whose time jumps by
+    /// more than half of `u64` overflowed the overrun test (`2 * period`).
+    #[test]
+    fn a_clock_jump_past_half_of_u64_is_an_overrun_not_an_overflow() {
+        let mut m = LoopMonitor::at_rate(CONTROL_RATE_HZ);
+        m.step(0);
+        let dt = m.step(u64::MAX);
+        assert!((dt - 0.005).abs() < 1e-9, "clamped to twice nominal: {dt}");
+        let s = m.take_stats();
+        assert_eq!((s.ticks, s.overruns), (1, 1));
+        assert_eq!(s.max_period_us, u32::MAX);
     }
 }
