@@ -264,7 +264,6 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
             one(&MISSION_REQUEST_LIST_DATA {
                 target_system: 1,
                 target_component: 1,
-                ..Default::default()
             }),
         ),
         ("timesync-request", one(&TIMESYNC_DATA { tc1: 0, ts1: 42 })),
@@ -351,7 +350,7 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
     };
     let mut g = Ground::new(None);
     g.send(&OperatorCommand::Start.to_command_long());
-    for _ in 0..200 {
+    for _ in 0..80 {
         g.send(&HEARTBEAT_DATA::default());
     }
     seeds.push(("session-stored-payload-driver", input(driver, &g)));

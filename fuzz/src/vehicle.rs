@@ -68,6 +68,9 @@ pub const SEED_KEY_TIMESTAMP: u64 = 1_000_000;
 pub const BYTE_US: u64 = 87;
 /// The control period of the board's IMU driver, us (400 Hz).
 pub const TICK_US: u64 = 2_500;
+/// Most steps the IMU driver takes in one run (50 s of the mission): bounds the time of one
+/// fuzz input (about 0.1 s) without a plant to fly, the mission never gets further.
+pub const MAX_DRIVER_STEPS: u64 = 20_000;
 /// Oldest a motion-capture fix may be for its own stamp to be used (comms.rs), us.
 const MAX_FIX_AGE_US: u64 = 150_000;
 /// The link id the vehicle signs with.
@@ -105,7 +108,8 @@ pub struct Options {
     /// The store holds the signing key [`SEED_KEY`] at the start: signing is on.
     pub key_stored: bool,
     /// The board's IMU driver steps the control task: [`Self::ticks`] steps after each
-    /// frame, [`TICK_US`] apart on the board's clock (HIL_SENSOR frames step it in any case).
+    /// frame, [`TICK_US`] apart on the board's clock, at most [`MAX_DRIVER_STEPS`] in a run
+    /// (HIL_SENSOR frames step it in any case).
     pub imu_driver: bool,
     /// With the IMU driver: a motion-capture fix at rest comes with each of its steps.
     pub mocap: bool,
@@ -176,6 +180,7 @@ pub struct Vehicle {
     now_us: u64,
     next_beat_us: u64,
     frames: u32,
+    driver_steps: u64,
     parser: Parser,
     signing: Signing,
     timesync: TimeSync,
@@ -251,6 +256,7 @@ impl Vehicle {
             now_us: 0,
             next_beat_us: 0,
             frames: 0,
+            driver_steps: 0,
             parser: Parser::new(crc_extra),
             signing: Signing::new(),
             timesync: TimeSync::new(),
@@ -313,7 +319,9 @@ impl Vehicle {
             self.frames = self.frames.saturating_add(1);
             if self.options.imu_driver {
                 for _ in 0..self.options.ticks {
-                    self.driver_step();
+                    if self.driver_steps < MAX_DRIVER_STEPS {
+                        self.driver_step();
+                    }
                 }
             }
         }
@@ -582,11 +590,11 @@ impl Vehicle {
                     Some((index, value)) => {
                         assert!(refuse_changes.is_none(), "a refused write changed {index}");
                         assert_eq!(self.params.values().get(index), Some(value));
-                        if let Some(store) = &mut self.store {
-                            if let Err(e) = block_on(store.save(index, value)) {
-                                self.store_failed = true;
-                                self.report_text(Severity::Error, &format!("param: {e}"));
-                            }
+                        if let Some(store) = &mut self.store
+                            && let Err(e) = block_on(store.save(index, value))
+                        {
+                            self.store_failed = true;
+                            self.report_text(Severity::Error, &format!("param: {e}"));
                         }
                         self.config = self.params.values().config();
                         self.reload();
@@ -710,6 +718,7 @@ impl Vehicle {
 
     /// A step of the board's IMU driver: a sample at rest on the board's clock.
     fn driver_step(&mut self) {
+        self.driver_steps += 1;
         self.now_us += TICK_US;
         if self.options.mocap {
             self.mocap = Some(MocapFix {
