@@ -4,10 +4,14 @@
 //! mutated files get past the checksum to the fields and their checks. Never a panic;
 //! `decode_and_check` decodes as `decode` does; what decodes encodes back to the same bytes
 //! (or is refused by the encoder and by the checks alike); a checked scenario, encoded again,
-//! passes the checks again.
+//! passes the checks again, and the vehicle's planner takes it: loaded, one of each job the
+//! mission asks for before the flight runs without a panic.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use shared::estimation::Measurement;
+use shared::mission::{JobRequest, JobResult, MissionConfig, MissionPlanner};
+use shared::scenario::Scenario;
 use shared::scenario_wire::{MAX_ENCODED_LEN, decode, decode_and_check, encode, encode_scenario};
 
 const CRC32: crc::Crc<u32, crc::NoTable> =
@@ -54,4 +58,31 @@ fuzz_target!(|input: &[u8]| {
     let len = encode_scenario(&wire.name, &scenario, &mut out).expect("a checked scenario encodes");
     let (_, again) = decode_and_check(&out[..len]).expect("a checked scenario passes again");
     assert_eq!(again.robots.count(), scenario.robots.count());
+    plan(&scenario);
 });
+
+/// What the vehicle's job task does with a checked description: the planner loaded with it,
+/// then one of each job the mission asks for before the flight, from the robots' start.
+fn plan(scenario: &Scenario) {
+    let mut planner = Box::new(MissionPlanner::UNLOADED);
+    if planner.load(scenario, MissionConfig::DEFAULT).is_err() {
+        return;
+    }
+    let robots = scenario.robots.initial.clone();
+    let pair = planner.run(&JobRequest::SelectPair {
+        robots: robots.clone(),
+    });
+    if let JobResult::Pair(Ok(lift)) = pair {
+        let thrust = scenario.robots.max_thrust * 0.5;
+        for reading in [Measurement::Lifted { thrust }, Measurement::CouldNotLift] {
+            planner.run(&JobRequest::Update {
+                group: lift.group,
+                reading,
+            });
+        }
+    }
+    planner.run(&JobRequest::DecideFormation {
+        robots: robots.clone(),
+    });
+    planner.run(&JobRequest::BuildFlight { robots });
+}

@@ -354,6 +354,22 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
         g.send(&HEARTBEAT_DATA::default());
     }
     seeds.push(("session-stored-payload-driver", input(driver, &g)));
+    // An upload (its checksum recomputed at the end, so mutations of it reach the checks and
+    // the mission), a start, then the IMU driver with motion capture for 20 s.
+    let mut g = Ground::new(None);
+    g.upload(&rect)
+        .send(&OperatorCommand::Start.to_command_long());
+    for _ in 0..40 {
+        g.send(&HEARTBEAT_DATA::default());
+    }
+    let upload = Options {
+        imu_driver: true,
+        mocap: true,
+        ticks: 200,
+        fix_payload_checksum: true,
+        ..Options::default()
+    };
+    seeds.push(("session-upload-driver", input(upload, &g)));
     // A parameter write and a kill while running.
     let mut g = Ground::new(None);
     g.send(&OperatorCommand::Start.to_command_long())

@@ -58,6 +58,9 @@ use crate::autonomy::{
 };
 use crate::flash::{MemFlash, PARAM_RANGE, PAYLOAD_RANGE};
 
+/// The payload description's checksum (`shared::scenario_wire`'s).
+const CRC32: crc::Crc<u32, crc::NoTable> =
+    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
 /// Largest payload description file the vehicle takes (the firmware's `FILE_CAPACITY`).
 pub const FILE_CAPACITY: usize = MAX_ENCODED_LEN;
 /// The signing key a seed's "key stored" option puts in the store before the start.
@@ -128,6 +131,10 @@ pub struct Options {
     /// ([`fix_checksums`]), so that a mutated frame reaches the services instead of being
     /// dropped by the parser for its checksum.
     pub fix_checksums: bool,
+    /// An uploaded payload description gets its CRC-32 (its last four bytes) recomputed when
+    /// its upload closes, as if the ground station had written a well-formed file of those
+    /// contents: mutated descriptions reach the checks and, passing them, the mission.
+    pub fix_payload_checksum: bool,
 }
 
 impl Options {
@@ -135,8 +142,8 @@ impl Options {
     pub const HEADER_LEN: usize = 4;
 
     /// The options of a header: flags (bit 0 payload stored, 1 key stored, 2 IMU driver,
-    /// 3 motion capture, 4 key setup allowed, 5 IMU fault, 6 fix checksums), ticks, stalled
-    /// robots, the frame the faults start at.
+    /// 3 motion capture, 4 key setup allowed, 5 IMU fault, 6 fix checksums, 7 fix the
+    /// payload's checksum), ticks, stalled robots, the frame the faults start at.
     pub fn from_header(h: [u8; Self::HEADER_LEN]) -> Self {
         let [flags, ticks, stalled_robots, faults_from] = h;
         Self {
@@ -147,6 +154,7 @@ impl Options {
             key_setup_allowed: flags & 16 != 0,
             imu_fault: flags & 32 != 0,
             fix_checksums: flags & 64 != 0,
+            fix_payload_checksum: flags & 128 != 0,
             ticks,
             stalled_robots,
             faults_from,
@@ -161,7 +169,8 @@ impl Options {
             | u8::from(self.mocap) << 3
             | u8::from(self.key_setup_allowed) << 4
             | u8::from(self.imu_fault) << 5
-            | u8::from(self.fix_checksums) << 6;
+            | u8::from(self.fix_checksums) << 6
+            | u8::from(self.fix_payload_checksum) << 7;
         [flags, self.ticks, self.stalled_robots, self.faults_from]
     }
 }
@@ -656,6 +665,10 @@ impl Vehicle {
                 self.send_ftp(&answer, from);
                 if let FileEvent::Written { len } = event {
                     assert_eq!(len, self.ftp.file().len());
+                    if self.options.fix_payload_checksum && len >= 4 {
+                        let crc = CRC32.checksum(&self.ftp.file()[..len - 4]);
+                        self.ftp.restore_buffer()[len - 4..len].copy_from_slice(&crc.to_le_bytes());
+                    }
                     let file = self.ftp.file().to_vec();
                     self.check_payload(&file, true);
                 }
