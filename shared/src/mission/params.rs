@@ -890,9 +890,17 @@ pub fn find(name: &[u8]) -> Option<usize> {
 
 /// The current value of every parameter, in table order; always valid (every value passed
 /// [`check`]).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct ParamValues {
     values: [f32; COUNT],
+}
+
+/// Equal when every parameter has the same value in force, bit for bit (one never set equals
+/// one set to its default). Not derived: NaN marks "never set", and NaN equals nothing.
+impl PartialEq for ParamValues {
+    fn eq(&self, other: &Self) -> bool {
+        (0..COUNT).all(|i| self.get(i).map(f32::to_bits) == other.get(i).map(f32::to_bits))
+    }
 }
 
 impl Default for ParamValues {
@@ -963,6 +971,30 @@ pub fn markdown_table(out: &mut impl core::fmt::Write) -> core::fmt::Result {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Found writing the `link_input` fuzz target (issue 15): the derived `PartialEq` compared
+    /// the storage, where NaN marks a parameter never set, so the defaults did not equal
+    /// themselves.
+    #[test]
+    fn values_compare_by_the_values_in_force() {
+        assert_eq!(ParamValues::DEFAULT, ParamValues::DEFAULT);
+        let mut set = ParamValues::DEFAULT;
+        set.set(0, TABLE[0].default_value())
+            .expect("the default is valid");
+        assert_eq!(
+            set,
+            ParamValues::DEFAULT,
+            "set to the default equals never set"
+        );
+        let p = &TABLE[0];
+        let other = if p.min != p.default_value() {
+            p.min
+        } else {
+            p.max
+        };
+        set.set(0, other).expect("the range's ends are valid");
+        assert_ne!(set, ParamValues::DEFAULT);
+    }
 
     #[test]
     fn names_are_unique_short_and_in_mavlink_style() {
