@@ -350,8 +350,8 @@ impl Vehicle {
         let loaded = block_on(store.load(&mut values));
         assert_eq!(loaded.error, None, "the store fails after a restart");
         assert_eq!(
-            in_force(&values),
-            in_force(self.params.values()),
+            &values,
+            self.params.values(),
             "parameters lost in a restart"
         );
         let key = block_on(store.load_signing()).expect("the signing key reads back");
@@ -452,7 +452,7 @@ impl Vehicle {
         let inert = matches!(inbound, Inbound::Ignored { .. } | Inbound::Heartbeat(_));
         let untrusted = !verdict.trusted();
         let before = (
-            in_force(self.params.values()),
+            self.params.values().clone(),
             self.ftp.file().to_vec(),
             self.commands.clone(),
             self.telemetry,
@@ -462,7 +462,7 @@ impl Vehicle {
         self.handle(inbound, verdict);
         if inert {
             let after = (
-                in_force(self.params.values()),
+                self.params.values().clone(),
                 self.ftp.file().to_vec(),
                 self.commands.clone(),
                 self.telemetry,
@@ -482,8 +482,8 @@ impl Vehicle {
         }
         if untrusted || was_running {
             assert_eq!(
-                before.0,
-                in_force(self.params.values()),
+                &before.0,
+                self.params.values(),
                 "a parameter changed (untrusted {untrusted}, running {was_running})"
             );
         }
@@ -593,7 +593,7 @@ impl Vehicle {
                 } else {
                     None
                 };
-                let before = in_force(self.params.values());
+                let before = self.params.values().clone();
                 let answer = self.params.handle(&request, refuse_changes);
                 match answer.changed {
                     Some((index, value)) => {
@@ -609,8 +609,8 @@ impl Vehicle {
                         self.reload();
                     }
                     None => assert_eq!(
-                        before,
-                        in_force(self.params.values()),
+                        &before,
+                        self.params.values(),
                         "a parameter changed without being reported"
                     ),
                 }
@@ -954,14 +954,6 @@ impl Vehicle {
             assert_eq!(verdict, Verdict::Valid, "a signed frame does not check");
         }
     }
-}
-
-/// The values in force, as bits. (`ParamValues`' derived `PartialEq` compares its storage,
-/// where NaN marks a parameter never set: two equal sets of values compare unequal.)
-fn in_force(values: &ParamValues) -> Vec<u32> {
-    (0..PARAM_COUNT)
-        .map(|i| values.get(i).expect("every index has a value").to_bits())
-        .collect()
 }
 
 fn ns(us: u64) -> i64 {
