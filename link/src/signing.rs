@@ -112,7 +112,7 @@ impl Signing {
         if key != [0; KEY_LEN] {
             self.key = Some(key);
             self.link_id = link_id;
-            let timestamp = timestamp & TIMESTAMP_MASK;
+            let timestamp = timestamp.min(TIMESTAMP_MASK);
             self.base = timestamp.saturating_sub(uptime_us / 10);
             self.last = timestamp;
         }
@@ -129,8 +129,13 @@ impl Signing {
     }
 
     /// The vehicle's timestamp at uptime `uptime_us` (for storage and the next signature).
+    /// At the end of the 48 bits it stays there: wrapping to 0 would make every later frame a
+    /// replay to the ground, and every captured frame a new stream to the vehicle.
     pub fn timestamp(&self, uptime_us: u64) -> u64 {
-        (self.base + uptime_us / 10).max(self.last) & TIMESTAMP_MASK
+        self.base
+            .saturating_add(uptime_us / 10)
+            .min(TIMESTAMP_MASK)
+            .max(self.last)
     }
 
     /// Checks a received frame at uptime `uptime_us`.
@@ -192,7 +197,7 @@ impl Signing {
         let Some(key) = self.key else {
             return;
         };
-        let timestamp = (self.timestamp(uptime_us) + 1) & TIMESTAMP_MASK;
+        let timestamp = (self.timestamp(uptime_us) + 1).min(TIMESTAMP_MASK);
         if frame.append_signature(crc_extra, |body| {
             let mut signature = [0u8; SIGNATURE_LEN];
             signature[0] = self.link_id;
@@ -378,6 +383,32 @@ mod tests {
             u64::from_le_bytes([s[0], s[1], s[2], s[3], s[4], s[5], 0, 0])
         };
         assert!(stamp(&b) > stamp(&a));
+    }
+
+    /// Found by the `link_input` fuzz target (issue 15): a `SETUP_SIGNING` whose timestamp
+    /// is near the end of the 48 bits made the vehicle's timestamp wrap to 0, so the ground
+    /// took every later frame of the vehicle for a replay, and the vehicle took a frame signed
+    /// long ago, from a stream it had not heard, for a new one.
+    #[test]
+    fn the_timestamp_stops_at_the_end_of_its_48_bits_instead_of_wrapping() {
+        let mut v = Signing::new();
+        v.set_key(KEY, TIMESTAMP_MASK - 100, 0, 0);
+        // 10 s later: 1,000,000 units past the end.
+        let f = signed_by(&mut v, 1, 10_000_000);
+        let signature = &f.bytes()[f.bytes().len() - SIGNATURE_LEN..];
+        let mut stamp = [0u8; 8];
+        stamp[..6].copy_from_slice(&signature[1..7]);
+        assert_eq!(u64::from_le_bytes(stamp), TIMESTAMP_MASK, "not wrapped");
+        assert_eq!(v.timestamp(20_000_000), TIMESTAMP_MASK);
+        // A frame signed at timestamp 1000, replayed from a stream never heard: refused.
+        let mut old = Signing::new();
+        old.set_key(KEY, 1000, 0, 7);
+        let captured = signed_by(&mut old, 42, 0);
+        assert_eq!(v.check(&received(&captured), 20_000_000), Verdict::Replayed);
+        // A timestamp past 48 bits is the end, not its low bits.
+        let mut far = Signing::new();
+        far.set_key(KEY, u64::MAX, 0, 0);
+        assert_eq!(far.timestamp(0), TIMESTAMP_MASK);
     }
 
     #[test]
