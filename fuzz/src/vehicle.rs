@@ -951,7 +951,12 @@ impl Vehicle {
         assert_eq!(frame.bytes(), &bytes[..]);
         if self.signing.enabled() {
             let verdict = self.ground_signing.check(&frame, self.now_us);
-            assert_eq!(verdict, Verdict::Valid, "a signed frame does not check");
+            // At the end of its 48 bits the timestamp stays there: then equal timestamps are
+            // replays, as they must be (a key set that close to the end leaves no room).
+            let ended = self.signing.timestamp(self.now_us) == (1 << 48) - 1;
+            if !(ended && verdict == Verdict::Replayed) {
+                assert_eq!(verdict, Verdict::Valid, "a signed frame does not check");
+            }
         }
     }
 }
