@@ -20,3 +20,10 @@ pub mod flash;
 pub mod scenario_file;
 pub mod seeds;
 pub mod vehicle;
+
+/// A gyro reading of a vehicle at rest at step `i`: noise of about 0.6 mrad/s, as a real
+/// sensor's (the same for the same `i`, so a seed replays the same).
+pub fn rest_noise(i: u64) -> f32 {
+    let h = i.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40;
+    (h as f32 / (1u64 << 24) as f32 - 0.5) * 2e-3
+}

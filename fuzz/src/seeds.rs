@@ -120,7 +120,7 @@ impl Ground {
             let time_us = start_us + i * TICK_US;
             let imu = ImuSample {
                 time_us,
-                gyro: [0.0; 3],
+                gyro: [0.0, 0.0, crate::rest_noise(time_us)],
                 accel: [0.0, 0.0, -shared::scenario::GRAVITY],
             };
             self.send(&imu.to_message());
@@ -169,6 +169,8 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
     let param = shared::mission::params::TABLE[0].name;
     let mut seeds: Vec<(&str, Vec<u8>)> = vec![
         ("heartbeat", one(&HEARTBEAT_DATA::default())),
+        ("gcs-heartbeat", one(&link::vehicle::gcs_heartbeat())),
+        ("battery-status", one(&link::vehicle::battery_status(13.1))),
         (
             "command-start",
             one(&OperatorCommand::Start.to_command_long()),
@@ -325,12 +327,14 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
     // An upload and a start, then 0.1 s of lockstep HIL with motion capture.
     let mut g = Ground::new(None);
     g.upload(&rect)
+        .send(&link::vehicle::gcs_heartbeat())
         .send(&OperatorCommand::Start.to_command_long())
         .hil_steps(TICK_US, 40);
     seeds.push(("session-upload-start-hil", input(Options::default(), &g)));
     // The same, signed, on a vehicle whose key is stored.
     let mut g = Ground::new(Some(SEED_KEY));
     g.upload(&rect)
+        .send(&link::vehicle::gcs_heartbeat())
         .send(&OperatorCommand::Start.to_command_long())
         .hil_steps(TICK_US, 40)
         .send(&OperatorCommand::Abort.to_command_long());
@@ -349,18 +353,20 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
         ..Options::default()
     };
     let mut g = Ground::new(None);
-    g.send(&OperatorCommand::Start.to_command_long());
+    g.send(&link::vehicle::gcs_heartbeat())
+        .send(&OperatorCommand::Start.to_command_long());
     for _ in 0..80 {
-        g.send(&HEARTBEAT_DATA::default());
+        g.send(&link::vehicle::gcs_heartbeat());
     }
     seeds.push(("session-stored-payload-driver", input(driver, &g)));
     // An upload (its checksum recomputed at the end, so mutations of it reach the checks and
     // the mission), a start, then the IMU driver with motion capture for 20 s.
     let mut g = Ground::new(None);
     g.upload(&rect)
+        .send(&link::vehicle::gcs_heartbeat())
         .send(&OperatorCommand::Start.to_command_long());
     for _ in 0..40 {
-        g.send(&HEARTBEAT_DATA::default());
+        g.send(&link::vehicle::gcs_heartbeat());
     }
     let upload = Options {
         imu_driver: true,
@@ -372,8 +378,9 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
     seeds.push(("session-upload-driver", input(upload, &g)));
     // A parameter write and a kill while running.
     let mut g = Ground::new(None);
-    g.send(&OperatorCommand::Start.to_command_long())
-        .send(&HEARTBEAT_DATA::default())
+    g.send(&link::vehicle::gcs_heartbeat())
+        .send(&OperatorCommand::Start.to_command_long())
+        .send(&link::vehicle::gcs_heartbeat())
         .send(&PARAM_SET_DATA {
             param_value: 1.0,
             target_system: 1,
@@ -382,7 +389,7 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
             param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
         })
         .send(&OperatorCommand::Kill.to_command_long())
-        .send(&HEARTBEAT_DATA::default());
+        .send(&link::vehicle::gcs_heartbeat());
     seeds.push((
         "session-running-param-kill",
         input(
@@ -399,13 +406,14 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
     let mut raw = Options::default().header().to_vec();
     raw.extend([0x00, 0x55, 0xFE, 0x01, 0x13]);
     let mut g = Ground::new(None);
-    g.send(&HEARTBEAT_DATA::default());
+    g.send(&link::vehicle::gcs_heartbeat());
     let mut bad = g.bytes.clone();
     let n = bad.len();
     bad[n - 1] ^= 0x20;
     raw.extend(bad);
     g.bytes.clear();
-    g.send(&OperatorCommand::Start.to_command_long());
+    g.send(&link::vehicle::gcs_heartbeat())
+        .send(&OperatorCommand::Start.to_command_long());
     raw.extend(&g.bytes);
     seeds.push(("raw-garbage-and-frames", raw));
     seeds

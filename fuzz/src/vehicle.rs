@@ -48,7 +48,7 @@ use link::telemetry::Schedule;
 use link::timesync::{Received as SyncReceived, TimeSync};
 use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
 use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, check};
-use shared::mission::{HardwareFaults, MissionConfig, MissionPlanner};
+use shared::mission::{HardwareFaults, MissionConfig, MissionPlanner, Supervision};
 use shared::scenario::Scenario;
 use shared::scenario_wire::{MAX_ENCODED_LEN, decode_and_check};
 
@@ -208,6 +208,10 @@ pub struct Vehicle {
     commands: VecDeque<PendingCommand>,
     /// `MOCAP`.
     mocap: Option<MocapFix>,
+    /// `GCS_HEARTBEAT`: a ground station's heartbeat since the last control step.
+    gcs_heartbeat: bool,
+    /// `LINK_BATTERY_MV`: the plant's pack, mV (`u32::MAX`: none heard).
+    link_battery_mv: u32,
     /// `PAYLOAD`: the newest description loaded into the planner, for the control task.
     payload: Option<(Scenario, MissionConfig)>,
     /// The job task's last accepted description.
@@ -279,6 +283,8 @@ impl Vehicle {
             stored_payload: None,
             commands: VecDeque::with_capacity(COMMANDS_CAPACITY),
             mocap: None,
+            gcs_heartbeat: false,
+            link_battery_mv: u32::MAX,
             payload: None,
             last: None,
             autonomy: Box::new(Autonomy::new()),
@@ -444,12 +450,19 @@ impl Vehicle {
         HardwareFaults {
             imu: self.options.imu_fault,
             stalled_robots: self.options.stalled_robots,
+            rotors_out: 0,
         }
     }
 
     /// `handle` with the invariants of what an ignored or untrusted frame may change.
     fn handle_checked(&mut self, inbound: Inbound, verdict: Verdict) {
-        let inert = matches!(inbound, Inbound::Ignored { .. } | Inbound::Heartbeat(_));
+        let inert = matches!(
+            inbound,
+            Inbound::Ignored { .. }
+                | Inbound::Heartbeat(_)
+                | Inbound::GcsHeartbeat(_)
+                | Inbound::Battery { .. }
+        );
         let untrusted = !verdict.trusted();
         let before = (
             self.params.values().clone(),
@@ -674,6 +687,8 @@ impl Vehicle {
                 }
             }
             Inbound::Invalid(e) => self.report_text(Severity::Warning, &format!("HIL: {e}")),
+            Inbound::GcsHeartbeat(_) => self.gcs_heartbeat = true,
+            Inbound::Battery { volts, .. } => self.link_battery_mv = (volts * 1000.0) as u32,
             Inbound::Heartbeat(_) | Inbound::Ignored { .. } => {}
         }
     }
@@ -742,7 +757,9 @@ impl Vehicle {
         }
         let imu = ImuSample {
             time_us: self.now_us,
-            gyro: [0.0; 3],
+            // A real sensor never repeats itself: the mission's IMU monitor stops on one that
+            // does (shared::control::imu_monitor), so the driver's rest has a little noise.
+            gyro: [0.0, 0.0, crate::rest_noise(self.driver_steps)],
             accel: [0.0, 0.0, -shared::scenario::GRAVITY],
         };
         self.control_step(imu, false);
@@ -784,6 +801,15 @@ impl Vehicle {
                 HardwareFaults::NONE
             } else {
                 self.faults()
+            },
+            supervision: Supervision {
+                gcs_heartbeat: core::mem::take(&mut self.gcs_heartbeat),
+                // The plant's pack in HIL; off HIL the board's ADC (none on the host).
+                battery_volts: match self.link_battery_mv {
+                    u32::MAX => None,
+                    mv if hil => Some(mv as f32 * 1e-3),
+                    _ => None,
+                },
             },
         };
         let mut out = self.autonomy.tick(&input);
