@@ -1038,7 +1038,14 @@ impl Mission {
         let imu_trusted =
             !input.faults.imu && self.imu_detection.is_none() && !self.navigator.imu_dropped();
         if flight
-            .watch_rotors(nav, input.imu.accel, &thrusts[..n], reported, imu_trusted, dt)
+            .watch_rotors(
+                nav,
+                input.imu.accel,
+                &thrusts[..n],
+                reported,
+                imu_trusted,
+                dt,
+            )
             .is_some()
         {
             if let Some(adapter) = self.adapter.as_mut() {
