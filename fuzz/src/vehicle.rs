@@ -802,6 +802,8 @@ impl Vehicle {
             } else {
                 self.faults()
             },
+            // The job task runs each load to the end before the next frame here.
+            loading: false,
             supervision: Supervision {
                 gcs_heartbeat: core::mem::take(&mut self.gcs_heartbeat),
                 // The plant's pack in HIL; off HIL the board's ADC (none on the host).

@@ -64,6 +64,9 @@ pub struct TickInput<'a> {
     pub faults: HardwareFaults,
     /// A ground station's heartbeat since the last step, and the pack's voltage.
     pub supervision: Supervision,
+    /// The job task is loading the planner with a description or new parameters (`LOADING`):
+    /// a start now is refused as temporarily rejected (the ground tries again).
+    pub loading: bool,
 }
 
 /// How a command was taken (its `COMMAND_ACK`).
@@ -254,6 +257,10 @@ impl Autonomy {
             // Dropped by the mission when it no longer waits for it (after an abort).
             self.mission.deliver(result);
         }
+        // A start while the planner is being loaded would fly a mission the planner no longer
+        // matches: refused for now, the mission never sees it.
+        let held_back = input.loading && input.command == Some(OperatorCommand::Start);
+        let command = input.command.filter(|_| !held_back);
         let out = self.mission.step(&MissionInput {
             time_us: input.time_us,
             imu: ImuSample {
@@ -261,26 +268,31 @@ impl Autonomy {
                 accel: Vec3::new(input.imu.accel[0], input.imu.accel[1], input.imu.accel[2]),
             },
             mocap: input.mocap.as_ref().map(fix),
-            command: input.command.map(command),
+            command: command.map(self::command),
             faults: input.faults,
             supervision: input.supervision,
         });
-        let ack = input.command.zip(out.reply).map(|(given, reply)| {
-            let result = match reply.outcome {
-                Ok(()) => CommandResult::Accepted,
-                Err(why) => {
-                    report.text(
-                        Severity::Error,
-                        format_args!("command {} refused: {why}", reply.command.name()),
-                    );
-                    match why {
-                        CommandRefusal::AlreadyStarted => CommandResult::TemporarilyRejected,
-                        _ => CommandResult::Denied,
+        // Its COMMAND_ACK says TEMPORARILY_REJECTED (no text: the flash budget has no room).
+        let ack = if held_back {
+            Some((OperatorCommand::Start, CommandResult::TemporarilyRejected))
+        } else {
+            command.zip(out.reply).map(|(given, reply)| {
+                let result = match reply.outcome {
+                    Ok(()) => CommandResult::Accepted,
+                    Err(why) => {
+                        report.text(
+                            Severity::Error,
+                            format_args!("command {} refused: {why}", reply.command.name()),
+                        );
+                        match why {
+                            CommandRefusal::AlreadyStarted => CommandResult::TemporarilyRejected,
+                            _ => CommandResult::Denied,
+                        }
                     }
-                }
-            };
-            (given, result)
-        });
+                };
+                (given, result)
+            })
+        };
         if let Some(t) = out.transition {
             let severity = match t.reason {
                 Reason::Abort(

@@ -22,7 +22,7 @@ use link::hil::{Actuators, JobDeadline, VehicleClock};
 use super::autonomy::{Autonomy, CommandResult, JobResult, Severity, TickInput, TickOutput, Value};
 use super::comms::{Outbound, SensorSample};
 use super::{
-    ARMED, COMMANDS, GCS_HEARTBEAT, IN_HIL, JOB_REQUESTS, JOB_RESULTS, LINK_BATTERY_MV,
+    ARMED, COMMANDS, GCS_HEARTBEAT, IN_HIL, JOB_REQUESTS, JOB_RESULTS, LINK_BATTERY_MV, LOADING,
     MISSION_STATE, MOCAP, OUTBOX, PAYLOAD, SENSOR, VEHICLE,
 };
 use crate::board::{ActuatorOutputs, Board, Selected};
@@ -84,6 +84,9 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             None
         };
 
+        // The flag before the payload: a description offered before the flag was cleared is
+        // in the channel by then.
+        let loading = LOADING.load(Ordering::SeqCst);
         let payload = PAYLOAD.try_receive().ok();
         let pending = COMMANDS.try_receive().ok();
         let input = TickInput {
@@ -99,6 +102,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             } else {
                 <Selected as Board>::hardware_faults()
             },
+            loading,
             supervision: Supervision {
                 gcs_heartbeat: GCS_HEARTBEAT.swap(false, Ordering::Relaxed),
                 // In HIL the plant's pack; on a board its own measurement.
@@ -141,7 +145,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 out.armed,
             );
         }
-        MISSION_STATE.store(out.state as u8, Ordering::Relaxed);
+        MISSION_STATE.store(out.state as u8, Ordering::SeqCst);
         ARMED.store(out.armed, Ordering::Relaxed);
 
         let cost = <Selected as Board>::cycle_count()

@@ -21,9 +21,26 @@ use static_cell::{ConstStaticCell, StaticCell};
 use super::autonomy::{Report, Severity, run_job};
 use super::comms::{Outbound, Received};
 use super::{
-    JOB_REQUESTS, JOB_RESULTS, LoadedPayload, MISSION_CONFIG, MISSION_STATE, OUTBOX, RELOAD,
-    TO_LOAD, offer_payload,
+    JOB_REQUESTS, JOB_RESULTS, LOADING, LoadedPayload, MISSION_CONFIG, MISSION_STATE, OUTBOX,
+    RELOAD, TO_LOAD, offer_payload,
 };
+
+/// Why a received description was not loaded into the planner.
+enum LoadRefusal {
+    /// A running mission's jobs need the planner it started with.
+    Running,
+    /// The planner refused it.
+    Checks(shared::mission::AbortReason),
+}
+
+impl core::fmt::Display for LoadRefusal {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Running => f.write_str("the mission is running"),
+            Self::Checks(why) => why.fmt(f),
+        }
+    }
+}
 
 static PLANNER: ConstStaticCell<MissionPlanner> = ConstStaticCell::new(MissionPlanner::UNLOADED);
 /// The last payload description accepted, for loading again when the parameters change.
@@ -38,10 +55,21 @@ pub async fn jobs() {
     loop {
         match select3(TO_LOAD.receive(), JOB_REQUESTS.receive(), RELOAD.wait()).await {
             Either3::First(received) => {
+                LOADING.store(true, Ordering::SeqCst);
                 let mut report = Report::default();
                 // The parameters in force now; the mission gets the same with the description.
                 let config = MISSION_CONFIG.lock(|c| c.get());
-                match planner.load(&received.scenario, config) {
+                // A running mission's jobs need the planner it started with: a description
+                // that comes now is not loaded (the mission would ignore it anyway).
+                let running = MISSION_STATE.load(Ordering::SeqCst) == MissionState::Running as u8;
+                let loaded = if running {
+                    Err(LoadRefusal::Running)
+                } else {
+                    planner
+                        .load(&received.scenario, config)
+                        .map_err(LoadRefusal::Checks)
+                };
+                match loaded {
                     Ok(()) => {
                         let grid = &received.scenario.estimation;
                         report.text(
@@ -66,12 +94,14 @@ pub async fn jobs() {
                         report.text(Severity::Error, format_args!("payload refused: {why}"));
                     }
                 }
+                LOADING.store(false, Ordering::SeqCst);
                 OUTBOX.send(Outbound::Report(report)).await;
             }
             Either3::Third(()) => {
                 // New parameters: the payload loaded again with them, unless the mission runs
                 // (the link refuses changes then; this guards the moment of a start).
-                let running = MISSION_STATE.load(Ordering::Relaxed) == MissionState::Running as u8;
+                LOADING.store(true, Ordering::SeqCst);
+                let running = MISSION_STATE.load(Ordering::SeqCst) == MissionState::Running as u8;
                 if let (Some(received), false) = (last.as_ref(), running) {
                     let config = MISSION_CONFIG.lock(|c| c.get());
                     let mut report = Report::default();
@@ -90,8 +120,10 @@ pub async fn jobs() {
                             report.text(Severity::Error, format_args!("params not applied: {why}"));
                         }
                     }
+                    LOADING.store(false, Ordering::SeqCst);
                     OUTBOX.send(Outbound::Report(report)).await;
                 }
+                LOADING.store(false, Ordering::SeqCst);
             }
             Either3::Second((id, request)) => {
                 let result = run_job(planner, &request.work);

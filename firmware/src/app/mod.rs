@@ -69,6 +69,14 @@ pub static MISSION_CONFIG: Mutex<Cs, Cell<MissionConfig>> =
 /// configuration (when the mission is not running).
 pub static RELOAD: Signal<Cs, ()> = Signal::new();
 
+/// The job task is loading the planner (a description received, or new parameters) and has
+/// not offered the result to the control task yet: a start now would fly the mission the
+/// planner no longer matches, so the control task refuses it as temporarily rejected. Set
+/// before the job task looks at the mission's state, cleared after the offer; the control
+/// step runs whole between two of the job task's instructions, so it sees either the mission
+/// not yet started (and the job task then skips the reload) or the flag.
+pub static LOADING: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
+
 /// A payload description loaded into the planner, and the configuration it was loaded with.
 pub struct LoadedPayload {
     /// The description.
