@@ -16,7 +16,7 @@ pub mod mission_summary;
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Result, bail};
 use plotters::prelude::*;
 
 use crate::harness::FlightOutcome;
@@ -31,9 +31,7 @@ const COLOURS: [RGBColor; 4] = [
 /// Picks one angle out of a sample.
 type AngleOf = fn(&crate::harness::Sample) -> f32;
 
-fn draw_error<E: std::fmt::Display>(e: E) -> anyhow::Error {
-    anyhow!("drawing failed: {e}")
-}
+use canvas::draw_error;
 
 /// Room kept free above the curves for the legend, which sits in the top right corner, as a
 /// fraction of the curves' largest value: no curve passes under it.

@@ -17,24 +17,7 @@ use crate::figures::mission_summary::MissionSummary;
 use crate::mission_run::{FlightSample, MissionOutcome};
 use crate::report::file_stem;
 
-fn draw_error<E: std::fmt::Display>(e: E) -> anyhow::Error {
-    anyhow!("drawing failed: {e}")
-}
-
-/// A colour per robot (up to 16, then repeating).
-fn colour(j: usize) -> RGBColor {
-    const C: [RGBColor; 8] = [
-        RGBColor(31, 119, 180),
-        RGBColor(255, 127, 14),
-        RGBColor(44, 160, 44),
-        RGBColor(214, 39, 40),
-        RGBColor(148, 103, 189),
-        RGBColor(140, 86, 75),
-        RGBColor(227, 119, 194),
-        RGBColor(127, 127, 127),
-    ];
-    C[j % C.len()]
-}
+use crate::figures::canvas::{colour, draw_error};
 
 /// Writes `<name>-mission-flight.csv` and `.png`, and `<name>-mission-summary.png` and `.svg`,
 /// into `dir` (`name` through [`file_stem`]); returns the paths written. `max_thrust` is the
