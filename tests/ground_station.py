@@ -397,7 +397,15 @@ def second_run(args, port):
             raise Failure("no parameters after the restart")
         print(f"after the restart {CHECKS_PARAM} = {value}")
         v.text_matching("accepted", 60)
-        ack = v.command(mavlink.MAV_CMD_MISSION_START)
+        # The vehicle loads the description into its planner after it accepted it, and a start
+        # meanwhile is TEMPORARILY_REJECTED (with a STATUSTEXT): the command protocol's answer
+        # to try again, which a ground station does.
+        deadline = time.time() + 20
+        while True:
+            ack = v.command(mavlink.MAV_CMD_MISSION_START)
+            if ack.result != mavlink.MAV_RESULT_TEMPORARILY_REJECTED or time.time() > deadline:
+                break
+            time.sleep(0.2)
         if ack.result != mavlink.MAV_RESULT_ACCEPTED:
             raise Failure(f"MISSION_START acknowledged {ack.result}")
         v.text_matching("phase: preflight-checks", 20)

@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use host_sim::hil::qemu::{self, Qemu};
+use host_sim::hil::qemu::{self, Qemu, QemuLink};
 use host_sim::hil::run::{HilSetup, run};
 use host_sim::hil::session::{LoggedText, Session};
 use host_sim::hil::transport::Link;
@@ -84,8 +84,7 @@ fn print_text() -> Box<dyn FnMut(&LoggedText) + Send> {
 }
 
 fn qemu_session(elf: &Path) -> (Qemu, Session) {
-    let (qemu, stream) = Qemu::launch(elf).expect("QEMU starts");
-    let link = Link::over_tcp(stream).expect("link");
+    let (qemu, link) = Qemu::start(elf, QemuLink::Ethernet).expect("QEMU starts");
     (qemu, Session::new(link, None, print_text()))
 }
 
@@ -107,8 +106,7 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
         let (host, _) =
             mission_run::run(&loaded.scenario, &setup, &mut |_, _, _| {}).expect("host mission");
         let host_wall = host_started.elapsed().as_secs_f64();
-        let (qemu, stream) = Qemu::launch(&elf).expect("QEMU starts");
-        let link = Link::over_tcp(stream).expect("link");
+        let (qemu, link) = Qemu::start(&elf, QemuLink::Ethernet).expect("QEMU starts");
         let hil_setup = HilSetup {
             seed: setup.seed,
             ..HilSetup::default()
@@ -123,11 +121,12 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
             .worst_tick()
             .expect("the firmware reports its worst tick");
         report(format_args!(
-            "hil {name}: {} ticks, {:.1} s simulated in {:.1} s wall ({:.0} ticks/s); host-only mission {:.1} s wall; worst control tick {worst:.0} ({tick_name}, instructions under -icount)",
+            "hil {name}: {} ticks, {:.1} s simulated in {:.1} s wall ({:.0} ticks/s, {:.1}x real time); host-only mission {:.1} s wall; worst control tick {worst:.0} ({tick_name}, instructions under -icount)",
             fw.ticks,
             fw.simulated_s,
             fw.wall_s,
             fw.ticks as f64 / fw.wall_s,
+            fw.real_time_factor(),
             host_wall
         ));
         assert_eq!(fw.firmware, "qemu-mps2-an500");
@@ -301,6 +300,71 @@ fn the_serial_path_runs_through_a_pty() {
     );
 }
 
+/// The firmware's texts and values of a run, with the step each came at, less what depends
+/// on the emulator's timing: how often the plant had to ask which board it is before the
+/// answer came, the worst step's instructions (interrupts land between other instructions),
+/// and the steps that waited for a job (the job runs while the guest would otherwise wait for
+/// the next sample, and a faster link leaves it less of that wall-clock time).
+fn said(outcome: &host_sim::hil::run::HilOutcome) -> Vec<String> {
+    let texts = outcome
+        .log
+        .texts
+        .iter()
+        .filter(|t| !t.text.starts_with("board: "))
+        .map(|t| format!("{} text {}", t.step, t.text));
+    let values = outcome
+        .log
+        .values
+        .iter()
+        .filter(|v| v.name != "tick_insn" && v.name != "job_holds")
+        .map(|v| format!("{} value {} {}", v.step, v.name, v.value));
+    texts.chain(values).collect()
+}
+
+#[test]
+fn the_uart_and_the_ethernet_link_fly_the_same_steps() {
+    let Some(elf) = image_or_skip("the_uart_and_the_ethernet_link_fly_the_same_steps") else {
+        return;
+    };
+    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    // Through the pre-flight checks and into the first lift's move (5 s of checks).
+    let setup = HilSetup {
+        duration_s: Some(5.5),
+        ..HilSetup::default()
+    };
+    let mut runs = Vec::new();
+    for kind in [QemuLink::Uart, QemuLink::Ethernet] {
+        let (qemu, link) = Qemu::start(&elf, kind).expect("QEMU starts");
+        let outcome = run(&rect_ex1(), link, &setup, print_text()).unwrap_or_else(|e| {
+            panic!(
+                "{}: hil run failed: {e:#}\nQEMU said: {}",
+                kind.name(),
+                qemu.output()
+            )
+        });
+        report(format_args!(
+            "hil over the {}: {} ticks in {:.2} s wall ({:.2}x real time); {:.0} bytes to the firmware and {:.0} from it per tick",
+            kind.name(),
+            outcome.ticks,
+            outcome.wall_s,
+            outcome.real_time_factor(),
+            outcome.link_bytes.to_firmware as f64 / outcome.ticks as f64,
+            outcome.link_bytes.from_firmware as f64 / outcome.ticks as f64
+        ));
+        assert_eq!(outcome.ticks, 2200, "{}", kind.name());
+        runs.push(outcome);
+    }
+    let (uart, ethernet) = (&runs[0], &runs[1]);
+    assert_eq!(said(uart), said(ethernet));
+    assert!(
+        said(ethernet)
+            .iter()
+            .any(|l| l.contains("phase: move-robots")),
+        "the run reached the first lift's move: {:?}",
+        said(ethernet)
+    );
+}
+
 #[test]
 fn a_ground_station_sees_and_commands_the_vehicle_through_the_bridge() {
     let Some(elf) =
@@ -351,8 +415,7 @@ fn a_ground_station_sees_and_commands_the_vehicle_through_the_bridge() {
         }
         (seen, answered)
     });
-    let (_qemu, stream) = Qemu::launch(&elf).expect("QEMU starts");
-    let link = Link::over_tcp(stream).expect("link");
+    let (_qemu, link) = Qemu::start(&elf, QemuLink::Ethernet).expect("QEMU starts");
     let setup = HilSetup {
         duration_s: Some(2.5),
         gcs: Some(addr),
@@ -398,8 +461,7 @@ fn the_firmware_answers_a_stopped_rotor_and_a_low_battery_in_the_loop() {
         &mut |_, _, _| {},
     )
     .expect("host mission");
-    let (qemu, stream) = Qemu::launch(&elf).expect("QEMU starts");
-    let link = Link::over_tcp(stream).expect("link");
+    let (qemu, link) = Qemu::start(&elf, QemuLink::Ethernet).expect("QEMU starts");
     let setup = HilSetup {
         injections,
         ..HilSetup::default()

@@ -3,6 +3,7 @@
 //!
 //! - [`frame`]: MAVLink 2 framing: a byte-at-a-time parser that survives any byte stream, and
 //!   the encoder (the `mavlink` crate's message types, CRCs and payload encoding).
+//! - [`hil_ethernet`]: the HIL link's Ethernet framing (QEMU's LAN9118 to the plant's UDP).
 //! - [`hil`]: PX4's simulator MAVLink API: `HIL_SENSOR` and `ATT_POS_MOCAP` in,
 //!   `HIL_ACTUATOR_CONTROLS` (and `ACTUATOR_OUTPUT_STATUS` past 8 robots) out, with the channel
 //!   map, and the lockstep bookkeeping of both sides.
@@ -39,6 +40,7 @@ pub mod command_wire;
 pub mod frame;
 pub mod ftp;
 pub mod hil;
+pub mod hil_ethernet;
 pub mod odometry;
 pub mod param;
 pub mod signing;

@@ -272,8 +272,14 @@ impl Autonomy {
             faults: input.faults,
             supervision: input.supervision,
         });
-        // Its COMMAND_ACK says TEMPORARILY_REJECTED (no text: the flash budget has no room).
+        // Its COMMAND_ACK says TEMPORARILY_REJECTED, and a text says why and what to do.
         let ack = if held_back {
+            report.text(
+                Severity::Warning,
+                format_args!(
+                    "start refused for now: the payload description is being loaded; start again in a moment"
+                ),
+            );
             Some((OperatorCommand::Start, CommandResult::TemporarilyRejected))
         } else {
             command.zip(out.reply).map(|(given, reply)| {

@@ -716,6 +716,7 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
         text_id: 0,
     };
     out.identity().await;
+    let _ = out.tx.flush().await;
     let mut state = MissionState::Idle;
     let mut next_beat = Instant::now();
     loop {
@@ -804,5 +805,8 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
             // The schedule changed: the next wake is worked out again.
             Either3::Third(()) => {}
         }
+        // The group's end: a link that frames (the QEMU board's Ethernet) sends it now, as
+        // one frame.
+        let _ = out.tx.flush().await;
     }
 }

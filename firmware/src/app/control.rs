@@ -22,8 +22,8 @@ use link::hil::{Actuators, JobDeadline, VehicleClock};
 use super::autonomy::{Autonomy, CommandResult, JobResult, Severity, TickInput, TickOutput, Value};
 use super::comms::{Outbound, SensorSample};
 use super::{
-    ARMED, COMMANDS, GCS_HEARTBEAT, IN_HIL, JOB_REQUESTS, JOB_RESULTS, LINK_BATTERY_MV, LOADING,
-    MISSION_STATE, MOCAP, OUTBOX, PAYLOAD, SENSOR, VEHICLE,
+    ARMED, COMMANDS, GCS_HEARTBEAT, IDLE_COUNTS, IN_HIL, JOB_REQUESTS, JOB_RESULTS,
+    LINK_BATTERY_MV, LOADING, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD, SENSOR, VEHICLE,
 };
 use crate::board::{ActuatorOutputs, Board, Selected};
 use shared::mission::{HardwareFaults, Supervision};
@@ -45,6 +45,8 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
     let mut dropped_reports: u32 = 0;
     // Number of the last job asked for; results of other (late, dropped) jobs are discarded.
     let mut job_id: u32 = 0;
+    // The cycle counter at the last busy-time report.
+    let mut busy_since = <Selected as Board>::cycle_count();
     loop {
         let sample: SensorSample = SENSOR.receive().await;
         let start = <Selected as Board>::cycle_count();
@@ -175,6 +177,19 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             out.report.value(
                 <Selected as Board>::TICK_COST_NAME,
                 Value::Int(worst_cost.min(i32::MAX as u32) as i32),
+            );
+        }
+        if step.index % COST_REPORT_STEPS == 0 {
+            let now = <Selected as Board>::cycle_count();
+            let idle = IDLE_COUNTS.swap(0, Ordering::Relaxed);
+            let busy = now.wrapping_sub(busy_since).saturating_sub(idle);
+            busy_since = now;
+            out.report.value(
+                <Selected as Board>::BUSY_COST_NAME,
+                Value::Int(
+                    busy.saturating_mul(<Selected as Board>::TICK_COST_PER_COUNT)
+                        .min(i32::MAX as u32) as i32,
+                ),
             );
         }
         let actuators = Actuators {

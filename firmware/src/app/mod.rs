@@ -155,6 +155,10 @@ pub static LINK_BATTERY_MV: AtomicU32 = AtomicU32::new(u32::MAX);
 /// The thread-mode wake-up interrupt fired since the executor last looked.
 static THREAD_WOKEN: AtomicBool = AtomicBool::new(false);
 
+/// Counts of the board's cycle counter the processor spent asleep (`WFI`) since the control
+/// task last took them: the rest of the time it was busy.
+pub static IDLE_COUNTS: AtomicU32 = AtomicU32::new(0);
+
 /// Called by the board's thread-wake interrupt handler.
 pub fn thread_woken() {
     THREAD_WOKEN.store(true, Ordering::Release);
@@ -219,7 +223,11 @@ pub fn run(
             // A wake-up between the poll and here has set the flag; one after is pending and
             // ends the WFI at once.
             if !THREAD_WOKEN.swap(false, Ordering::Acquire) {
+                // Interrupts wait until the critical section ends: this is the sleep alone.
+                let asleep = <Selected as crate::board::Board>::cycle_count();
                 cortex_m::asm::wfi();
+                let woke = <Selected as crate::board::Board>::cycle_count();
+                IDLE_COUNTS.fetch_add(woke.wrapping_sub(asleep), Ordering::Relaxed);
             }
         });
     }

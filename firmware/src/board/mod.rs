@@ -46,6 +46,10 @@ pub trait Board: 'static {
     const NAME: &'static str;
     /// Name of the `NAMED_VALUE_INT` carrying the worst control tick's cost, and its unit.
     const TICK_COST_NAME: &'static str;
+    /// Name of the named value that carries the processor's busy time, in the units of
+    /// [`Board::TICK_COST_NAME`], over each second of vehicle time (`busy_insn` under QEMU,
+    /// `busy_cyc` on a board): its CPU load, and in HIL the guest's instructions per step.
+    const BUSY_COST_NAME: &'static str;
     /// Units of [`Board::TICK_COST_NAME`] per count of [`Board::cycle_count`].
     const TICK_COST_PER_COUNT: u32;
     /// A whole control period (2.5 ms) in units of [`Board::TICK_COST_NAME`]: the control

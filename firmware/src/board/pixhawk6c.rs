@@ -130,6 +130,7 @@ impl ActuatorOutputs for Outputs {
 impl Board for Pixhawk6c {
     const NAME: &'static str = "pixhawk6c";
     const TICK_COST_NAME: &'static str = "tick_cyc";
+    const BUSY_COST_NAME: &'static str = "busy_cyc";
     const TICK_COST_PER_COUNT: u32 = 1;
     /// 2.5 ms of the 480 MHz core clock.
     const TICK_PERIOD_COST: u32 = CORE_HZ / 400;

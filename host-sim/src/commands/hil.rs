@@ -19,7 +19,7 @@ use serde_json::json;
 
 use crate::cli::{Outcome, check_map_error, check_range};
 use crate::hil::gcs::GcsBridge;
-use crate::hil::qemu::Qemu;
+use crate::hil::qemu::{Qemu, QemuLink};
 use crate::hil::run::{HilOutcome, HilSetup, run as run_hil};
 use crate::hil::session::LoggedText;
 use crate::hil::transport::{Endpoint, Link};
@@ -45,6 +45,16 @@ pub struct HilArgs {
     /// every run starts from the defaults.
     #[arg(long, value_name = "DIR", requires = "qemu")]
     pub storage: Option<PathBuf>,
+    /// With --qemu: the board's link to the plant: `ethernet` (its LAN9118, frames as UDP
+    /// datagrams on this machine: fast) or `uart` (its CMSDK UART over a TCP socket, one byte
+    /// per pass of QEMU's main loop: the serial path a board's TELEM1 takes).
+    #[arg(
+        long,
+        value_name = "LINK",
+        default_value = "ethernet",
+        requires = "qemu"
+    )]
+    pub qemu_link: QemuLink,
     /// The firmware on a board (or QEMU's -serial pty) over this serial device.
     #[arg(long, value_name = "DEV")]
     pub serial: Option<String>,
@@ -178,8 +188,8 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
         }
     });
     let (_qemu, mut link) = if let Some(elf) = &args.qemu {
-        let (qemu, stream) = Qemu::launch_with_storage(elf, args.storage.as_deref())?;
-        (Some(qemu), Link::over_tcp(stream)?)
+        let (qemu, link) = Qemu::start_with_storage(elf, args.storage.as_deref(), args.qemu_link)?;
+        (Some(qemu), link)
     } else if let Some(path) = &args.serial {
         let endpoint = Endpoint::Serial {
             path: path.clone(),
@@ -199,7 +209,14 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
     }
     let outcome = run_hil(&loaded, link, &setup, on_text)?;
     if json {
-        print_json(to_json(&loaded.name, &outcome))?;
+        let mut report = to_json(&loaded.name, &outcome);
+        let transport = match (&args.qemu, &args.serial) {
+            (Some(_), _) => args.qemu_link.name(),
+            (None, Some(_)) => "serial",
+            (None, None) => "tcp",
+        };
+        report["transport"] = json!(transport);
+        print_json(report)?;
     } else {
         print_summary(&outcome)?;
     }
@@ -231,7 +248,15 @@ pub fn to_json(scenario: &str, o: &HilOutcome) -> serde_json::Value {
         "simulated_s": o.simulated_s,
         "wall_s": o.wall_s,
         "ticks_per_s": o.ticks as f64 / o.wall_s.max(1e-9),
+        "real_time_factor": o.real_time_factor(),
+        "link_bytes": {
+            "to_firmware": o.link_bytes.to_firmware,
+            "from_firmware": o.link_bytes.from_firmware,
+            "to_firmware_per_tick": o.link_bytes.to_firmware as f64 / o.ticks.max(1) as f64,
+            "from_firmware_per_tick": o.link_bytes.from_firmware as f64 / o.ticks.max(1) as f64,
+        },
         "worst_tick": worst.map(|(name, v)| json!({"name": name, "value": v})),
+        "busy_per_step": o.busy_per_step().map(|(name, mean, worst)| json!({"name": name, "mean": mean, "worst_second": worst})),
         // The last value of each name the firmware sent (NAMED_VALUE_FLOAT/INT).
         "values": o.log.values.iter().map(|v| (v.name.clone(), json!(v.value))).collect::<serde_json::Map<String, serde_json::Value>>(),
         "statustexts": o.log.texts.iter().map(|t| json!({"step": t.step, "text": t.text})).collect::<Vec<_>>(),
@@ -240,12 +265,18 @@ pub fn to_json(scenario: &str, o: &HilOutcome) -> serde_json::Value {
 
 fn print_summary(o: &HilOutcome) -> Result<()> {
     say!(
-        "{} ticks in lockstep with the firmware on {}: {:.2} s simulated in {:.2} s ({:.0} ticks/s)",
+        "{} ticks in lockstep with the firmware on {}: {:.2} s simulated in {:.2} s ({:.0} ticks/s, {:.2}x real time)",
         o.ticks,
         o.firmware,
         o.simulated_s,
         o.wall_s,
-        o.ticks as f64 / o.wall_s.max(1e-9)
+        o.ticks as f64 / o.wall_s.max(1e-9),
+        o.real_time_factor()
+    )?;
+    say!(
+        "link: {:.0} bytes to the firmware and {:.0} from it per tick",
+        o.link_bytes.to_firmware as f64 / o.ticks.max(1) as f64,
+        o.link_bytes.from_firmware as f64 / o.ticks.max(1) as f64
     )?;
     if let Some((name, v)) = o.worst_tick() {
         let unit = if name == "tick_insn" {
@@ -254,6 +285,16 @@ fn print_summary(o: &HilOutcome) -> Result<()> {
             "cycles"
         };
         say!("worst control step: {v:.0} {unit}")?;
+    }
+    if let Some((name, mean, worst)) = o.busy_per_step() {
+        let unit = if name == "busy_insn" {
+            "instructions"
+        } else {
+            "cycles"
+        };
+        say!(
+            "processor busy per control step (the step, the link, the jobs): {mean:.0} {unit} on average, {worst:.0} in the busiest second"
+        )?;
     }
     if let Some(e) = o.estimate {
         say!(

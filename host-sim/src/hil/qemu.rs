@@ -1,15 +1,18 @@
 //! Runs the firmware's QEMU image (`cargo fw-qemu`) under `qemu-system-arm -M mps2-an500`
-//! (issue 11, section 3): its UART bridged to a local TCP socket this process listens on (or
-//! to a pseudo-terminal, as a serial device would be), `-icount shift=0` so one instruction is
-//! one virtual nanosecond (the firmware measures its control step in instructions), and
-//! semihosting so a panic prints and stops QEMU and the firmware keeps its parameter flash in
-//! a host file ([`PARAM_FLASH_FILE`], in QEMU's working directory).
+//! (docs/firmware.md#hil-transports): its link to this process over the board's Ethernet
+//! controller, each frame a UDP datagram on this machine (QEMU's `socket` back end; the
+//! fast default), or over its UART bridged to a local TCP socket this process listens on (or
+//! to a pseudo-terminal, as a serial device would be); `-icount shift=0` so one instruction
+//! is one virtual nanosecond (the firmware measures its control step in instructions), and
+//! semihosting so a panic prints and stops QEMU, the firmware learns its link from the
+//! command line and keeps its parameter flash in a host file ([`PARAM_FLASH_FILE`], in
+//! QEMU's working directory).
 //!
 //! The QEMU process never outlives this one: it is killed when [`Qemu`] is dropped, and on
 //! Linux also when this process dies (parent-death signal).
 
 use std::io::{BufRead, BufReader, Read};
-use std::net::{TcpListener, TcpStream};
+use std::net::{Ipv4Addr, SocketAddr, TcpListener, TcpStream, UdpSocket};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::{Arc, Mutex};
@@ -17,6 +20,8 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow, bail};
+
+use super::transport::Link;
 
 /// The emulator binary.
 pub const QEMU: &str = "qemu-system-arm";
@@ -52,12 +57,38 @@ fn working_dir(storage: Option<&Path>) -> Result<(PathBuf, bool)> {
     Ok((dir, true))
 }
 
-/// How the firmware's UART is brought out.
+/// Which of the board's links carries MAVLink to the plant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum QemuLink {
+    /// The LAN9118 Ethernet controller, frames as UDP datagrams (fast: whole frames).
+    Ethernet,
+    /// CMSDK UART 0 over a TCP socket (QEMU moves one byte per pass of its main loop).
+    Uart,
+}
+
+impl QemuLink {
+    /// Its name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Ethernet => "ethernet",
+            Self::Uart => "uart",
+        }
+    }
+}
+
+/// How the firmware's link is brought out.
 enum Serial {
-    /// QEMU connects to this local TCP port.
+    /// The UART: QEMU connects to this local TCP port.
     Tcp(u16),
-    /// QEMU opens a pseudo-terminal and names it.
+    /// The UART: QEMU opens a pseudo-terminal and names it.
     Pty,
+    /// The Ethernet controller: QEMU sends its frames to `plant` and takes frames at `qemu`.
+    Udp {
+        /// This process's socket's address.
+        plant: SocketAddr,
+        /// QEMU's socket's address.
+        qemu: SocketAddr,
+    },
 }
 
 /// Whether `qemu-system-arm` can be run here.
@@ -71,6 +102,46 @@ pub fn available() -> bool {
 }
 
 impl Qemu {
+    /// Starts the firmware `elf` with an empty parameter flash, its MAVLink on `link`;
+    /// returns QEMU and the plant's end of the link.
+    pub fn start(elf: &Path, link: QemuLink) -> Result<(Self, Link)> {
+        Self::start_with_storage(elf, None, link)
+    }
+
+    /// As [`Self::start`], with the parameter flash kept in `storage` (see
+    /// [`Self::launch_with_storage`]).
+    pub fn start_with_storage(
+        elf: &Path,
+        storage: Option<&Path>,
+        link: QemuLink,
+    ) -> Result<(Self, Link)> {
+        match link {
+            QemuLink::Uart => {
+                let (qemu, stream) = Self::launch_with_storage(elf, storage)?;
+                Ok((qemu, Link::over_tcp(stream)?))
+            }
+            QemuLink::Ethernet => {
+                let localhost = SocketAddr::from((Ipv4Addr::LOCALHOST, 0));
+                let socket =
+                    UdpSocket::bind(localhost).context("cannot open a UDP socket for QEMU")?;
+                let plant = socket.local_addr()?;
+                // A port for QEMU's end: free now, taken by QEMU at once.
+                let qemu_addr = UdpSocket::bind(localhost)
+                    .and_then(|s| s.local_addr())
+                    .context("cannot find a free UDP port for QEMU")?;
+                let qemu = Self::spawn(
+                    elf,
+                    Serial::Udp {
+                        plant,
+                        qemu: qemu_addr,
+                    },
+                    storage,
+                )?;
+                Ok((qemu, Link::over_udp(socket, qemu_addr)?))
+            }
+        }
+    }
+
     /// Starts the firmware `elf` with its UART connected to a TCP socket and an empty
     /// parameter flash; returns QEMU and the socket.
     pub fn launch(elf: &Path) -> Result<(Self, TcpStream)> {
@@ -167,10 +238,17 @@ impl Qemu {
                     &format!("socket,id=link,host=127.0.0.1,port={port},server=off,nodelay=on"),
                     "-serial",
                     "chardev:link",
+                    "-nic",
+                    "none",
                 ]);
             }
             Serial::Pty => {
-                cmd.args(["-serial", "pty"]);
+                cmd.args(["-serial", "pty", "-nic", "none"]);
+            }
+            Serial::Udp { plant, qemu } => {
+                // The firmware reads its link from the command line (semihosting).
+                cmd.args(["-serial", "null", "-append", "hil-link=ethernet", "-nic"])
+                    .arg(format!("socket,udp={plant},localaddr={qemu}"));
             }
         }
         cmd.stdin(Stdio::null())

@@ -23,7 +23,7 @@ use shared::scenario_wire::{MAX_ENCODED_LEN, encode_scenario};
 
 use super::gcs::GcsBridge;
 use super::session::{FirmwareLog, LoggedText, Session};
-use super::transport::Link;
+use super::transport::{ByteCounts, Link};
 use crate::inject::Injection;
 use crate::mission_run::{
     self, Autopilot, Commanded, DELIVERY_RADIUS, Event, MISSION_TIME_LIMIT, MissionSetup, Sensed,
@@ -97,6 +97,8 @@ pub struct HilOutcome {
     pub simulated_s: f64,
     /// Wall-clock time of the lockstep, s.
     pub wall_s: f64,
+    /// Bytes that crossed the link during the lockstep.
+    pub link_bytes: ByteCounts,
     /// The firmware's mission state at the end.
     pub state: MissionState,
     /// The acknowledgement of the start command.
@@ -115,6 +117,39 @@ pub struct HilOutcome {
 }
 
 impl HilOutcome {
+    /// Simulated seconds per wall-clock second of the lockstep.
+    pub fn real_time_factor(&self) -> f64 {
+        if self.wall_s > 0.0 {
+            self.simulated_s / self.wall_s
+        } else {
+            0.0
+        }
+    }
+
+    /// The processor's busy time per control step, averaged over the run and at its worst
+    /// second: the name of the firmware's report (`busy_insn` under QEMU, instructions;
+    /// `busy_cyc` on a board, cycles), the mean and the largest per step. Each report covers
+    /// one second of steps; the first, which covers the start-up, is left out.
+    pub fn busy_per_step(&self) -> Option<(&'static str, f64, f64)> {
+        let steps_per_report = 400.0;
+        ["busy_insn", "busy_cyc"].into_iter().find_map(|name| {
+            let reports: Vec<f64> = self
+                .log
+                .values
+                .iter()
+                .filter(|v| v.name == name)
+                .skip(1)
+                .map(|v| v.value / steps_per_report)
+                .collect();
+            if reports.is_empty() {
+                return None;
+            }
+            let mean = reports.iter().sum::<f64>() / reports.len() as f64;
+            let worst = reports.iter().copied().fold(0.0, f64::max);
+            Some((name, mean, worst))
+        })
+    }
+
     /// The worst control-step cost the firmware reported: its name (`tick_insn` under QEMU,
     /// instructions; `tick_cyc` on a board, cycles) and value.
     pub fn worst_tick(&self) -> Option<(&'static str, f64)> {
@@ -293,8 +328,14 @@ pub fn run(
         },
     );
     let wall = Instant::now();
+    let bytes_before = autopilot.session.byte_counts();
     let record = mission_run::fly(s, &plant_setup, &mut autopilot, &mut |_, _, _| {})?;
     let wall_s = wall.elapsed().as_secs_f64();
+    let bytes_after = autopilot.session.byte_counts();
+    let link_bytes = ByteCounts {
+        to_firmware: bytes_after.to_firmware - bytes_before.to_firmware,
+        from_firmware: bytes_after.from_firmware - bytes_before.from_firmware,
+    };
     let log = autopilot.session.log().clone();
     let state = log.state.unwrap_or(MissionState::Idle);
     let estimate = match (
@@ -315,6 +356,7 @@ pub fn run(
         ticks: autopilot.session.steps(),
         simulated_s: f64::from(record.simulated_s),
         wall_s,
+        link_bytes,
         state,
         start_ack: log.ack_of(MavCmd::MAV_CMD_MISSION_START),
         delivered: state == MissionState::Completed

@@ -119,6 +119,11 @@ impl Session {
         &self.log
     }
 
+    /// Bytes that crossed the link so far.
+    pub fn byte_counts(&self) -> super::transport::ByteCounts {
+        self.link.counts()
+    }
+
     /// Lockstep steps done.
     pub fn steps(&self) -> u64 {
         self.steps
@@ -286,10 +291,12 @@ impl Session {
         robots: usize,
         timeout: Duration,
     ) -> Result<Actuators> {
+        // One write: one Ethernet frame for the step's input.
         for fix in fixes {
-            self.link.send(&fix.to_message())?;
+            self.link.batch(&fix.to_message());
         }
-        self.link.send(&imu.to_message())?;
+        self.link.batch(&imu.to_message());
+        self.link.send_batch()?;
         self.matcher.sent(imu.time_us);
         let deadline = Instant::now() + timeout;
         loop {

@@ -1,13 +1,15 @@
-//! The byte link to the firmware, whatever carries it (issue 11, section 3): QEMU's UART
-//! bridged to a local TCP socket (`--qemu`, `--connect tcp:HOST:PORT`) or a serial device
-//! (`--serial DEV`: a real board on USB or a UART adapter, or QEMU's `-serial pty`).
+//! The byte link to the firmware, whatever carries it (docs/firmware.md#hil-transports):
+//! QEMU's emulated Ethernet controller, each frame a UDP datagram on this machine
+//! (`--qemu`, the fast default), QEMU's UART bridged to a local TCP socket (`--qemu
+//! --qemu-link uart`, `--connect tcp:HOST:PORT`) or a serial device (`--serial DEV`: a real
+//! board on USB or a UART adapter, or QEMU's `-serial pty`).
 //!
 //! [`Link`] frames it with the `link` crate's parser and encoder (the same code the firmware
 //! runs), reads with a deadline, and lets a second thread (the ground-station bridge) write
-//! whole frames in between.
+//! whole frames in between. What one call writes goes out together: on Ethernet as one frame.
 
 use std::io::{self, Read, Write};
-use std::net::TcpStream;
+use std::net::{SocketAddr, TcpStream, UdpSocket};
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -15,6 +17,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, anyhow, bail};
 use link::MessageData;
 use link::frame::{Encoder, Frame, Integrity, Parser};
+use link::hil_ethernet::{self, MAX_PAYLOAD, PLANT_MAC, VEHICLE_MAC};
 use link::msg::STATUSTEXT_DATA;
 use link::signing::Signing;
 use link::status::StatusChunk;
@@ -63,6 +66,19 @@ pub struct Link {
     pending: (usize, usize),
     /// Signs what is sent, with the time signing began.
     signing: Option<(Signing, Instant)>,
+    /// Frames encoded by [`Self::batch`] and not yet written.
+    batch: Vec<u8>,
+    /// Bytes this side has written and read (the ground-station bridge's not counted).
+    counts: ByteCounts,
+}
+
+/// Bytes that crossed the link.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ByteCounts {
+    /// Written to the firmware.
+    pub to_firmware: u64,
+    /// Read from the firmware.
+    pub from_firmware: u64,
 }
 
 /// The plant's signing link id. It sends as system 255, component 190, as ground stations
@@ -107,6 +123,26 @@ impl Link {
         Ok(Self::new(Box::new(port), Box::new(writer)))
     }
 
+    /// A link over Ethernet frames carried as UDP datagrams (QEMU's `socket` network back
+    /// end): `socket` is bound on this machine and `peer` is where QEMU's end listens.
+    pub fn over_udp(socket: UdpSocket, peer: SocketAddr) -> Result<Self> {
+        socket
+            .connect(peer)
+            .with_context(|| format!("cannot address the firmware's Ethernet at {peer}"))?;
+        socket.set_read_timeout(Some(READ_SLICE))?;
+        let writer = FrameWriter {
+            socket: socket.try_clone().context("cannot share the UDP socket")?,
+            pending: Vec::with_capacity(MAX_PAYLOAD),
+        };
+        let reader = FrameReader {
+            socket,
+            datagram: vec![0; 65_536],
+            at: 0,
+            end: 0,
+        };
+        Ok(Self::new(Box::new(reader), Box::new(writer)))
+    }
+
     fn new(reader: Box<dyn Read + Send>, writer: Box<dyn Write + Send>) -> Self {
         Self {
             reader,
@@ -117,7 +153,14 @@ impl Link {
             buf: [0; 512],
             pending: (0, 0),
             signing: None,
+            batch: Vec::new(),
+            counts: ByteCounts::default(),
         }
+    }
+
+    /// Bytes written and read so far.
+    pub fn counts(&self) -> ByteCounts {
+        self.counts
     }
 
     /// Signs every frame sent from now on with `key` (MAVLink 2 signing, link id
@@ -149,7 +192,26 @@ impl Link {
     pub fn send<M: MessageData>(&mut self, message: &M) -> Result<()> {
         self.encoder.encode(message, &mut self.frame);
         self.sign(M::EXTRA_CRC);
+        self.counts.to_firmware += self.frame.bytes().len() as u64;
         write_frame(&self.writer, self.frame.bytes())
+    }
+
+    /// Encodes one message into the batch that [`Self::send_batch`] writes.
+    pub fn batch<M: MessageData>(&mut self, message: &M) {
+        self.encoder.encode(message, &mut self.frame);
+        self.sign(M::EXTRA_CRC);
+        self.batch.extend_from_slice(self.frame.bytes());
+    }
+
+    /// Writes the batched messages in one go (one Ethernet frame), if there are any.
+    pub fn send_batch(&mut self) -> Result<()> {
+        if self.batch.is_empty() {
+            return Ok(());
+        }
+        self.counts.to_firmware += self.batch.len() as u64;
+        let sent = write_frame(&self.writer, &self.batch);
+        self.batch.clear();
+        sent
     }
 
     /// Sends one `STATUSTEXT` chunk (with its extension fields).
@@ -174,7 +236,10 @@ impl Link {
             }
             match self.reader.read(&mut self.buf) {
                 Ok(0) => bail!("the firmware closed the link"),
-                Ok(n) => self.pending = (0, n),
+                Ok(n) => {
+                    self.counts.from_firmware += n as u64;
+                    self.pending = (0, n);
+                }
                 Err(e)
                     if matches!(
                         e.kind(),
@@ -194,6 +259,76 @@ pub fn write_frame(writer: &SharedWriter, bytes: &[u8]) -> Result<()> {
         .map_err(|_| anyhow!("the link writer was poisoned by a failed thread"))?;
     w.write_all(bytes).context("writing to the firmware")?;
     w.flush().context("writing to the firmware")
+}
+
+/// Reads the MAVLink bytes of the Ethernet frames QEMU sends as datagrams.
+struct FrameReader {
+    socket: UdpSocket,
+    datagram: Vec<u8>,
+    /// The current frame's MAVLink bytes not yet read, as a range of `datagram`.
+    at: usize,
+    end: usize,
+}
+
+impl Read for FrameReader {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        while self.at >= self.end {
+            let n = match self.socket.recv(&mut self.datagram) {
+                Ok(n) => n,
+                // A datagram sent before QEMU opened its socket came back refused: nothing to
+                // read yet.
+                Err(e) if e.kind() == io::ErrorKind::ConnectionRefused => {
+                    return Err(io::ErrorKind::WouldBlock.into());
+                }
+                Err(e) => return Err(e),
+            };
+            // A frame that is not the firmware's HIL frame (QEMU's NIC sends nothing else;
+            // anything else on the port) carries nothing for us.
+            if let Ok(payload) = hil_ethernet::payload(&self.datagram[..n]) {
+                self.at = hil_ethernet::HEADER_LEN;
+                self.end = self.at + payload.len();
+            }
+        }
+        let n = buf.len().min(self.end - self.at);
+        buf[..n].copy_from_slice(&self.datagram[self.at..self.at + n]);
+        self.at += n;
+        Ok(n)
+    }
+}
+
+/// Gathers written bytes and sends them on `flush` as Ethernet frames, one datagram each.
+struct FrameWriter {
+    socket: UdpSocket,
+    pending: Vec<u8>,
+}
+
+impl Write for FrameWriter {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        self.pending.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        let mut frame = Vec::with_capacity(hil_ethernet::MAX_FRAME);
+        for chunk in self.pending.chunks(MAX_PAYLOAD) {
+            frame.clear();
+            frame.extend_from_slice(&hil_ethernet::header(VEHICLE_MAC, PLANT_MAC, chunk.len()));
+            frame.extend_from_slice(chunk);
+            match self.socket.send(&frame) {
+                // An earlier datagram, sent before QEMU opened its socket, was refused; that
+                // error comes back here and this one was not sent: send it again. (The
+                // requests sent before the firmware is up are repeated until it answers.)
+                Err(e) if e.kind() == io::ErrorKind::ConnectionRefused => {
+                    let _ = self.socket.send(&frame);
+                }
+                sent => {
+                    sent?;
+                }
+            }
+        }
+        self.pending.clear();
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -9,7 +9,8 @@
 //! |---|---|---|
 //! | CMSDK timer 0: the free-running clock ([`time_driver`]) | 0x4000_0000 | 8 |
 //! | CMSDK timer 1: the alarm ([`time_driver`]) | 0x4000_1000 | 9 |
-//! | CMSDK UART 0: the MAVLink link ([`uart`]; QEMU's `-serial`) | 0x4000_4000 | RX 0, TX 1 |
+//! | CMSDK UART 0: the MAVLink link by default ([`uart`]; QEMU's `-serial`) | 0x4000_4000 | RX 0, TX 1 |
+//! | LAN9118 Ethernet: the MAVLink link with `-append hil-link=ethernet` ([`ethernet`], [`link`]) | 0xA000_0000 | 13 |
 //! | the parameters' flash: a host file over semihosting ([`flash`]) | - | - |
 //! | executors: control, link, thread wake-up (unused lines) | - | 24, 25, 26 |
 //!
@@ -18,7 +19,9 @@
 //! measures the control tick in instructions. The thread-mode executor sleeps with `WFI`
 //! (QEMU does not halt on `WFE` under `-icount`).
 
+pub mod ethernet;
 pub mod flash;
+pub mod link;
 pub mod time_driver;
 pub mod uart;
 
@@ -42,6 +45,8 @@ pub enum Irq {
     Timer0 = 8,
     /// Timer 1 reached zero.
     Timer1 = 9,
+    /// The Ethernet controller received a frame.
+    Ethernet = 13,
     /// Control executor (no peripheral on this line).
     ControlExecutor = 24,
     /// Link executor (no peripheral on this line).
@@ -75,6 +80,7 @@ impl ActuatorOutputs for NoOutputs {
 impl Board for QemuMps2An500 {
     const NAME: &'static str = "qemu-mps2-an500";
     const TICK_COST_NAME: &'static str = "tick_insn";
+    const BUSY_COST_NAME: &'static str = "busy_insn";
 
     /// Its UART stands for the bench's wired link (the Pixhawk's USB).
     fn key_setup_allowed() -> bool {
@@ -83,8 +89,8 @@ impl Board for QemuMps2An500 {
     const TICK_COST_PER_COUNT: u32 = 40;
     /// `-icount shift=0`: one instruction per virtual nanosecond.
     const TICK_PERIOD_COST: u32 = 2_500_000;
-    type LinkRx = uart::UartRx;
-    type LinkTx = uart::UartTx;
+    type LinkRx = link::LinkRx;
+    type LinkTx = link::LinkTx;
     type Outputs = NoOutputs;
     type Irq = Irq;
     type ParamFlash = flash::FileFlash;
@@ -111,18 +117,23 @@ pub fn init() -> Parts<QemuMps2An500> {
         p.NVIC.set_priority(Irq::Uart0Tx, PRIO_IO);
         p.NVIC.set_priority(Irq::Timer0, PRIO_IO);
         p.NVIC.set_priority(Irq::Timer1, PRIO_IO);
+        p.NVIC.set_priority(Irq::Ethernet, PRIO_IO);
         p.NVIC.set_priority(Irq::ControlExecutor, PRIO_CONTROL);
         p.NVIC.set_priority(Irq::LinkExecutor, PRIO_LINK);
         p.NVIC.set_priority(Irq::ThreadWake, PRIO_THREAD_WAKE);
     }
     time_driver::init();
-    let (link_rx, link_tx) = uart::init();
+    let (link_rx, link_tx, ethernet) = link::init();
     // SAFETY: the handlers of these lines are in the vector table below.
     unsafe {
         NVIC::unmask(Irq::Timer0);
         NVIC::unmask(Irq::Timer1);
-        NVIC::unmask(Irq::Uart0Rx);
-        NVIC::unmask(Irq::Uart0Tx);
+        if ethernet {
+            NVIC::unmask(Irq::Ethernet);
+        } else {
+            NVIC::unmask(Irq::Uart0Rx);
+            NVIC::unmask(Irq::Uart0Tx);
+        }
         NVIC::unmask(Irq::ThreadWake);
     }
     Parts {
@@ -176,6 +187,9 @@ pub static __INTERRUPTS: [Vector; 32] = {
     };
     v[Irq::Uart0Tx as usize] = Vector {
         handler: uart::on_tx_interrupt,
+    };
+    v[Irq::Ethernet as usize] = Vector {
+        handler: ethernet::on_interrupt,
     };
     v[Irq::Timer0 as usize] = Vector {
         handler: time_driver::on_timer0_interrupt,
