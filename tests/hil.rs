@@ -174,7 +174,9 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
         }
         assert_eq!(tick_name, "tick_insn");
         assert!(
-            worst < 20_000.0,
+            // A regression guard with room for the emulator's interrupt timing; the budget
+            // itself (12,000) is measured and printed by .ci/hil-bench.
+            worst < 13_000.0,
             "{name}: worst control tick {worst} instructions"
         );
     }
@@ -507,7 +509,7 @@ fn the_firmware_answers_a_stopped_rotor_and_a_low_battery_in_the_loop() {
     );
     // The tick that finds the rotor rebuilds the mixer without it (a few small inverses) and
     // writes the reason: once per rotor lost, about 40,000 instructions (85 us at 480 MHz, 3 %
-    // of the 2.5 ms period); the normal flight's budget of 20,000 is the main test's.
+    // of the 2.5 ms period); the normal flight's budget of 12,000 is the main test's.
     assert!(worst < 50_000.0, "worst control tick {worst} instructions");
 }
 
