@@ -25,6 +25,8 @@ use super::transport::Link;
 
 /// The emulator binary.
 pub const QEMU: &str = "qemu-system-arm";
+/// Environment variable whose words are added to QEMU's command line.
+pub const EXTRA_ARGS_VAR: &str = "HIL_QEMU_ARGS";
 /// How long QEMU may take to connect or to open its terminal.
 const START_TIMEOUT: Duration = Duration::from_secs(20);
 
@@ -250,6 +252,11 @@ impl Qemu {
                 cmd.args(["-serial", "null", "-append", "hil-link=ethernet", "-nic"])
                     .arg(format!("socket,udp={plant},localaddr={qemu}"));
             }
+        }
+        // For debugging the firmware in the loop: more of QEMU's options, e.g. `-s` for a gdb
+        // server on port 1234 or `-d guest_errors` (docs/firmware.md#hil-transports).
+        if let Some(extra) = std::env::var_os(EXTRA_ARGS_VAR) {
+            cmd.args(extra.to_string_lossy().split_whitespace());
         }
         cmd.stdin(Stdio::null())
             .stdout(Stdio::piped())
