@@ -58,7 +58,7 @@ fn tilt_after(o: &MissionOutcome, from: f32) -> f32 {
         .fold(0.0, f32::max)
 }
 
-/// Flies `name` with the shift, adaptation on and off, and checks what the issue asks. The
+/// Flies `name` with the shift, adaptation on and off, and checks that the re-formation pays. The
 /// thrust spread is (max - min) / mean over the rotors, averaged over a second: a balanced
 /// formation's is zero in a still hover and about 0.15-0.2 under the paper's disturbance (the
 /// second before the shift, in the formation chosen on the ground); after rebalancing it must

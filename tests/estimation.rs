@@ -1,4 +1,4 @@
-//! Estimation tests (docs/system.md#paper-cases; issue: reproduce the paper):
+//! Estimation tests (docs/system.md#paper-cases: they reproduce the paper's):
 //! 100 random truths per shape with a fixed seed, readings from the model plus unit-variance
 //! noise; the mean and the standard deviation of the error, in resolutions, must stay below 1 on
 //! every axis. Also the `lift` and `estimate` command lines.

@@ -1,4 +1,4 @@
-//! `--output DIR` of `estimate`, `formation` and `mission` (issue 17, the paper's figures):
+//! `--output DIR` of `estimate`, `formation` and `mission` (the paper's figures):
 //! each writes the files it lists under `files` in its JSON, named from the scenario's `name`
 //! (not its file name), inside the folder, the PNGs and SVGs well formed; the text output
 //! names the same files. Small trial counts keep them fast.

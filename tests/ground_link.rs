@@ -1,4 +1,4 @@
-//! The ground link driven by a real ground-station client (issue 14): runs
+//! The ground link driven by a real ground-station client: runs
 //! `tests/ground_station.py` (pymavlink) against the firmware under QEMU through
 //! `host-sim hil --gcs`: identity, every parameter, refusals, a value kept over a restart,
 //! the mission started from the ground and followed to the landing. What it checks is

@@ -1,4 +1,4 @@
-//! The ground link's and the battery's failsafes in the physics plant (issue 15): the
+//! The ground link's and the battery's failsafes in the physics plant: the
 //! simulated ground station's heartbeat stops (`--inject gcs-loss@T`) or the pack's voltage
 //! drops (`--inject battery:V@T`) in flight on rect-ex1, with each `FS_GCS_ACT`; and on the
 //! ground neither a missing link nor a low pack lets the mission start.

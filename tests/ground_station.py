@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A real ground station against the firmware under QEMU (issue 14): pymavlink, as
+"""A real ground station against the firmware under QEMU: pymavlink, as
 QGroundControl and MAVProxy talk to a vehicle, through `host-sim hil --gcs`.
 
 Run by tests/ground_link.rs (cargo test); by hand:

@@ -1,4 +1,4 @@
-//! Hardware in the loop under QEMU (issue 11, sections 2 to 4): the firmware's ARM image
+//! Hardware in the loop under QEMU: the firmware's ARM image
 //! (`cargo fw-qemu`) on `qemu-system-arm -M mps2-an500`, the plant in lockstep over MAVLink.
 //!
 //! These tests need `qemu-system-arm` and the image at
@@ -440,7 +440,7 @@ fn a_ground_station_sees_and_commands_the_vehicle_through_the_bridge() {
     );
 }
 
-/// The failsafes on the firmware itself (issue 15), through `hil --inject`: the pack drops
+/// The failsafes on the firmware itself, through `hil --inject`: the pack drops
 /// below `BAT_LOW_V` 2 s after take-off (the plant's `BATTERY_STATUS`; the firmware warns and
 /// flies on), then rotor 3 stops in the transit (the plant makes no thrust for it; the
 /// firmware finds it from the vehicle's response, flies on the other seven and lands where it

@@ -1,4 +1,4 @@
-//! The IMU's failsafes in the physics plant (issue 15, `imu-stuck` and `imu-noise:X`): a
+//! The IMU's failsafes in the physics plant (`imu-stuck` and `imu-noise:X`): a
 //! frozen or wildly noisy IMU is found within 100 ms; in flight the vehicle lands where it is
 //! on motion capture without dropping the payload and stops its rotors; on the ground the
 //! mission stops with the reason and never arms; no normal mission is ever flagged.

@@ -236,9 +236,9 @@ fn losing_motion_capture_in_flight_lands_in_place_instead_of_falling() {
     );
 }
 
-/// Robot 2's stepper stalls halfway to its place in the formation (issue 15,
-/// `stepper-stall:2`): the mission must not fly with a robot off its planned place, so it stops
-/// on the ground with the robot named, no take-off, rotors stopped, the robot where it stalled.
+/// Robot 2's stepper stalls halfway to its place in the formation (`stepper-stall:2`): the mission
+/// must not fly with a robot off its planned place, so it stops on the ground with the robot named,
+/// no take-off, rotors stopped, the robot where it stalled.
 #[test]
 fn a_stepper_stalled_during_the_rearrangement_stops_the_mission_on_the_ground() {
     let s = load("rect-ex1");

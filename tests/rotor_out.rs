@@ -1,4 +1,4 @@
-//! A rotor that stops in flight (issue 15, `rotor-out:J`), in the physics plant with
+//! A rotor that stops in flight (`rotor-out:J`), in the physics plant with
 //! `shared`'s mission: the rotor monitor (`shared::flight::rotor_monitor`) finds it from the
 //! vehicle's response, the mixer is rebuilt without it and the payload lands where it is.
 //! The paper's 8-rotor payloads, every rotor, fixed seed; and what two rotors out do.

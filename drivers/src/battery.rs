@@ -1,4 +1,4 @@
-//! The power module's pack voltage on the Pixhawk 6C's ADC (issue 15): ADC counts to volts
+//! The power module's pack voltage on the Pixhawk 6C's ADC: ADC counts to volts
 //! through the board's divider.
 //!
 //! The power module's voltage output reaches `BAT1 VOLTAGE` on the POWER1 connector, wired (as

@@ -1,4 +1,4 @@
-//! DShot600 frames for the ESCs (issue 13): the 16-bit frame (11-bit value, telemetry request
+//! DShot600 frames for the ESCs: the 16-bit frame (11-bit value, telemetry request
 //! bit, 4-bit checksum), the timer compare values that draw its bits, and the interleaved
 //! buffer a timer's update-event DMA burst writes to its compare registers, one row per bit.
 //!

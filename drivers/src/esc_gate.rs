@@ -1,4 +1,4 @@
-//! What the ESC outputs send at each update (issue 13): the control step's command only while
+//! What the ESC outputs send at each update: the control step's command only while
 //! armed, the stop command while disarmed and whenever no command came within the feed
 //! timeout (the control task stopped), and a change of protocol only while disarmed (the
 //! timers change rate then, which would drop a spinning rotor's pulses).

@@ -1,4 +1,4 @@
-//! The ICM-42688-P IMU over SPI (issue 13; TDK InvenSense ICM-42688-P datasheet DS-000347
+//! The ICM-42688-P IMU over SPI (TDK InvenSense ICM-42688-P datasheet DS-000347
 //! rev. 1.8): its registers, the start-up sequence, and its FIFO's 20-byte packets in
 //! high-resolution mode (packet 4: accelerometer and gyro in 20 bits, temperature, timestamp).
 //!

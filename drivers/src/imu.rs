@@ -1,4 +1,4 @@
-//! From IMU samples to the control tick (issue 13): the board's mounting rotation into the
+//! From IMU samples to the control tick: the board's mounting rotation into the
 //! body frame the controller uses (x forward, y right, z down: docs/models.md#conventions), a
 //! second-order Butterworth anti-alias filter at the sample rate, decimation to the 400 Hz
 //! tick, and the IMU's health: a stalled, saturated or implausible IMU is a fault with a name.

@@ -1,4 +1,4 @@
-//! Driver cores for the Pixhawk 6C board (issue 13): the parts of each driver that are plain
+//! Driver cores for the Pixhawk 6C board: the parts of each driver that are plain
 //! computation (frame encoding, checksums, packet parsing, unit scaling, register packing),
 //! kept apart from the embassy glue in `firmware/src/board` as Hubris splits a driver core from
 //! its server, so that they are tested on the host against the datasheets' own examples.

@@ -1,4 +1,4 @@
-//! ESC pulses for ESCs without DShot (issue 13): the protocol choice and the pulse width of a
+//! ESC pulses for ESCs without DShot: the protocol choice and the pulse width of a
 //! command fraction. PWM: 1000 us (stop) to 2000 us (full) at 400 Hz; OneShot125: 125 us to
 //! 250 us, one pulse per control step. The board's timers turn the width into compare counts.
 

@@ -1,4 +1,4 @@
-//! Why the STM32H7 last reset (issue 13), from its reset status register `RCC_RSR` (RM0433
+//! Why the STM32H7 last reset, from its reset status register `RCC_RSR` (RM0433
 //! section 8.7.39: flags in bits 16..=30, cleared by writing `RMVF`, bit 16). After a watchdog
 //! reset the firmware comes up disarmed and tells the ground why.
 

@@ -1,4 +1,4 @@
-//! One robot's rail axis on a TMC2209 (issue 13): the rack and pinion turn metres of arc into
+//! One robot's rail axis on a TMC2209: the rack and pinion turn metres of arc into
 //! microsteps; the axis follows the commanded position (`shared`'s trapezoidal rail profiles,
 //! sampled each update) by velocity (`VACTUAL`), and keeps its own arc length from the
 //! velocities it actually commanded, as the driver has no position counter over UART. A

@@ -1,4 +1,4 @@
-//! Rotor thrust to ESC command (issue 13): a piecewise-linear table, replaceable by a bench
+//! Rotor thrust to ESC command: a piecewise-linear table, replaceable by a bench
 //! calibration. The paper's map came from the motor maker's data and over-read thrust; ours is
 //! a parameter table (`THR_MAP_20` .. `THR_MAP_80`): the thrust each command of 20, 40, 60 and
 //! 80 % gives, as a fraction of the thrust at 100 % (the rotor's maximum thrust, which the

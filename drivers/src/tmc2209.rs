@@ -1,4 +1,4 @@
-//! The TMC2209 stepper driver's single-wire UART (issue 13; Trinamic TMC2209 datasheet rev.
+//! The TMC2209 stepper driver's single-wire UART (Trinamic TMC2209 datasheet rev.
 //! 1.09, section 4 "UART Single Wire Interface" and section 5 "Register Map"): datagrams with
 //! their CRC8, register packing, the motor current setting and the `VACTUAL` velocity unit.
 //!

@@ -1,5 +1,5 @@
-//! What the fuzz targets (`fuzz_targets/`) run, and the seed corpora they start from (issue
-//! 15, "Hostile input"). See `fuzz/README.md`.
+//! What the fuzz targets (`fuzz_targets/`) run, and the seed corpora they start from. See
+//! `fuzz/README.md`.
 //!
 //! Two source files of crates that do not build here are compiled in as they are, so the
 //! targets run exactly their code:

@@ -1,6 +1,6 @@
 //! One full 400 Hz flight tick as the firmware runs it, with 8 rotors: the navigator (attitude
 //! filter, position observer) and the flight stack (plan, nets, cascade, allocation), hovering
-//! (issue: a few microseconds on the target).
+//! (it must take a few microseconds on the target).
 //!
 //! `cargo bench -p host-sim --bench control`. Host figures; `.ci/target-bench` counts the same
 //! tick's instructions on the Cortex-M7.

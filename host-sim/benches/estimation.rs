@@ -1,8 +1,8 @@
-//! Speed of the estimator's steps as the flight controller runs them (issue: one full pair
-//! selection on the L-shape grid must stay well under 10 ms on a 480 MHz Cortex-M7).
+//! Speed of the estimator's steps as the flight controller runs them (one full pair selection
+//! on the L-shape grid must stay well under 10 ms on a 480 MHz Cortex-M7).
 //!
-//! `cargo bench -p host-sim --bench estimation`. The figures are host times; see the issue
-//! note for the ratio used to carry them to the Cortex-M7.
+//! `cargo bench -p host-sim --bench estimation`. The figures are host times; the Cortex-M7's
+//! own come from `bash .ci/target-bench` (instruction counts under QEMU).
 
 use std::hint::black_box;
 use std::path::Path;

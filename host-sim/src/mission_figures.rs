@@ -1,7 +1,7 @@
 //! What `mission --output DIR` writes about the flight: the robots' rail positions, each
 //! rotor's thrust and the payload's roll and pitch over time, as one PNG of three panels
 //! (plotters) with the injected load shift and each in-flight re-formation marked, and the
-//! same samples as CSV (the adaptation issue: a load that shifts in flight); beside them the
+//! same samples as CSV (a load that shifts in flight, docs/system.md#in-flight-adaptation); beside them the
 //! whole mission on one page ([`crate::figures::mission_summary`], PNG and SVG).
 
 use std::fs;

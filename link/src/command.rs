@@ -1,5 +1,5 @@
-//! The MAVLink command service (`COMMAND_LONG` answered by `COMMAND_ACK`) as the vehicle
-//! reads it: which operator command a request is (issue 11, sections 1 and 3).
+//! The MAVLink command service (`COMMAND_LONG` answered by `COMMAND_ACK`) as the vehicle reads it:
+//! which operator command a request is.
 //!
 //! | `COMMAND_LONG` | meaning |
 //! |---|---|

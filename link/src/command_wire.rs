@@ -1,5 +1,5 @@
 //! `COMMAND_LONG` and `COMMAND_ACK` with the command as its number (MAVLink's `MAV_CMD`, any
-//! `u16`), for the vehicle's command service (issue 14: every command gets its `COMMAND_ACK`).
+//! `u16`), for the vehicle's command service (every command gets its `COMMAND_ACK`).
 //!
 //! The `mavlink` crate decodes a command into its `MavCmd` enum: a command number the dialect
 //! does not list fails to decode (so it could not be acknowledged), and the conversion is a

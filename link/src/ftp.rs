@@ -1,6 +1,5 @@
 //! MAVLink FTP (the MAVLink "File Transfer Protocol" service, `FILE_TRANSFER_PROTOCOL`):
-//! how a ground station writes the payload description to the vehicle before the mission
-//! (issue 11, section 3).
+//! how a ground station writes the payload description to the vehicle before the mission.
 //!
 //! The `FILE_TRANSFER_PROTOCOL` payload (251 bytes) carries, little-endian: `seq_number` u16,
 //! `session` u8, `opcode` u8, `size` u8, `req_opcode` u8, `burst_complete` u8, padding u8,

@@ -1,5 +1,5 @@
-//! Hardware in the loop as PX4's simulator MAVLink API has it (PX4 `simulator_mavlink`, issue 11
-//! section 3), in lockstep.
+//! Hardware in the loop as PX4's simulator MAVLink API has it (PX4 `simulator_mavlink`), in
+//! lockstep.
 //!
 //! Plant to vehicle:
 //! - `HIL_SENSOR` (sensor id 0) at the IMU rate: body-frame (FRD) specific force in m/s^2
@@ -385,7 +385,7 @@ impl VehicleClock {
     }
 }
 
-/// When a job's result is due (issue 11, section 1): a fixed number of control steps after the
+/// When a job's result is due: a fixed number of control steps after the
 /// step that asked for it, whatever the speed of the processor or the emulator. At that step
 /// the vehicle takes the result, and in lockstep holds its reply until the job is done, as
 /// PX4's lockstep waits for its modules.

@@ -1,4 +1,4 @@
-//! The vehicle's MAVLink link as plain, synchronous, `no_std` logic (issue 11, section 3):
+//! The vehicle's MAVLink link as plain, synchronous, `no_std` logic:
 //! what the firmware and the hardware-in-the-loop plant say to each other, and how.
 //!
 //! - [`frame`]: MAVLink 2 framing: a byte-at-a-time parser that survives any byte stream, and

@@ -1,4 +1,4 @@
-//! `ODOMETRY` from a motion-capture system (issue 14), read for what the vehicle flies on: the
+//! `ODOMETRY` from a motion-capture system, read for what the vehicle flies on: the
 //! pose, its time, its frames and the estimator type (an extension field).
 //!
 //! The `mavlink` crate's decoder reads all 230 bytes into enums and covariance arrays the

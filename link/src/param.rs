@@ -1,5 +1,5 @@
-//! MAVLink's parameter protocol, vehicle side (MAVLink "Parameter Protocol"; issue 14,
-//! "Parameters"), over the mission's table of `shared::mission::params`: every parameter a
+//! MAVLink's parameter protocol, vehicle side (MAVLink "Parameter Protocol"), over the
+//! mission's table of `shared::mission::params`: every parameter a
 //! 32-bit float (`MAV_PARAM_TYPE_REAL32`), numbered in table order.
 //!
 //! | request | answer |

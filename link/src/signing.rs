@@ -1,4 +1,4 @@
-//! MAVLink 2 message signing (MAVLink's "Message signing" spec; issue 14): once a secret key
+//! MAVLink 2 message signing (MAVLink's "Message signing" spec): once a secret key
 //! is set, every frame the vehicle sends carries a signature, and received frames are checked
 //! for theirs, so the vehicle knows which commands come from a ground station holding the key.
 //!
@@ -385,7 +385,7 @@ mod tests {
         assert!(stamp(&b) > stamp(&a));
     }
 
-    /// Found by the `link_input` fuzz target (issue 15): a `SETUP_SIGNING` whose timestamp
+    /// Found by the `link_input` fuzz target: a `SETUP_SIGNING` whose timestamp
     /// is near the end of the 48 bits made the vehicle's timestamp wrap to 0, so the ground
     /// took every later frame of the vehicle for a replay, and the vehicle took a frame signed
     /// long ago, from a stream it had not heard, for a new one.

@@ -1,4 +1,4 @@
-//! The payload description's storage (issue 14: "stored the same way" as the parameters): two
+//! The payload description's storage ("stored the same way" as the parameters): two
 //! slots on a NOR flash, written in turn, so a power cut at any instant leaves the last whole
 //! description readable.
 //!

@@ -1,6 +1,6 @@
 //! What the vehicle tells people and tools: `STATUSTEXT` for events (every mission transition,
-//! refusals naming the key), `NAMED_VALUE_FLOAT`/`NAMED_VALUE_INT` for numbers (issue 11,
-//! section 3), so any MAVLink tool can show them.
+//! refusals naming the key), `NAMED_VALUE_FLOAT`/`NAMED_VALUE_INT` for numbers, so any MAVLink tool
+//! can show them.
 //!
 //! A text longer than one `STATUSTEXT` (50 bytes) goes out in chunks sharing a non-zero `id`,
 //! numbered by `chunk_seq`; the last chunk is shorter than 50 bytes (an empty one follows a

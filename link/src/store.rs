@@ -1,4 +1,4 @@
-//! Parameter storage that survives a power cut at any instant (issue 14, "Parameters"): a
+//! Parameter storage that survives a power cut at any instant: a
 //! `sequential-storage` map over any NOR flash (`embedded-storage-async`), keyed by the
 //! parameter's name, one item per changed parameter.
 //!

@@ -1,4 +1,4 @@
-//! Telemetry at set rates (issue 14): `SYS_STATUS`, `ATTITUDE_QUATERNION`,
+//! Telemetry at set rates: `SYS_STATUS`, `ATTITUDE_QUATERNION`,
 //! `LOCAL_POSITION_NED` and each robot's rail position (`DEBUG_FLOAT_ARRAY` named `rail`: the
 //! formation once the robots have moved to it), each on its own interval that a ground station sets with
 //! `MAV_CMD_SET_MESSAGE_INTERVAL` (or asks for once with `MAV_CMD_REQUEST_MESSAGE`), as

@@ -1,4 +1,4 @@
-//! MAVLink's time synchronisation (`TIMESYNC`, issue 14): the motion-capture computer's clock
+//! MAVLink's time synchronisation (`TIMESYNC`): the motion-capture computer's clock
 //! mapped to the flight controller's, so a fix's own timestamp says when it was taken in the
 //! vehicle's time (the estimators compensate the fix's latency from it).
 //!

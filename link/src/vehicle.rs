@@ -1,5 +1,5 @@
 //! The vehicle's dispatch of received frames: which of its services a frame is for, decoded and
-//! checked (issue 11, section 3). Only the messages the vehicle handles are decoded, so the
+//! checked. Only the messages the vehicle handles are decoded, so the
 //! firmware links those decoders and no others (decoding the whole dialect costs ~80 KB).
 
 use mavlink::MessageData;

@@ -1,12 +1,12 @@
-//! Property tests of the operator's commands against the whole mission (issue 15, "Hostile
-//! input"): no sequence of commands (start, abort, land, kill, arm, disarm, parameter writes,
-//! in any order and any phase) makes the mission panic, arm the rotors in a ground phase, or
-//! stop them in flight except on kill; and a vehicle that restarts (a watchdog reset or a
-//! power glitch, in flight or not) comes up disarmed and never arms by itself: what decides
-//! that is the mission of `shared` (a fresh mission is idle and arms only after a start) and
-//! the firmware's start (`Autonomy::new`, the stored payload loaded into an idle mission),
-//! mirrored by [`Vehicle::restart`]. (The reset's cause, `drivers::reset`, only tells the
-//! ground; the ESC outputs stop while no step commands them, `drivers::esc_gate`.)
+//! Property tests of the operator's commands against the whole mission: no sequence of commands
+//! (start, abort, land, kill, arm, disarm, parameter writes, in any order and any phase) makes the
+//! mission panic, arm the rotors in a ground phase, or stop them in flight except on kill; and a
+//! vehicle that restarts (a watchdog reset or a power glitch, in flight or not) comes up disarmed
+//! and never arms by itself: what decides that is the mission of `shared` (a fresh mission is idle
+//! and arms only after a start) and the firmware's start (`Autonomy::new`, the stored payload
+//! loaded into an idle mission), mirrored by [`Vehicle::restart`]. (The reset's cause,
+//! `drivers::reset`, only tells the ground; the ESC outputs stop while no step commands them,
+//! `drivers::esc_gate`.)
 //!
 //! The commands go the way the firmware takes them, through this crate's own functions: each
 //! is a `COMMAND_LONG` as a ground station sends it, decoded from its wire bytes and read by

@@ -1,4 +1,4 @@
-//! The parameter store over many power cuts in one flash's life (issue 15: "the parameter
+//! The parameter store over many power cuts in one flash's life ("the parameter
 //! store keeps the old or the new value after a power cut at any write step, over thousands
 //! of random cuts").
 //!

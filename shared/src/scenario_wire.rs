@@ -1,6 +1,6 @@
 //! The payload description as a compact binary file: what a ground station (or the HIL plant)
 //! writes to the flight controller over MAVLink FTP before the mission starts
-//! (docs/formats.md#payload-description-wire-format; issue 11, section 3).
+//! (docs/formats.md#payload-description-wire-format).
 //!
 //! It carries the sections the vehicle needs: `payload`, `robots`, `estimation`, `formation`
 //! and, when present, `flight` (the target). Never the `truth`: the vehicle must find the

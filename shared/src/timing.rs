@@ -129,7 +129,7 @@ mod tests {
         );
     }
 
-    /// Found by the `link_input` fuzz target (issue 15): a `HIL_SENSOR` whose time jumps by
+    /// Found by the `link_input` fuzz target: a `HIL_SENSOR` whose time jumps by
     /// more than half of `u64` overflowed the overrun test (`2 * period`).
     #[test]
     fn a_clock_jump_past_half_of_u64_is_an_overrun_not_an_overflow() {

@@ -1,5 +1,6 @@
-//! Instruction counts of `shared`'s hot paths on a Cortex-M7 (issues: pair selection well
-//! under 10 ms at 480 MHz; formation bounded; one 400 Hz step a few microseconds).
+//! Instruction counts of `shared`'s hot paths on a Cortex-M7 (pair selection well under 10 ms
+//! at 480 MHz; the formation solve bounded; one 400 Hz step a few microseconds;
+//! docs/firmware.md#optimisation-settings has the goals and the figures).
 //!
 //! Runs under QEMU's mps2-an500 with `-icount shift=0`, where each instruction advances the
 //! virtual clock by 1 ns and SysTick counts the 25 MHz core clock: one tick is 40

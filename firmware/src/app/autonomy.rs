@@ -1,4 +1,4 @@
-//! The one seam between the firmware and the autonomy (issue 11, sections 1 and 2): the
+//! The one seam between the firmware and the autonomy: the
 //! mission of `shared`, exactly the code the simulator flies.
 //!
 //! The control task calls [`Autonomy::tick`] once per IMU sample (400 Hz) with a [`TickInput`]

@@ -1,4 +1,4 @@
-//! The MAVLink link's two tasks, on the link executor (issue 11, section 3): receiving
+//! The MAVLink link's two tasks, on the link executor: receiving
 //! (framing, dispatch to the services, the FTP server, the payload's checks, the parameter
 //! service and its store) and sending (each
 //! control step's messages in order, replies, heartbeat). The protocol logic is the `link`

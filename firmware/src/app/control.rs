@@ -1,5 +1,4 @@
-//! The control task: one step of the autonomy per IMU sample, at the highest priority (issue
-//! 11, sections 1 to 3).
+//! The control task: one step of the autonomy per IMU sample, at the highest priority.
 //!
 //! In hardware-in-the-loop the sample is the plant's `HIL_SENSOR` and the vehicle's clock is
 //! its time (PX4 lockstep): the step runs when it arrives and its reply, the actuator

@@ -1,5 +1,5 @@
 //! The job task: the autonomy's long computations, in thread mode, below both interrupt
-//! executors (issue 11, section 1). The control step keeps its period while a job runs: it
+//! executors. The control step keeps its period while a job runs: it
 //! preempts this task at every sample.
 //!
 //! It owns the mission's job side, the [`MissionPlanner`] with the estimator's grid-sized

@@ -1,4 +1,4 @@
-//! The application, written once for every board (issue 11, section 2): four tasks on three
+//! The application, written once for every board: four tasks on three
 //! executors, embassy's multi-priority pattern.
 //!
 //! | task | executor | does |

@@ -1,4 +1,4 @@
-//! The Pixhawk 6C's eight ESC outputs (issue 13): FMU_CH1-4 on TIM1 CH1-4 (PA8, PE11, PE13,
+//! The Pixhawk 6C's eight ESC outputs: FMU_CH1-4 on TIM1 CH1-4 (PA8, PE11, PE13,
 //! PE14), FMU_CH5-6 on TIM4 CH3-4 (PD14, PD15), FMU_CH7-8 on TIM5 CH1-2 (PA0, PA1), as PX4's
 //! `fmu-v6c/src/timer_config.cpp` assigns them.
 //!

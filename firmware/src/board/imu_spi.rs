@@ -1,4 +1,4 @@
-//! The Pixhawk 6C's ICM-42688-P on SPI1 (issue 13): SCK PA5, MISO PA6, MOSI PA7, chip select
+//! The Pixhawk 6C's ICM-42688-P on SPI1: SCK PA5, MISO PA6, MOSI PA7, chip select
 //! PC13, data ready (INT1) PE6, as PX4's `fmu-v6c/src/spi.cpp` wires it; mounted yaw 270 deg
 //! (`init/rc.board_sensors`: `icm42688p -R 6`). The driver core is [`drivers::icm42688`] and
 //! [`drivers::imu`]; this task is its glue.

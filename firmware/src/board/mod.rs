@@ -1,5 +1,5 @@
-//! The boards the application runs on, and the small interface each one gives it (issue 11,
-//! section 2). One board per build, chosen by cargo feature:
+//! The boards the application runs on, and the small interface each one gives it. One board per
+//! build, chosen by cargo feature:
 //!
 //! | feature | board | binary |
 //! |---|---|---|

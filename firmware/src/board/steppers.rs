@@ -1,4 +1,4 @@
-//! The robots' steppers on the Pixhawk 6C (issue 13): TMC2209 drivers on two single-wire UART
+//! The robots' steppers on the Pixhawk 6C: TMC2209 drivers on two single-wire UART
 //! buses, TELEM2 (UART5, TX PC12, RX PD2) for robots 1-4 and TELEM3 (USART2, TX PD5, RX PA3)
 //! for robots 5-8, node addresses 0-3 on each (MS1/MS2), at [`BAUD`]. The wiring is the
 //! datasheet's for a standard UART: TX through 1 kOhm and RX directly to the drivers' PDN_UART

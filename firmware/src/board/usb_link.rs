@@ -1,4 +1,4 @@
-//! MAVLink over the Pixhawk 6C's USB (issue 13): a CDC-ACM serial port (embassy-usb) on the
+//! MAVLink over the Pixhawk 6C's USB: a CDC-ACM serial port (embassy-usb) on the
 //! full-speed OTG peripheral (D- PA11, D+ PA12, VBUS sensed on PA9, as PX4's fmu-v6c
 //! `board.h` has it), so a laptop sees `/dev/ttyACM0` and `host-sim hil --serial /dev/ttyACM0`
 //! is the bench set-up with a real board.

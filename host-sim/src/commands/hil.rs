@@ -1,7 +1,7 @@
-//! `host-sim hil`: the mission with the firmware in the loop (docs/formats.md#hil; issue 11,
-//! section 3): the plant side of PX4's simulator MAVLink API, in lockstep. The firmware runs
-//! under QEMU (`--qemu ELF`, started here), on a board over a serial device (`--serial DEV`),
-//! or behind any TCP socket (`--connect tcp:HOST:PORT`).
+//! `host-sim hil`: the mission with the firmware in the loop (docs/formats.md#hil): the plant side
+//! of PX4's simulator MAVLink API, in lockstep. The firmware runs under QEMU (`--qemu ELF`, started
+//! here), on a board over a serial device (`--serial DEV`), or behind any TCP socket (`--connect
+//! tcp:HOST:PORT`).
 //!
 //! Prints what the firmware says as it says it; `--json` prints one object with the keys of
 //! `mission` plus `firmware` (the board it reported) and `ticks` (lockstep exchanges). Exit

@@ -1,4 +1,4 @@
-//! `host-sim params`: the vehicle's parameters (issue 14): every tunable of the mission the
+//! `host-sim params`: the vehicle's parameters: every tunable of the mission the
 //! firmware serves over MAVLink's parameter protocol, with unit, range, default and what it
 //! does, from the table the firmware runs (`shared::mission::params`). The README's list is
 //! this output (a test keeps the two equal).

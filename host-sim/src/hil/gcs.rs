@@ -1,4 +1,4 @@
-//! The ground-station bridge of `hil --gcs udp:HOST:PORT` (issue 11, section 3), as PX4's
+//! The ground-station bridge of `hil --gcs udp:HOST:PORT`, as PX4's
 //! HITL bridge does it: every MAVLink frame between the firmware and a ground station
 //! (QGroundControl, MAVProxy, pymavlink) passes through, except the simulator's own HIL
 //! messages, so the tool watches and commands the simulated vehicle.

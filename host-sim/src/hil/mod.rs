@@ -1,5 +1,5 @@
 //! Hardware in the loop: the plant side of PX4's simulator MAVLink API, in lockstep, against
-//! the real firmware (issue 11, section 3; docs/firmware.md#hil-protocol).
+//! the real firmware (docs/firmware.md#hil-protocol).
 //!
 //! - [`transport`]: the byte link (QEMU's UART on a local socket, a serial device), framed.
 //! - [`qemu`]: runs the firmware's QEMU image under `qemu-system-arm`.

@@ -1,5 +1,5 @@
 //! `hil`: the firmware as the autopilot of the `mission` command's plant loop
-//! ([`crate::mission_run::fly`]), in lockstep (issue 11, section 3).
+//! ([`crate::mission_run::fly`]), in lockstep.
 //!
 //! Before the loop: the firmware says who it is and takes the payload description over
 //! MAVLink FTP. Each control step (400 Hz): the motion-capture fix due and the IMU sample go

@@ -1,4 +1,4 @@
-//! The plant's conversation with the firmware (issue 11, section 3): who it is, the payload
+//! The plant's conversation with the firmware: who it is, the payload
 //! description over MAVLink FTP, the start command, and the lockstep steps, with everything
 //! the firmware says along the way (texts, values, acknowledgements, heartbeats) logged.
 //!

@@ -1,4 +1,4 @@
-//! The IMU's own plausibility, checked every control tick (issue 15, `imu-stuck` and
+//! The IMU's own plausibility, checked every control tick (`imu-stuck` and
 //! `imu-noise`): a sensor that repeats its last sample (frozen) or whose samples jump far more
 //! from tick to tick than sensor noise and the vehicle's motion can make (wildly noisy). The
 //! board's driver catches a sensor that stops answering or reads at full scale

@@ -1,4 +1,4 @@
-//! A rotor that stops in flight, found from the vehicle's response (issue 15, `rotor-out`).
+//! A rotor that stops in flight, found from the vehicle's response (`rotor-out`).
 //!
 //! What it implements: actuator failure detection and isolation with a momentum residual
 //! (A. De Luca, R. Mattone, "Actuator failure detection and isolation using generalized

@@ -1,4 +1,4 @@
-//! The vehicle's hardware settings, which the flight controller's drivers read (issue 13): the
+//! The vehicle's hardware settings, which the flight controller's drivers read: the
 //! ESC protocol and the thrust map, the steppers' drive train, current and stall threshold.
 //! They are parameters like the mission's tuning ([`super::params`]), so a bench calibration
 //! replaces them without a new image; the mission itself does not use them.

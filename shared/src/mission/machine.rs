@@ -117,7 +117,7 @@ pub struct CommandReply {
     pub outcome: Result<(), CommandRefusal>,
 }
 
-/// Failures the flight controller's drivers report (issue 13): what the mission must not
+/// Failures the flight controller's drivers report: what the mission must not
 /// ignore. On the ground either stops the mission; in flight it lands where it is.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct HardwareFaults {

@@ -1,4 +1,4 @@
-//! The mission's tunables as named 32-bit float parameters (issue 14, "Parameters"): every
+//! The mission's tunables as named 32-bit float parameters: every
 //! field of [`MissionConfig`] an operator may change, with its unit, its range and what it
 //! does, in one table. The ground link (`link::param`) serves this table over MAVLink's
 //! parameter protocol and stores its values; the mission reads them back through
@@ -972,7 +972,7 @@ pub fn markdown_table(out: &mut impl core::fmt::Write) -> core::fmt::Result {
 mod tests {
     use super::*;
 
-    /// Found writing the `link_input` fuzz target (issue 15): the derived `PartialEq` compared
+    /// Found writing the `link_input` fuzz target: the derived `PartialEq` compared
     /// the storage, where NaN marks a parameter never set, so the defaults did not equal
     /// themselves.
     #[test]

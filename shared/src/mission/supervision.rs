@@ -1,4 +1,4 @@
-//! What the mission watches beyond its sensors (issue 15): the ground link and the battery.
+//! What the mission watches beyond its sensors: the ground link and the battery.
 //!
 //! - The ground link: a ground station sends `HEARTBEAT` once a second. [`LinkMonitor`] calls
 //!   the link lost when none has come for [`SupervisionConfig::gcs_timeout`] seconds (PX4's

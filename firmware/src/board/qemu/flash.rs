@@ -1,4 +1,4 @@
-//! A NOR flash for QEMU whose bytes outlive the emulator (issue 14, "Parameters"): a host
+//! A NOR flash for QEMU whose bytes outlive the emulator: a host
 //! file, `firmware-params.bin` in QEMU's working directory, reached through semihosting file
 //! I/O (`SYS_OPEN`, `SYS_SEEK`, `SYS_READ`, `SYS_WRITE`; QEMU's `-semihosting-config
 //! enable=on,target=native`). It behaves as NOR flash does: erase sets whole pages to 0xFF, a
