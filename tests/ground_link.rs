@@ -4,10 +4,10 @@
 //! the mission started from the ground and followed to the landing. What it checks is
 //! listed at the top of the script.
 //!
-//! Needs `python3` with `pymavlink`, `qemu-system-arm` and the image
-//! `target/thumbv7em-none-eabihf/release/firmware-qemu` (`cargo fw-qemu`; or
-//! `FIRMWARE_QEMU_ELF`). Without one of them the test says it was skipped and why, and
-//! passes; with `HIL_REQUIRED=1` (CI, which installs them) it fails instead.
+//! Needs `python3` with `pymavlink` and `qemu-system-arm`; it builds the firmware's QEMU
+//! image itself (`FIRMWARE_QEMU_ELF` names another). Without one of them the test says it
+//! was skipped and why, and passes; with `HIL_REQUIRED=1` (CI, which installs them) it fails
+//! instead.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -16,16 +16,6 @@ use host_sim::hil::qemu;
 
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn firmware_image() -> PathBuf {
-    if let Some(p) = std::env::var_os("FIRMWARE_QEMU_ELF") {
-        return PathBuf::from(p);
-    }
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| workspace().join("target"));
-    target.join("thumbv7em-none-eabihf/release/firmware-qemu")
 }
 
 fn skip(reason: &str) {
@@ -42,16 +32,13 @@ const NO_PYMAVLINK: i32 = 2;
 
 #[test]
 fn a_pymavlink_ground_station_tunes_restarts_and_flies_the_firmware() {
-    let elf = firmware_image();
     if !qemu::available() {
         return skip("qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)");
     }
-    if !elf.is_file() {
-        return skip(&format!(
-            "the firmware image {} is not built (cargo fw-qemu)",
-            elf.display()
-        ));
-    }
+    let elf = match qemu::test_image(&workspace()) {
+        Ok(elf) => elf,
+        Err(why) => return skip(&why),
+    };
     let script = workspace().join("tests/ground_station.py");
     let output = match Command::new("python3")
         .arg(&script)

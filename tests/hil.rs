@@ -1,10 +1,10 @@
 //! Hardware in the loop under QEMU: the firmware's ARM image
 //! (`cargo fw-qemu`) on `qemu-system-arm -M mps2-an500`, the plant in lockstep over MAVLink.
 //!
-//! These tests need `qemu-system-arm` and the image at
-//! `target/thumbv7em-none-eabihf/release/firmware-qemu` (or `FIRMWARE_QEMU_ELF`). Without
-//! them each test says it was skipped and why, and passes; with `HIL_REQUIRED=1` (CI) it
-//! fails instead. One QEMU runs at a time.
+//! These tests need `qemu-system-arm`; they build the firmware's QEMU image themselves (the
+//! build `cargo fw-qemu` stands for; `FIRMWARE_QEMU_ELF` names another). Without QEMU each
+//! test says it was skipped and why, and passes; with `HIL_REQUIRED=1` (CI) it fails instead.
+//! One QEMU runs at a time.
 //!
 //! The main test flies rect-ex1 and L-sim1 through the firmware and compares them with the
 //! same missions run in this process (`host-sim mission`, same seed): the firmware runs the
@@ -35,29 +35,16 @@ fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-fn firmware_image() -> PathBuf {
-    if let Some(p) = std::env::var_os("FIRMWARE_QEMU_ELF") {
-        return PathBuf::from(p);
-    }
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| workspace().join("target"));
-    target.join("thumbv7em-none-eabihf/release/firmware-qemu")
-}
-
-/// The firmware image if the test can run; otherwise says why it is skipped (or, with
-/// `HIL_REQUIRED=1`, fails).
+/// The firmware image if the test can run (built first when it is missing or stale);
+/// otherwise says why it is skipped (or, with `HIL_REQUIRED=1`, fails).
 fn image_or_skip(test: &str) -> Option<PathBuf> {
-    let elf = firmware_image();
     let reason = if !qemu::available() {
         "qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)".to_string()
-    } else if !elf.is_file() {
-        format!(
-            "the firmware image {} is not built (cargo fw-qemu)",
-            elf.display()
-        )
     } else {
-        return Some(elf);
+        match qemu::test_image(&workspace()) {
+            Ok(elf) => return Some(elf),
+            Err(why) => why,
+        }
     };
     if std::env::var("HIL_REQUIRED").is_ok_and(|v| v == "1") {
         panic!("{test}: HIL_REQUIRED=1 but {reason}");

@@ -93,6 +93,56 @@ enum Serial {
     },
 }
 
+/// Where `cargo fw-qemu` puts the image, for the workspace at `workspace` (honouring
+/// `CARGO_TARGET_DIR`).
+pub fn image_path(workspace: &Path) -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| workspace.join("target"))
+        .join("thumbv7em-none-eabihf/release/firmware-qemu")
+}
+
+/// The firmware's QEMU image for the tests: `FIRMWARE_QEMU_ELF` when set, otherwise the
+/// workspace's own, built (or brought up to date) first with the command `cargo fw-qemu`
+/// stands for, so `cargo test` flies the firmware as it is in the tree with no step before it.
+/// The build runs once per process; its failure is an error with cargo's last lines.
+pub fn test_image(workspace: &Path) -> Result<PathBuf, String> {
+    if let Some(p) = std::env::var_os("FIRMWARE_QEMU_ELF") {
+        return Ok(PathBuf::from(p));
+    }
+    static BUILT: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
+    BUILT
+        .get_or_init(|| {
+            let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+            let output = Command::new(cargo)
+                .current_dir(workspace)
+                .args([
+                    "build",
+                    "-p",
+                    "firmware",
+                    "--release",
+                    "--target",
+                    "thumbv7em-none-eabihf",
+                    "--features",
+                    "qemu",
+                    "--bin",
+                    "firmware-qemu",
+                ])
+                .output()
+                .map_err(|e| format!("cargo could not be run to build the firmware image ({e})"))?;
+            if !output.status.success() {
+                let stderr = String::from_utf8_lossy(&output.stderr);
+                let tail: Vec<&str> = stderr.lines().rev().take(6).collect();
+                return Err(format!(
+                    "the firmware image did not build (cargo fw-qemu): {}",
+                    tail.into_iter().rev().collect::<Vec<_>>().join(" / ")
+                ));
+            }
+            Ok(image_path(workspace))
+        })
+        .clone()
+}
+
 /// Whether `qemu-system-arm` can be run here.
 pub fn available() -> bool {
     Command::new(QEMU)

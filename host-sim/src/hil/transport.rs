@@ -261,6 +261,9 @@ pub fn write_frame(writer: &SharedWriter, bytes: &[u8]) -> Result<()> {
     w.flush().context("writing to the firmware")
 }
 
+/// How long a read looks for a datagram before it blocks.
+const SPIN: Duration = Duration::from_micros(500);
+
 /// Reads the MAVLink bytes of the Ethernet frames QEMU sends as datagrams.
 struct FrameReader {
     socket: UdpSocket,
@@ -273,7 +276,20 @@ struct FrameReader {
 impl Read for FrameReader {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
         while self.at >= self.end {
-            let n = match self.socket.recv(&mut self.datagram) {
+            // The firmware answers a step within a fraction of a millisecond: look for the
+            // answer without sleeping for that long, which spares the wake-up of a blocked
+            // read (a context switch) on each step; then block as usual.
+            let spin_until = Instant::now() + SPIN;
+            let mut got = None;
+            while got.is_none() && Instant::now() < spin_until {
+                got = recv_now(&self.socket, &mut self.datagram);
+                std::hint::spin_loop();
+            }
+            let received = match got {
+                Some(n) => Ok(n),
+                None => self.socket.recv(&mut self.datagram),
+            };
+            let n = match received {
                 Ok(n) => n,
                 // A datagram sent before QEMU opened its socket came back refused: nothing to
                 // read yet.
@@ -294,6 +310,30 @@ impl Read for FrameReader {
         self.at += n;
         Ok(n)
     }
+}
+
+/// A datagram already waiting on `socket`, without blocking (`MSG_DONTWAIT`); `None` when
+/// there is none (or the socket reports an error, which the blocking read then returns).
+#[cfg(unix)]
+fn recv_now(socket: &UdpSocket, buf: &mut [u8]) -> Option<usize> {
+    use std::os::fd::AsRawFd;
+    // SAFETY: `buf` is valid for `buf.len()` bytes for the call; the descriptor is the open
+    // socket's.
+    let n = unsafe {
+        libc::recv(
+            socket.as_raw_fd(),
+            buf.as_mut_ptr().cast(),
+            buf.len(),
+            libc::MSG_DONTWAIT,
+        )
+    };
+    usize::try_from(n).ok()
+}
+
+/// Elsewhere the read blocks at once.
+#[cfg(not(unix))]
+fn recv_now(_socket: &UdpSocket, _buf: &mut [u8]) -> Option<usize> {
+    None
 }
 
 /// Gathers written bytes and sends them on `flush` as Ethernet frames, one datagram each.

@@ -127,11 +127,98 @@ fn reproduces<const R: usize>(product: &SMatrix<f32, R, R>) -> bool {
     })
 }
 
-/// The pseudo-inverse `a^T (a a^T)^-1` of thrust, roll and pitch rows, if they are
-/// independent.
-fn right_inverse(a: &Rows3) -> Option<SMatrix<f32, MAX_ROBOTS, 3>> {
-    let m = a.transpose() * (a * a.transpose()).try_inverse()?;
-    (m.iter().all(|v| v.is_finite()) && reproduces(&(a * m))).then_some(m)
+/// The columns of `a`, each as an array (nalgebra stores a matrix column after column).
+fn columns_of<const R: usize>(a: &SMatrix<f32, R, MAX_ROBOTS>) -> [[f32; R]; MAX_ROBOTS] {
+    let data = a.as_slice();
+    core::array::from_fn(|i| core::array::from_fn(|r| data[i * R + r]))
+}
+
+/// The right pseudo-inverse `a^T (a a^T)^-1` of `a`'s first `count` columns (the rest of
+/// `a` is zero, and so are the result's rows past `count`), or `None` when `a a^T` is not
+/// positive definite (the rows are not independent). `a a^T = L D L^T` (`L` unit lower
+/// triangular), and each rotor's row of the result solves `L D L^T m_i = a_i` for its column
+/// `a_i`: products over the rotors in use only and no explicit inverse (a rebuild is a job;
+/// this is most of its cost).
+fn pseudo_inverse<const R: usize>(
+    a: &SMatrix<f32, R, MAX_ROBOTS>,
+    count: usize,
+) -> Option<SMatrix<f32, MAX_ROBOTS, R>> {
+    let all = columns_of(a);
+    let columns = &all[..count.min(MAX_ROBOTS)];
+    let mut gram = [[0.0f32; R]; R];
+    for col in columns {
+        for r in 0..R {
+            for c in 0..=r {
+                gram[r][c] += col[r] * col[c];
+            }
+        }
+    }
+    let mut l = [[0.0f32; R]; R];
+    let mut d = [0.0f32; R];
+    let mut inv_d = [0.0f32; R];
+    for j in 0..R {
+        let mut dj = gram[j][j];
+        for k in 0..j {
+            dj -= l[j][k] * l[j][k] * d[k];
+        }
+        if !(dj > 0.0 && dj.is_finite()) {
+            return None;
+        }
+        d[j] = dj;
+        inv_d[j] = 1.0 / dj;
+        for i in j + 1..R {
+            let mut v = gram[i][j];
+            for k in 0..j {
+                v -= l[i][k] * l[j][k] * d[k];
+            }
+            l[i][j] = v * inv_d[j];
+        }
+    }
+    let mut rows = [[0.0f32; R]; MAX_ROBOTS];
+    for (row, col) in rows.iter_mut().zip(columns) {
+        // L y = a_i, D z = y, L^T x = z.
+        let mut y = *col;
+        for r in 0..R {
+            for k in 0..r {
+                y[r] -= l[r][k] * y[k];
+            }
+        }
+        for r in 0..R {
+            y[r] *= inv_d[r];
+        }
+        for r in (0..R).rev() {
+            for k in r + 1..R {
+                y[r] -= l[k][r] * y[k];
+            }
+        }
+        *row = y;
+    }
+    Some(SMatrix::<f32, MAX_ROBOTS, R>::from_fn(|i, k| rows[i][k]))
+}
+
+/// `a m` over the first `count` rotors.
+fn product<const R: usize>(
+    a: &SMatrix<f32, R, MAX_ROBOTS>,
+    m: &SMatrix<f32, MAX_ROBOTS, R>,
+    count: usize,
+) -> SMatrix<f32, R, R> {
+    let mut p = [[0.0f32; R]; R];
+    for (i, col) in columns_of(a).iter().take(count).enumerate() {
+        for c in 0..R {
+            let share = m[(i, c)];
+            for r in 0..R {
+                p[r][c] += col[r] * share;
+            }
+        }
+    }
+    SMatrix::<f32, R, R>::from_fn(|r, c| p[r][c])
+}
+
+/// The pseudo-inverse `a^T (a a^T)^-1` of thrust, roll and pitch rows of `count` rotors, if
+/// they are independent.
+fn right_inverse(a: &Rows3, count: usize) -> Option<SMatrix<f32, MAX_ROBOTS, 3>> {
+    let m = pseudo_inverse(a, count)?;
+    (m.iter().all(|v| v.is_finite()) && reproduces(&product(a, &m, count))).then_some(m)
 }
 
 /// Smallest share of the hover a flown rotor must carry, as a fraction of the flown rotors'
@@ -148,7 +235,7 @@ const MIN_HOVER_SHARE: f32 = 0.2;
 fn hovering_rotors(a: &Rows3, count: usize) -> Option<(Rows3, SMatrix<f32, MAX_ROBOTS, 3>)> {
     let mut left = *a;
     for _ in 0..count {
-        let m = right_inverse(&left)?;
+        let m = right_inverse(&left, count)?;
         let flown = (0..count).filter(|&i| left[(0, i)] != 0.0).count();
         let least = MIN_HOVER_SHARE / math::max(flown as f32, 1.0);
         let mut worst: Option<(usize, f32)> = None;
@@ -206,17 +293,12 @@ impl Mixer {
         let mut mixing = Mixing::zeros();
         match kind {
             MixerKind::Allocation => {
-                let inverse = (a * a.transpose())
-                    .try_inverse()
-                    .ok_or(AllocationError::Uncontrollable)?;
-                mixing = a.transpose() * inverse;
+                mixing = pseudo_inverse(&a, count).ok_or(AllocationError::Uncontrollable)?;
             }
             MixerKind::EqualSplit => {
                 let b: SMatrix<f32, 3, MAX_ROBOTS> = a.fixed_rows::<3>(1).into_owned();
-                let inverse = (b * b.transpose())
-                    .try_inverse()
-                    .ok_or(AllocationError::Uncontrollable)?;
-                let torque_columns = b.transpose() * inverse;
+                let torque_columns =
+                    pseudo_inverse(&b, count).ok_or(AllocationError::Uncontrollable)?;
                 for i in 0..count {
                     mixing[(i, 0)] = 1.0 / count as f32;
                     for axis in 0..3 {
@@ -231,7 +313,7 @@ impl Mixer {
         if kind == MixerKind::Allocation {
             // A nearly singular `A A^T` inverts to garbage in f32: the mixing must reproduce
             // each axis it claims (the identity on the rows inverted).
-            if !reproduces(&(a * mixing)) {
+            if !reproduces(&product(&a, &mixing, count)) {
                 return Err(AllocationError::Uncontrollable);
             }
         }
@@ -275,7 +357,7 @@ impl Mixer {
             }
         }
         let a3: Rows3 = a.fixed_rows::<3>(0).into_owned();
-        let plain = right_inverse(&a3).ok_or(AllocationError::Uncontrollable)?;
+        let plain = right_inverse(&a3, count).ok_or(AllocationError::Uncontrollable)?;
         // Fly only the rotors that can share the hover: one held at zero by its column could
         // not go below it for a torque, and the allocator would give up roll and pitch.
         let (flown, m3) = hovering_rotors(&a3, count).unwrap_or((a3, plain));
