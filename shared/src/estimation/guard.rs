@@ -152,6 +152,9 @@ impl GuardBand {
     ) {
         let ns = grid.scale_len();
         let res = grid.resolution();
+        // The COM faces list the masses of one COM one after another: its sub-points' lift
+        // shares (the geometry, most of a point's cost) are worked out once for them all.
+        let mut shares_at: Option<(Vec2, Vec<f32, 9>)> = None;
         for face in self.faces {
             for k in 0..face.len {
                 let base = face.start + k * ns;
@@ -162,10 +165,17 @@ impl GuardBand {
                     continue;
                 }
                 let theta = self.theta(grid, &face, k);
-                let shares = cell.shares(Vec2::new(theta[0], theta[1]), res[0], res[1]);
+                let com = Vec2::new(theta[0], theta[1]);
+                let shares = match &shares_at {
+                    Some((at, shares)) if *at == com => shares,
+                    _ => {
+                        let shares = cell.shares(com, res[0], res[1]);
+                        &shares_at.insert((com, shares)).1
+                    }
+                };
                 for is in 0..ns {
                     let l = cell.likelihood(
-                        &shares,
+                        shares,
                         theta[2],
                         res[2],
                         grid.scale(is),
