@@ -253,6 +253,78 @@ fn hovering_rotors(a: &Rows3, count: usize) -> Option<(Rows3, SMatrix<f32, MAX_R
     None
 }
 
+/// Whether some shift along the collective's column fits thrusts `thrust + scale * tilt`
+/// within `[0, max]`, as a function of `scale`, for the search that scales roll and pitch
+/// down: each rotor's limits on the shift are lines in `scale`, worked out once
+/// ([`Mixer::room`] for one scale).
+struct ScaledRoom {
+    count: usize,
+    /// Rotor by rotor: the shift's lower and upper limits at scale 0, and their slopes.
+    lower: [(f32, f32); MAX_ROBOTS],
+    upper: [(f32, f32); MAX_ROBOTS],
+    /// Rotors the collective does not move: their thrust at scale 0 and its slope.
+    unmoved_count: usize,
+    unmoved: [(f32, f32); MAX_ROBOTS],
+    max_thrust: f32,
+}
+
+impl ScaledRoom {
+    /// The lines for `mixer`; `None` when no shift fits even at scale 0 (or a rotor the
+    /// collective does not move is out of its limits there).
+    fn new(
+        mixer: &Mixer,
+        thrust: &[f32; MAX_ROBOTS],
+        tilt: &[f32; MAX_ROBOTS],
+        collective: &[f32; MAX_ROBOTS],
+    ) -> Option<Self> {
+        mixer.room(thrust, collective)?;
+        let mut room = Self {
+            count: 0,
+            lower: [(0.0, 0.0); MAX_ROBOTS],
+            upper: [(0.0, 0.0); MAX_ROBOTS],
+            unmoved_count: 0,
+            unmoved: [(0.0, 0.0); MAX_ROBOTS],
+            max_thrust: mixer.max_thrust,
+        };
+        for i in 0..mixer.count {
+            let (t, p, d) = (thrust[i], tilt[i], collective[i]);
+            if d.abs() < 1e-9 {
+                // A rotor the collective does not move limits the scale alone:
+                // `0 <= t + scale p <= max`, checked in `at` as `Mixer::room` checks it.
+                room.unmoved[room.unmoved_count] = (t, p);
+                room.unmoved_count += 1;
+                continue;
+            }
+            let inv = 1.0 / d;
+            // Shift k with 0 <= t + s p + k d <= max: k between (0 - t - s p) / d and
+            // (max - t - s p) / d, whichever is lower.
+            let (a0, a1) = (-t * inv, (mixer.max_thrust - t) * inv);
+            let slope = -p * inv;
+            let (low, high) = if inv > 0.0 { (a0, a1) } else { (a1, a0) };
+            room.lower[room.count] = (low, slope);
+            room.upper[room.count] = (high, slope);
+            room.count += 1;
+        }
+        Some(room)
+    }
+
+    /// Whether a shift fits at `scale`.
+    fn at(&self, scale: f32) -> bool {
+        for &(t, p) in &self.unmoved[..self.unmoved_count] {
+            let b = t + scale * p;
+            if b < -1e-6 || b > self.max_thrust + 1e-6 {
+                return false;
+            }
+        }
+        let (mut lo, mut hi) = (f32::NEG_INFINITY, f32::INFINITY);
+        for (&(l0, ls), &(h0, hs)) in self.lower[..self.count].iter().zip(&self.upper) {
+            lo = math::max(lo, l0 + scale * ls);
+            hi = math::min(hi, h0 + scale * hs);
+        }
+        lo <= hi
+    }
+}
+
 /// A mixer for one formation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mixer {
@@ -473,15 +545,11 @@ impl Mixer {
         if room.is_none() {
             saturation.roll_pitch = true;
             let (mut ok, mut bad) = (0.0f32, 1.0f32);
-            if self.room(&combine(0.0), collective).is_some() {
+            if let Some(fits) = ScaledRoom::new(self, &thrust_part, &tilt_part, collective) {
                 // 12 halvings: the scale to 1/4096, far finer than the rotors deliver.
                 for _ in 0..12 {
                     let mid = 0.5 * (ok + bad);
-                    if self.room(&combine(mid), collective).is_some() {
-                        ok = mid
-                    } else {
-                        bad = mid
-                    }
+                    if fits.at(mid) { ok = mid } else { bad = mid }
                 }
             }
             base = combine(ok);
@@ -600,6 +668,67 @@ mod tests {
             torque: Vec3::ZERO,
         });
         assert!(a.achieved.torque.y.abs() > 5.0, "{:?}", a.achieved);
+    }
+
+    /// The search's lines agree with [`Mixer::room`] scale by scale: for saturating wrenches
+    /// on both mixers and a lost rotor, the largest scale that fits by the lines and by
+    /// `room` itself (on a 1/1024 lattice) differ by at most one step.
+    #[test]
+    fn scaled_room_agrees_with_room_at_every_scale() {
+        let com = Vec2::new(0.12, 0.01);
+        let mixers = [
+            mixer(MixerKind::Allocation, com),
+            mixer(MixerKind::EqualSplit, com),
+            mixer(MixerKind::Allocation, com)
+                .without(1 << 2)
+                .expect("flies on"),
+        ];
+        let mut seed = 12345u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+        };
+        let mut searched = 0;
+        for m in &mixers {
+            for _ in 0..200 {
+                let wrench = Wrench {
+                    thrust: 40.0 + 60.0 * next().abs(),
+                    torque: Vec3::new(8.0 * next(), 8.0 * next(), 0.0),
+                };
+                let n = m.count;
+                let (mut thrust, mut tilt) = ([0.0f32; MAX_ROBOTS], [0.0f32; MAX_ROBOTS]);
+                for i in 0..n {
+                    thrust[i] = m.columns[0][i] * wrench.thrust;
+                    tilt[i] = m.columns[1][i] * wrench.torque.x + m.columns[2][i] * wrench.torque.y;
+                }
+                let Some(lines) = ScaledRoom::new(m, &thrust, &tilt, &m.columns[0]) else {
+                    continue;
+                };
+                let by_room = |scale: f32| {
+                    let mut base = [0.0f32; MAX_ROBOTS];
+                    for i in 0..n {
+                        base[i] = thrust[i] + scale * tilt[i];
+                    }
+                    m.room(&base, &m.columns[0]).is_some()
+                };
+                let largest = |fits: &dyn Fn(f32) -> bool| {
+                    (0..=1024u32)
+                        .rev()
+                        .find(|&k| fits(k as f32 / 1024.0))
+                        .unwrap_or(0)
+                };
+                let (a, b) = (largest(&|x| lines.at(x)), largest(&by_room));
+                assert!(
+                    a.abs_diff(b) <= 1,
+                    "{wrench:?}: lines {a} / 1024, room {b} / 1024"
+                );
+                searched += usize::from(b < 1024);
+            }
+        }
+        assert!(
+            searched > 50,
+            "only {searched} wrenches needed roll and pitch scaled down"
+        );
     }
 
     #[test]
