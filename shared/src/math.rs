@@ -151,6 +151,11 @@ pub fn ln_normal_sf(a: f32) -> f32 {
 /// `ln(sum(exp(terms)))` without overflow or underflow (`-inf` for no terms, or all `-inf`).
 pub fn ln_sum_exp(terms: &[f32]) -> f32 {
     let top = terms.iter().copied().fold(f32::NEG_INFINITY, max);
+    ln_sum_exp_from(terms, top)
+}
+
+/// [`ln_sum_exp`] when the largest term, `top`, is known already.
+pub fn ln_sum_exp_from(terms: &[f32], top: f32) -> f32 {
     if !top.is_finite() {
         return top;
     }

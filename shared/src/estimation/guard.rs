@@ -18,7 +18,7 @@ use heapless::Vec;
 
 use crate::estimation::grid::{Grid, GridError};
 use crate::estimation::likelihood::{LiftLikelihood, Measurement};
-use crate::estimation::posterior::CellModel;
+use crate::estimation::posterior::{CellModel, CellShares};
 use crate::geometry::{ConvexHull, Vec2};
 use crate::math;
 use crate::scenario::MAX_GRID_POINTS;
@@ -154,7 +154,7 @@ impl GuardBand {
         let res = grid.resolution();
         // The COM faces list the masses of one COM one after another: its sub-points' lift
         // shares (the geometry, most of a point's cost) are worked out once for them all.
-        let mut shares_at: Option<(Vec2, Vec<f32, 9>)> = None;
+        let mut shares_at: Option<(Vec2, CellShares)> = None;
         for face in self.faces {
             for k in 0..face.len {
                 let base = face.start + k * ns;

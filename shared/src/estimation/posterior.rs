@@ -23,9 +23,12 @@ pub fn predicted_reading(grid: &Grid, fraction: f32, im: usize, is: usize, robot
 /// Sub-point offsets within a cell, in resolutions.
 const SUB_OFFSETS: [f32; 3] = [-1.0 / 3.0, 0.0, 1.0 / 3.0];
 
-/// `ln(mean(exp(terms)))` without overflow or underflow (`terms` not empty).
-fn ln_mean_exp(terms: &[f32]) -> f32 {
-    math::ln_sum_exp(terms) - math::ln(terms.len() as f32)
+/// The lift shares of one COM cell's sub-points, and `ln` of the number of likelihood terms
+/// they make with the mass sub-points.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellShares {
+    shares: Vec<f32, 9>,
+    ln_terms: f32,
 }
 
 /// What one update did to the posterior.
@@ -64,7 +67,7 @@ pub struct CellLikelihood {
 impl CellModel<'_> {
     /// Lift shares of the COM sub-points of the cell centred on `centre` (COM resolutions
     /// `res_x`, `res_y`) that lie in the hull; empty when none does.
-    pub fn shares(&self, centre: Vec2, res_x: f32, res_y: f32) -> Vec<f32, 9> {
+    pub fn shares(&self, centre: Vec2, res_x: f32, res_y: f32) -> CellShares {
         let mut shares = Vec::new();
         for dx in SUB_OFFSETS {
             for dy in SUB_OFFSETS {
@@ -75,35 +78,45 @@ impl CellModel<'_> {
                 }
             }
         }
-        shares
+        // Each share meets the three mass sub-points: `ln` of that many terms, once per cell
+        // rather than at each of its masses and scales.
+        let ln_terms = math::ln((shares.len() * SUB_OFFSETS.len()) as f32);
+        CellShares { shares, ln_terms }
     }
 
     /// The reading's log-likelihood over the cell of COM shares `shares`, mass `mass` (mass
     /// resolution `res_mass`) and thrust scale `scale`; `None` when `shares` is empty.
     pub fn likelihood(
         &self,
-        shares: &[f32],
+        shares: &CellShares,
         mass: f32,
         res_mass: f32,
         scale: f32,
         likelihood: &LiftLikelihood,
         measurement: Measurement,
     ) -> Option<CellLikelihood> {
-        let mut terms: Vec<f32, 27> = Vec::new();
-        for &f in shares {
+        // At most 9 shares times 3 masses; the largest term kept as they come (it is both
+        // the best and the shift of the log-mean-exp).
+        let mut terms = [0.0f32; 27];
+        let mut len = 0;
+        let mut top = f32::NEG_INFINITY;
+        for &f in &shares.shares {
             for dm in SUB_OFFSETS {
                 let predicted =
                     scale * thrust_from_fraction(f, mass + dm * res_mass, self.robot_mass);
-                // At most 9 shares times 3 masses.
-                let _ = terms.push(likelihood.ln_likelihood(measurement, predicted));
+                let term = likelihood.ln_likelihood(measurement, predicted);
+                terms[len] = term;
+                len += 1;
+                top = math::max(top, term);
             }
         }
-        if terms.is_empty() {
+        if len == 0 {
             return None;
         }
+        // ln(mean(exp(terms))) without overflow or underflow.
         Some(CellLikelihood {
-            ln_mean: ln_mean_exp(&terms),
-            ln_best: terms.iter().copied().fold(f32::NEG_INFINITY, math::max),
+            ln_mean: math::ln_sum_exp_from(&terms[..len], top) - shares.ln_terms,
+            ln_best: top,
         })
     }
 }
