@@ -109,12 +109,16 @@ pub fn mutual_information(
     // Linear binning of the predictions' distribution.
     let mixture = &mut scratch.mixture[..nodes];
     mixture.fill(0.0);
+    // The nodes the predictions fall on: outside them the mixture is zero.
+    let (mut first_weighted, mut last_weighted) = (nodes, 0);
     each_point(&mut |w, reading| {
         let at = (reading - origin) / step;
         let i = (at as usize).min(nodes - 2);
         let frac = math::clamp(at - i as f32, 0.0, 1.0);
         mixture[i] += w * (1.0 - frac);
         mixture[i + 1] += w * frac;
+        first_weighted = first_weighted.min(i);
+        last_weighted = last_weighted.max(i + 1);
     });
 
     // Conditional entropy and the censored mass, node by node. More than
@@ -144,8 +148,9 @@ pub fn mutual_information(
     if density_end > origin {
         let last_node = (math::round((density_end - origin) / step) as usize).min(nodes - 1);
         for j in 0..=last_node {
-            let from = j.saturating_sub(half);
-            let to = (j + half).min(nodes - 1);
+            // Only the nodes that carry weight add to the sum (the others add exact zeros).
+            let from = j.saturating_sub(half).max(first_weighted);
+            let to = (j + half).min(nodes - 1).min(last_weighted);
             let mut density = 0.0;
             for (b, &w) in mixture.iter().enumerate().take(to + 1).skip(from) {
                 density += w * scratch.kernel[b.abs_diff(j)];
