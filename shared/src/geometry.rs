@@ -366,18 +366,12 @@ pub fn farthest_beyond(
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConvexHull {
     vertices: Vec<Vec2, MAX_VERTICES>,
-    /// Each edge's length (edge `i` from vertex `i` to the next), worked out once: the
-    /// containment test needs them for every point the estimator asks about, and a square
-    /// root is a long software routine on the Cortex-M7 (`libm`'s, for the same result on
-    /// every machine).
-    edge_lengths: Vec<f32, MAX_VERTICES>,
 }
 
 impl ConvexHull {
     /// No hull: what an unloaded payload description holds until it is given one.
     pub const EMPTY: Self = Self {
         vertices: Vec::new(),
-        edge_lengths: Vec::new(),
     };
 
     /// Hull of `points` (Andrew's monotone chain). `None` for fewer than three points, more
@@ -416,15 +410,8 @@ impl ConvexHull {
         if hull.len() < 3 {
             return None;
         }
-        let vertices: Vec<Vec2, MAX_VERTICES> = Vec::from_slice(&hull).ok()?;
-        let n = vertices.len();
-        let edge_lengths = (0..n)
-            .map(|i| (vertices[(i + 1) % n] - vertices[i]).norm())
-            .collect();
-        Some(Self {
-            vertices,
-            edge_lengths,
-        })
+        let vertices = Vec::from_slice(&hull).ok()?;
+        Some(Self { vertices })
     }
 
     /// The hull's vertices, counter-clockwise.
@@ -443,7 +430,15 @@ impl ConvexHull {
         (0..self.vertices.len()).all(|i| {
             let (a, b) = self.edge(i);
             let d = b - a;
-            d.cross(p - a) >= -tolerance * self.edge_lengths[i]
+            let side = d.cross(p - a);
+            if tolerance >= 0.0 {
+                // `side >= -tolerance |d|` without the square root (a long software routine
+                // on the Cortex-M7, and the estimator asks this of every point it weighs):
+                // inside, or outside by at most the tolerance.
+                side >= 0.0 || side * side <= tolerance * tolerance * d.dot(d)
+            } else {
+                side >= -tolerance * d.norm()
+            }
         })
     }
 
