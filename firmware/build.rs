@@ -1,26 +1,28 @@
 //! Hands the linker the memory map of the board being built, with cortex-m-rt's and (Pixhawk)
-//! defmt's linker scripts:
-//! - `pixhawk6c`: `memory-pixhawk6c.x` (the Pixhawk 6C application map behind the
-//!   bootloader);
-//! - `qemu`: `memory-qemu.x` (mps2-an500), and an empty `device.x` (this crate's vector table,
+//! defmt's linker scripts: the repository's `memory.x` holds both boards' regions, and
+//! `board-memory.x` (written here) makes the built board's cortex-m-rt's FLASH and RAM:
+//! - `pixhawk6c`: the Pixhawk 6C application map behind the bootloader;
+//! - `qemu`: mps2-an500's, and an empty `device.x` (this crate's vector table,
 //!   `board::qemu::__INTERRUPTS`, names every handler itself).
 
 use std::{env, fs, path::PathBuf};
 
 fn main() {
-    let manifest_dir = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("set by cargo"));
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("set by cargo"));
-    // The maps are not named memory.x in the source tree: the linker runs in the workspace root
-    // and would find a file of that name there before this one.
+    // The memory map is the repository's `memory.x` (cortex-m-rt's convention; the linker
+    // runs in the workspace root and finds it there for either board). It names each board's
+    // regions; this picks the board's as cortex-m-rt's FLASH and RAM.
     let qemu = env::var_os("CARGO_FEATURE_QEMU").is_some();
-    let memory_x = if qemu {
-        manifest_dir.join("memory-qemu.x")
+    let (flash, ram) = if qemu {
+        ("QEMU_CODE", "QEMU_DATA")
     } else {
-        manifest_dir.join("memory-pixhawk6c.x")
+        ("PIXHAWK6C_FLASH", "PIXHAWK6C_RAM")
     };
-    let contents =
-        fs::read(&memory_x).unwrap_or_else(|e| panic!("cannot read {}: {e}", memory_x.display()));
-    fs::write(out.join("memory.x"), contents).expect("OUT_DIR is writable");
+    fs::write(
+        out.join("board-memory.x"),
+        format!("REGION_ALIAS(\"FLASH\", {flash});\nREGION_ALIAS(\"RAM\", {ram});\n"),
+    )
+    .expect("OUT_DIR is writable");
     if qemu {
         fs::write(
             out.join("device.x"),
@@ -29,7 +31,7 @@ fn main() {
         .expect("OUT_DIR is writable");
     }
     println!("cargo:rustc-link-search={}", out.display());
-    println!("cargo:rerun-if-changed={}", memory_x.display());
+    println!("cargo:rerun-if-changed=../memory.x");
     println!("cargo:rerun-if-changed=build.rs");
 
     // Only the thumb target links a firmware image.

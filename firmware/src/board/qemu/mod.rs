@@ -2,8 +2,8 @@
 //! CMSDK APB peripherals, as QEMU 7.2 models it. The HIL target the tests and CI fly: no
 //! embassy-stm32 here (only one embassy time driver can be linked).
 //!
-//! Memory (`memory-qemu.x`): 4 MiB SSRAM at 0x0000_0000 for code, 4 MiB at 0x2000_0000 for
-//! data. Peripherals (AN500 and QEMU's `hw/arm/mps2.c`), all clocked at 25 MHz:
+//! Memory (`memory.x`'s QEMU regions): 4 MiB SSRAM at 0x0000_0000 for code, 4 MiB at 0x2000_0000
+//! for data. Peripherals (AN500 and QEMU's `hw/arm/mps2.c`), all clocked at 25 MHz:
 //!
 //! | peripheral | address | interrupt |
 //! |---|---|---|
