@@ -22,6 +22,7 @@ fn skip(reason: &str) {
     if std::env::var("HIL_REQUIRED").is_ok_and(|v| v == "1") {
         panic!("ground station: HIL_REQUIRED=1 but {reason}");
     }
+    qemu::note_skipped(reason.starts_with("qemu-system-arm is not installed"));
     // Straight to stderr: the harness hides what a passing test prints with `eprintln!`.
     use std::io::Write;
     let _ = writeln!(std::io::stderr(), "ground station: SKIPPED: {reason}");

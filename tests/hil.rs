@@ -38,7 +38,8 @@ fn workspace() -> PathBuf {
 /// The firmware image if the test can run (built first when it is missing or stale);
 /// otherwise says why it is skipped (or, with `HIL_REQUIRED=1`, fails).
 fn image_or_skip(test: &str) -> Option<PathBuf> {
-    let reason = if !qemu::available() {
+    let no_qemu = !qemu::available();
+    let reason = if no_qemu {
         "qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)".to_string()
     } else {
         match qemu::test_image(&workspace()) {
@@ -49,6 +50,7 @@ fn image_or_skip(test: &str) -> Option<PathBuf> {
     if std::env::var("HIL_REQUIRED").is_ok_and(|v| v == "1") {
         panic!("{test}: HIL_REQUIRED=1 but {reason}");
     }
+    qemu::note_skipped(no_qemu);
     // Straight to stderr: the test harness hides what `eprintln!` prints in a passing test.
     use std::io::Write;
     let _ = writeln!(std::io::stderr(), "{test}: SKIPPED: {reason}");

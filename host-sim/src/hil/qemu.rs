@@ -143,6 +143,46 @@ pub fn test_image(workspace: &Path) -> Result<PathBuf, String> {
         .clone()
 }
 
+/// Tests of this process skipped because QEMU is missing, and those skipped for another
+/// reason (said as each was skipped).
+static SKIPPED: [std::sync::atomic::AtomicU32; 2] = [
+    std::sync::atomic::AtomicU32::new(0),
+    std::sync::atomic::AtomicU32::new(0),
+];
+
+/// Counts a test skipped for want of QEMU (`no_qemu`) or for another reason; when the test
+/// process ends it prints one line with the count and, when QEMU was missing, the one command
+/// that installs it.
+pub fn note_skipped(no_qemu: bool) {
+    static AT_EXIT: std::sync::Once = std::sync::Once::new();
+    SKIPPED[usize::from(!no_qemu)].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    AT_EXIT.call_once(|| {
+        // SAFETY: registers a plain function with no arguments, run once at exit.
+        unsafe {
+            libc::atexit(say_skipped);
+        }
+    });
+}
+
+extern "C" fn say_skipped() {
+    use std::io::Write;
+    let load = |i: usize| SKIPPED[i].load(std::sync::atomic::Ordering::Relaxed);
+    let (no_qemu, other) = (load(0), load(1));
+    let mut err = std::io::stderr();
+    if no_qemu > 0 {
+        let _ = writeln!(
+            err,
+            "{no_qemu} firmware-in-the-loop test(s) SKIPPED: qemu-system-arm is not installed; install it with: sudo apt-get install qemu-system-arm"
+        );
+    }
+    if other > 0 {
+        let _ = writeln!(
+            err,
+            "{other} firmware-in-the-loop test(s) SKIPPED for the reasons printed above"
+        );
+    }
+}
+
 /// Whether `qemu-system-arm` can be run here.
 pub fn available() -> bool {
     Command::new(QEMU)
