@@ -1,4 +1,4 @@
-//! The command line's own safety (docs/formats.md#command-line; README "Exit codes"): flag values are
+//! The command line's own safety (docs/formats.md#command-line; docs/commands.md#exit-codes): flag values are
 //! checked and named, negative numbers parse, a scenario cannot make the tool write outside
 //! `--output`, an endless or huge file is refused, a closed stdout ends the run quietly, and
 //! the exit code tells how a mission or flight ended.
@@ -364,20 +364,20 @@ fn a_comparison_reports_both_flights_with_the_command_line_names() {
 }
 
 #[test]
-fn the_readme_lists_the_parameters_the_firmware_serves() {
+fn the_ground_link_notes_list_the_parameters_the_firmware_serves() {
     let (code, table, stderr) = run(&["params"]);
     assert_eq!(code, Some(0), "{stderr}");
-    let readme_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md");
-    let readme = std::fs::read_to_string(&readme_path).expect("README.md");
-    let listed = readme
+    let notes_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/ground-link.md");
+    let notes = std::fs::read_to_string(&notes_path).expect("docs/ground-link.md");
+    let listed = notes
         .split_once("<!-- params:begin -->\n")
         .and_then(|(_, rest)| rest.split_once("<!-- params:end -->"))
         .map(|(block, _)| block)
-        .expect("README.md has the parameter list between its markers");
+        .expect("docs/ground-link.md has the parameter list between its markers");
     assert_eq!(
         listed.trim(),
         table.trim(),
-        "README.md's parameter list is out of date: put the output of \
+        "docs/ground-link.md's parameter list is out of date: put the output of \
          `cargo run -p host-sim -- params` between its markers"
     );
     // The table's rows (after its two header lines) and the JSON's count agree.

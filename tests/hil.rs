@@ -520,7 +520,7 @@ fn the_hil_command_prints_the_mission_keys_as_json() {
         .expect("host-sim runs");
     let stderr = String::from_utf8_lossy(&out.stderr);
     // Stopped by --duration three seconds in: the report is printed, and the exit code says
-    // the payload was not delivered (README "Exit codes").
+    // the payload was not delivered (docs/commands.md#exit-codes).
     assert_eq!(
         out.status.code(),
         Some(4),

@@ -202,6 +202,6 @@ fn two_rotors() {
     );
     assert!(
         o.dropped,
-        "two rotors at once at one end: now survived, update the README"
+        "two rotors at once at one end: now survived, update docs/failures.md"
     );
 }

@@ -4,7 +4,7 @@
 //! and nothing else. Negative numbers work as `--mass -3`, `--com -0.2,0.1` and
 //! `--com=-0.2,0.1`. Flag values are checked before anything runs; an error names the flag.
 //!
-//! How a run ends is its exit code ([`Outcome::exit_code`], README "Exit codes"): 0 done,
+//! How a run ends is its exit code ([`Outcome::exit_code`], docs/commands.md#exit-codes): 0 done,
 //! 1 bad input, 2 usage (clap's), 3 mission aborted, 4 not delivered, 5 payload dropped.
 
 use std::ffi::OsString;

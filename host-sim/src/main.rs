@@ -1,7 +1,7 @@
 //! `host-sim`: the simulator's command line (docs/formats.md#command-line).
 //!
 //! Errors print as one line on stderr; nothing panics on bad input. The exit code says how the
-//! run ended (README "Exit codes"): 0 done, 1 bad input, 2 usage, 3 mission aborted, 4 not
+//! run ended (docs/commands.md#exit-codes): 0 done, 1 bad input, 2 usage, 3 mission aborted, 4 not
 //! delivered, 5 payload dropped. A reader that goes away (`| head -1`) ends the run quietly.
 
 use std::io::Write;

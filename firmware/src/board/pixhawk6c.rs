@@ -27,7 +27,7 @@
 //!   (RCC_RSR) goes to the ground at start, a watchdog reset as an error.
 //!
 //! - Steppers: TMC2209s on TELEM2 (UART5, TX PC12) and TELEM3 (USART2, TX PD5), half duplex,
-//!   see [`super::steppers`] and the README's wiring.
+//!   see [`super::steppers`] and docs/hardware.md#the-pixhawk-6cs-wiring.
 
 use defmt_rtt as _;
 use drivers::pulse::EscProtocol;

@@ -2,7 +2,7 @@
 //! buses, TELEM2 (UART5, TX PC12, RX PD2) for robots 1-4 and TELEM3 (USART2, TX PD5, RX PA3)
 //! for robots 5-8, node addresses 0-3 on each (MS1/MS2), at [`BAUD`]. The wiring is the
 //! datasheet's for a standard UART: TX through 1 kOhm and RX directly to the drivers' PDN_UART
-//! line (README "The Pixhawk 6C's wiring"), so every request comes back as an echo before the
+//! line (docs/hardware.md#the-pixhawk-6cs-wiring), so every request comes back as an echo before the
 //! reply; the echo is checked. The driver core is [`drivers::tmc2209`] and
 //! [`drivers::stepper`]; this task is its glue.
 //!

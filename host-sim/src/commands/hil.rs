@@ -5,7 +5,7 @@
 //!
 //! Prints what the firmware says as it says it; `--json` prints one object with the keys of
 //! `mission` plus `firmware` (the board it reported) and `ticks` (lockstep exchanges). Exit
-//! codes as `mission` (README "Exit codes"): 1 when the firmware refuses the payload or the
+//! codes as `mission` (docs/commands.md#exit-codes): 1 when the firmware refuses the payload or the
 //! start or the lockstep breaks, 3 when the mission aborts, 4 when it ends undelivered, 5 when
 //! the payload drops.
 

@@ -1,7 +1,7 @@
 //! `host-sim params`: the vehicle's parameters: every tunable of the mission the
 //! firmware serves over MAVLink's parameter protocol, with unit, range, default and what it
-//! does, from the table the firmware runs (`shared::mission::params`). The README's list is
-//! this output (a test keeps the two equal).
+//! does, from the table the firmware runs (`shared::mission::params`). The list in
+//! docs/ground-link.md is this output (a test keeps the two equal).
 
 use anyhow::Result;
 use clap::Args;

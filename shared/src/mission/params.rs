@@ -946,8 +946,8 @@ impl ParamValues {
     }
 }
 
-/// The parameter table in Markdown (name, unit, range, default, what it does), as the README
-/// lists it.
+/// The parameter table in Markdown (name, unit, range, default, what it does), as
+/// docs/ground-link.md lists it.
 #[cfg(feature = "docs")]
 pub fn markdown_table(out: &mut impl core::fmt::Write) -> core::fmt::Result {
     writeln!(out, "| index | name | unit | min | max | default | what |")?;
