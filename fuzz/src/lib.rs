@@ -16,6 +16,7 @@
 #[path = "../../firmware/src/app/autonomy.rs"]
 pub mod autonomy;
 pub mod flash;
+pub mod options;
 #[path = "../../host-sim/src/scenario_file.rs"]
 pub mod scenario_file;
 pub mod seeds;

@@ -15,6 +15,7 @@ pub mod balance;
 pub mod bound;
 pub mod face;
 mod independent;
+mod newton;
 pub mod objective;
 pub mod search;
 pub mod solver;

@@ -11,6 +11,7 @@
 
 pub mod config;
 pub mod hardware;
+pub mod interface;
 pub mod jobs;
 pub mod machine;
 pub mod params;

@@ -1,0 +1,181 @@
+//! What goes into and comes out of one step of the mission ([`crate::mission::Mission::step`],
+//! docs/system.md#mission-phases): the operator's commands and their replies, the hardware's
+//! faults, the tick's input and output, and an IMU failure the mission acted on.
+
+use crate::control::imu_monitor::ImuFailure;
+use crate::control::navigator::{ImuSample, MocapFix, NavState};
+use crate::flight::AdaptEvent;
+use crate::mission::jobs::JobRequest;
+use crate::mission::phases::{AbortReason, Phase, Transition};
+use crate::mission::supervision::{Notice, Supervision};
+use crate::rail::moves::Positions;
+use crate::scenario::MAX_ROBOTS;
+
+/// A command from the operator (the ground station).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OperatorCommand {
+    /// Start the mission (from idle).
+    Start,
+    /// Stop it: on the ground the rotors stop; in flight the vehicle lands where it is.
+    Abort,
+    /// In flight: land where the vehicle is.
+    LandNow,
+    /// Stop the rotors now, wherever the vehicle is (flight termination).
+    Kill,
+}
+
+impl OperatorCommand {
+    /// The command's name for people: `start`, `abort`, `land now`, `kill`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Start => "start",
+            Self::Abort => "abort",
+            Self::LandNow => "land now",
+            Self::Kill => "kill",
+        }
+    }
+}
+
+/// Why a command was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CommandRefusal {
+    /// The mission has already started.
+    AlreadyStarted,
+    /// The mission is over (landed or aborted).
+    Finished,
+    /// Landing asked for while not flying.
+    NotFlying,
+    /// No payload description has been loaded.
+    NoPayload,
+    /// No ground link: no ground station's heartbeat within `FS_GCS_LOSS_T`.
+    NoGroundLink,
+    /// The battery is below its low threshold (`BAT_LOW_V`).
+    BatteryLow {
+        /// The filtered pack voltage, mV.
+        millivolts: u32,
+    },
+}
+
+impl core::fmt::Display for CommandRefusal {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::AlreadyStarted => write!(f, "the mission has already started"),
+            Self::Finished => write!(f, "the mission is over"),
+            Self::NotFlying => write!(f, "not flying"),
+            Self::NoPayload => write!(f, "no payload description is loaded"),
+            Self::NoGroundLink => write!(
+                f,
+                "no ground link: no ground-station heartbeat (no take-off without one)"
+            ),
+            Self::BatteryLow { millivolts } => write!(
+                f,
+                "battery low: {} V, below BAT_LOW_V",
+                crate::numbers::Fixed(
+                    crate::mission::supervision::hundredths_down(*millivolts as f32 * 1e-3),
+                    2
+                )
+            ),
+        }
+    }
+}
+
+/// The answer to an operator command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CommandReply {
+    /// The command.
+    pub command: OperatorCommand,
+    /// Accepted, or why not.
+    pub outcome: Result<(), CommandRefusal>,
+}
+
+/// Failures the flight controller's drivers report: what the mission must not
+/// ignore. On the ground either stops the mission; in flight it lands where it is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HardwareFaults {
+    /// The IMU is stalled, saturated or implausible (its samples are not to be trusted).
+    pub imu: bool,
+    /// Robots whose steppers stalled, bit `j` for robot `j`.
+    pub stalled_robots: u8,
+    /// Robots whose ESC reports its rotor stopped while commanded to turn, bit `j` for robot
+    /// `j` (no board reads ESC telemetry yet: 0). Heeded in flight only, where the flight
+    /// flies on without the rotor and lands ([`AbortReason::RotorOut`]); not part of
+    /// [`Self::reason`].
+    pub rotors_out: u8,
+}
+
+impl HardwareFaults {
+    /// None.
+    pub const NONE: Self = Self {
+        imu: false,
+        stalled_robots: 0,
+        rotors_out: 0,
+    };
+
+    /// The abort reason of the first fault that concerns a mission with `robots` robots.
+    pub fn reason(&self, robots: usize) -> Option<AbortReason> {
+        if self.imu {
+            return Some(AbortReason::ImuFault);
+        }
+        let mask = if robots >= 8 {
+            u8::MAX
+        } else {
+            (1u8 << robots) - 1
+        };
+        let stalled = self.stalled_robots & mask;
+        (stalled != 0).then(|| AbortReason::RobotStalled {
+            robot: stalled.trailing_zeros() as u8,
+        })
+    }
+}
+
+/// What one tick takes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TickInput {
+    /// When the IMU sample was taken, us (the flight controller's clock; in lockstep
+    /// hardware-in-the-loop, the simulator's).
+    pub time_us: u64,
+    /// The IMU sample.
+    pub imu: ImuSample,
+    /// A motion-capture fix that arrived since the previous tick.
+    pub mocap: Option<MocapFix>,
+    /// An operator command that arrived since the previous tick.
+    pub command: Option<OperatorCommand>,
+    /// What the drivers report failed ([`HardwareFaults::NONE`] in simulation).
+    pub faults: HardwareFaults,
+    /// The ground station's heartbeat and the battery's voltage.
+    pub supervision: Supervision,
+}
+
+/// What one tick commands.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TickOutput {
+    /// Thrust of each robot's rotor, N (commanded units); zero unless `armed`.
+    pub thrusts: [f32; MAX_ROBOTS],
+    /// Where each robot should be on the rail now (arc lengths).
+    pub robots: Positions,
+    /// Whether the rotors may spin.
+    pub armed: bool,
+    /// The phase after this tick.
+    pub phase: Phase,
+    /// The transition this tick made, if any.
+    pub transition: Option<Transition>,
+    /// What the in-flight adaptation did this tick, if anything.
+    pub adaptation: Option<AdaptEvent>,
+    /// A computation to run off the tick, if this tick asked for one.
+    pub job: Option<JobRequest>,
+    /// The answer to this tick's operator command, if one came.
+    pub reply: Option<CommandReply>,
+    /// What the ground link's and the battery's supervision has to tell people this tick.
+    pub notice: Option<Notice>,
+    /// The state estimate after this tick.
+    pub nav: NavState,
+}
+
+/// An IMU failure the monitor found and the mission acted on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImuDetection {
+    /// What was wrong.
+    pub failure: ImuFailure,
+    /// The tick's time when it was found, us (the clock of [`TickInput::time_us`]).
+    pub time_us: u64,
+}
