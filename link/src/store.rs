@@ -255,137 +255,22 @@ impl<F: NorFlash> ParamStore<F> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use embedded_storage_async::nor_flash::{ErrorType, ReadNorFlash};
     use shared::mission::params::COUNT;
-    use std::vec;
     use std::vec::Vec;
+    use test_support::flash::{Cut, CutFlash, PAGE, block_on};
+    use test_support::rng::Rng;
 
-    const PAGE: usize = 1024;
     const PAGES: usize = 4;
-
-    /// A NOR flash in memory (writes only clear bits, erase sets a page to 0xFF) whose power
-    /// fails after `budget` write or erase operations: the failing operation gets only part of
-    /// the way (a prefix of the bytes it was to write or erase), and every later one fails.
-    struct CutFlash {
-        bytes: Vec<u8>,
-        budget: Option<usize>,
-        /// Of the failing operation, the share of bytes that still happen, per 256.
-        partial: u8,
-        ops: usize,
-        dead: bool,
-    }
-
-    #[derive(Debug)]
-    struct PowerCut;
-
-    impl NorFlashError for PowerCut {
-        fn kind(&self) -> NorFlashErrorKind {
-            NorFlashErrorKind::Other
-        }
-    }
-
-    impl CutFlash {
-        fn new() -> Self {
-            Self::sized(PAGE * PAGES)
-        }
-
-        fn sized(len: usize) -> Self {
-            Self {
-                bytes: vec![0xFF; len],
-                budget: None,
-                partial: 0,
-                ops: 0,
-                dead: false,
-            }
-        }
-
-        /// Whether this operation is the one the power dies in; how many bytes of `len` happen.
-        fn step(&mut self, len: usize) -> Result<usize, usize> {
-            if self.dead {
-                return Err(0);
-            }
-            self.ops += 1;
-            match self.budget {
-                Some(b) if self.ops > b => {
-                    self.dead = true;
-                    Err(len * usize::from(self.partial) / 256)
-                }
-                _ => Ok(len),
-            }
-        }
-
-        fn reboot(&mut self) {
-            self.budget = None;
-            self.dead = false;
-        }
-    }
-
-    impl ErrorType for CutFlash {
-        type Error = PowerCut;
-    }
-
-    impl ReadNorFlash for CutFlash {
-        const READ_SIZE: usize = 1;
-        async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), PowerCut> {
-            let at = offset as usize;
-            bytes.copy_from_slice(&self.bytes[at..at + bytes.len()]);
-            Ok(())
-        }
-        fn capacity(&self) -> usize {
-            self.bytes.len()
-        }
-    }
-
-    impl NorFlash for CutFlash {
-        const WRITE_SIZE: usize = 4;
-        const ERASE_SIZE: usize = PAGE;
-        async fn erase(&mut self, from: u32, to: u32) -> Result<(), PowerCut> {
-            let (from, to) = (from as usize, to as usize);
-            let (done, result) = match self.step(to - from) {
-                Ok(n) => (n, Ok(())),
-                Err(n) => (n, Err(PowerCut)),
-            };
-            self.bytes[from..from + done].fill(0xFF);
-            result
-        }
-        async fn write(&mut self, offset: u32, data: &[u8]) -> Result<(), PowerCut> {
-            let at = offset as usize;
-            let (done, result) = match self.step(data.len()) {
-                Ok(n) => (n, Ok(())),
-                Err(n) => (n, Err(PowerCut)),
-            };
-            for (cell, &b) in self.bytes[at..at + done].iter_mut().zip(data) {
-                // NOR: a write only clears bits.
-                *cell &= b;
-            }
-            result
-        }
-    }
-
-    fn block_on<T>(f: impl core::future::Future<Output = T>) -> T {
-        embassy_futures::block_on(f)
-    }
-
-    /// A small deterministic generator (xorshift) for the changes and the cut points.
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> u64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            self.0
-        }
-    }
 
     /// The changes of a run: (parameter, value), all in range; few parameters, so pages fill
     /// and are collected many times.
     fn changes(seed: u64, n: usize) -> Vec<(usize, f32)> {
-        let mut rng = Rng(seed | 1);
+        let mut rng = Rng::new(seed | 1);
         (0..n)
             .map(|_| {
-                let i = (rng.next() % 6) as usize * 7 % COUNT;
+                let i = (rng.next_u64() % 6) as usize * 7 % COUNT;
                 let spec = &TABLE[i];
-                let t = (rng.next() % 1000) as f32 / 1000.0;
+                let t = (rng.next_u64() % 1000) as f32 / 1000.0;
                 let mut v = spec.min + t * (spec.max - spec.min);
                 if spec.integer {
                     v = shared::math::floor(v);
@@ -400,9 +285,11 @@ mod tests {
     /// the one being saved at the cut, the new one. Returns whether the cut came before the
     /// end.
     fn run_with_cut(changes: &[(usize, f32)], budget: usize, partial: u8) -> bool {
-        let mut flash = CutFlash::new();
-        flash.budget = Some(budget);
-        flash.partial = partial;
+        let mut flash = CutFlash::new(PAGES);
+        flash.plan(Cut::AtOperation {
+            after: budget,
+            share: partial,
+        });
         let mut saved = ParamValues::DEFAULT;
         let mut in_flight = None;
         let mut store = ParamStore::new(flash, 0..(PAGE * PAGES) as u32).expect("range");
@@ -418,7 +305,7 @@ mod tests {
             }
         }
         let mut flash = store.into_flash().expect("the flash");
-        flash.reboot();
+        flash.restart();
         let mut store = ParamStore::new(flash, 0..(PAGE * PAGES) as u32).expect("range");
         let mut after = ParamValues::DEFAULT;
         let loaded = block_on(store.load(&mut after));
@@ -445,7 +332,8 @@ mod tests {
 
     #[test]
     fn values_survive_a_restart() {
-        let mut store = ParamStore::new(CutFlash::new(), 0..(PAGE * PAGES) as u32).expect("range");
+        let mut store =
+            ParamStore::new(CutFlash::new(PAGES), 0..(PAGE * PAGES) as u32).expect("range");
         let mut values = ParamValues::DEFAULT;
         assert_eq!(block_on(store.load(&mut values)).restored, 0);
         block_on(store.save(3, 0.05)).expect("saved");
@@ -461,7 +349,8 @@ mod tests {
     #[test]
     fn the_signing_key_survives_a_restart_beside_the_parameters() {
         assert!(!TABLE.iter().any(|p| p.name.starts_with("SIGN_")));
-        let mut store = ParamStore::new(CutFlash::new(), 0..(PAGE * PAGES) as u32).expect("range");
+        let mut store =
+            ParamStore::new(CutFlash::new(PAGES), 0..(PAGE * PAGES) as u32).expect("range");
         assert_eq!(block_on(store.load_signing()), Ok(None));
         block_on(store.save(3, 0.05)).expect("saved");
         block_on(store.save_signing(&[5; KEY_LEN], 123_456)).expect("saved");
@@ -481,7 +370,8 @@ mod tests {
 
     #[test]
     fn a_stored_value_the_table_now_refuses_is_dropped() {
-        let mut store = ParamStore::new(CutFlash::new(), 0..(PAGE * PAGES) as u32).expect("range");
+        let mut store =
+            ParamStore::new(CutFlash::new(PAGES), 0..(PAGE * PAGES) as u32).expect("range");
         // Written as a firmware with a wider range might have.
         block_on(store.save(1, 1e6)).expect("saved");
         let mut values = ParamValues::DEFAULT;
@@ -507,11 +397,11 @@ mod tests {
 
     #[test]
     fn random_power_cuts_leave_old_or_new_values() {
-        let mut rng = Rng(0x5eed);
+        let mut rng = Rng::new(0x5eed);
         for trial in 0..2000u64 {
             let run = changes(trial + 1, 120);
-            let budget = (rng.next() % 400) as usize;
-            let partial = (rng.next() % 256) as u8;
+            let budget = (rng.next_u64() % 400) as usize;
+            let partial = (rng.next_u64() % 256) as u8;
             run_with_cut(&run, budget, partial);
         }
     }
@@ -532,7 +422,7 @@ mod tests {
 
     #[test]
     fn the_payload_description_survives_a_restart_beside_the_parameters() {
-        let mut store = with_payload(CutFlash::sized(PAGE * (PAGES + 4)));
+        let mut store = with_payload(CutFlash::new(PAGES + 4));
         let mut into = [0u8; 2048];
         assert_eq!(block_on(store.load_payload(&mut into, uniform)), Ok(None));
         block_on(store.save(3, 0.05)).expect("saved");
@@ -563,19 +453,21 @@ mod tests {
         let mut trials = 0;
         for partial in [0u8, 128, 255] {
             for budget in 0.. {
-                let mut store = with_payload(CutFlash::sized(PAGE * (PAGES + 4)));
+                let mut store = with_payload(CutFlash::new(PAGES + 4));
                 block_on(store.save_payload(&[1; 1200])).expect("saved");
                 block_on(store.save_payload(&[2; 900])).expect("saved");
                 let mut flash = store.into_flash().expect("the flash");
-                flash.budget = Some(flash.ops + budget);
-                flash.partial = partial;
+                flash.plan(Cut::AtOperation {
+                    after: budget,
+                    share: partial,
+                });
                 let mut store = with_payload(flash);
                 let finished = block_on(store.save_payload(&[3; 1000])).is_ok();
                 let mut flash = match store.into_flash() {
                     Some(f) => f,
                     None => break,
                 };
-                flash.reboot();
+                flash.restart();
                 let mut store = with_payload(flash);
                 let mut into = [0u8; 2048];
                 let got = block_on(store.load_payload(&mut into, uniform)).expect("read");
@@ -598,11 +490,11 @@ mod tests {
     #[test]
     fn a_range_that_does_not_fit_the_flash_is_refused() {
         assert_eq!(
-            ParamStore::new(CutFlash::new(), 0..PAGE as u32).err(),
+            ParamStore::new(CutFlash::new(PAGES), 0..PAGE as u32).err(),
             Some(StoreError::BadRange)
         );
         assert_eq!(
-            ParamStore::new(CutFlash::new(), 100..(2 * PAGE) as u32).err(),
+            ParamStore::new(CutFlash::new(PAGES), 100..(2 * PAGE) as u32).err(),
             Some(StoreError::BadRange)
         );
     }

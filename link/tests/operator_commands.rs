@@ -23,9 +23,10 @@
 //!   mission only when it is idle or over; a job's result comes back in the step of its
 //!   deadline (or, off HIL, late: never).
 //!
-//! The vehicle is a miniature world as in `shared`'s mission tests (a payload that tips when
-//! a lift passes its lift-off thrust and moves vertically under the rotors' total thrust), so
-//! a whole mission takes a few milliseconds and a case can hold several.
+//! The vehicle flies in the miniature world of `shared`'s mission tests (`test_support::world`:
+//! a payload that tips when a lift passes its lift-off thrust and moves vertically under the
+//! rotors' total thrust), so a whole mission takes a few milliseconds and a case can hold
+//! several.
 
 use link::command::{FORCE_DISARM_MAGIC, Request, classify, command_long};
 use link::command_wire::CommandLong;
@@ -36,22 +37,15 @@ use mavlink::{MavlinkVersion, MessageData};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestCaseError, TestRunner};
 use shared::control::land_detector::LandDetector;
-use shared::control::navigator::{ImuSample, MocapFix};
 use shared::control::trajectory::FlightPhase;
-use shared::control::vector::{Quat, Vec3};
-use shared::geometry::Vec2;
-use shared::liftoff_thrust::lift_off_thrust;
 use shared::mission::params::{COUNT, NAME_LEN, ParamValues, TABLE};
 use shared::mission::{
-    HardwareFaults, JobResult, Mission, MissionConfig, MissionPlanner, OperatorCommand, Phase,
-    Supervision, TickInput, TickOutput,
+    JobResult, Mission, MissionConfig, MissionPlanner, OperatorCommand, Phase, TickOutput,
 };
-use shared::paper::{checked, rect_sim1};
-use shared::scenario::{FlightSetup, GRAVITY, MAX_ROBOTS, Scenario, Truth};
+use shared::scenario::Scenario;
 use std::cell::RefCell;
+use test_support::world::{World, straight_up_scenario};
 
-/// The control period, us (400 Hz).
-const DT_US: u64 = 2500;
 /// Height below which the payload counts as on the ground, m: rotors may stop there. The
 /// flight stack stops them on touchdown: the land detector's "down" (within
 /// [`LandDetector::LAND_HEIGHT`] of the ground and still), or the plan over for its touchdown
@@ -59,106 +53,13 @@ const DT_US: u64 = 2500;
 /// touchdown, not a fall.
 const ON_THE_GROUND: f32 = 3.0 * LandDetector::LAND_HEIGHT;
 
-/// rect-sim1 with a flight straight up to 0.5 m and back, its payload of `mass` kg.
-fn scenario(mass: f32) -> Scenario {
-    let mut s = checked(rect_sim1());
-    s.truth = Some(Truth {
-        com: Vec2::new(0.33, 0.01),
-        mass,
-    });
-    s.flight = Some(FlightSetup {
-        target: [0.0, 0.0, 0.5],
-        disturbance_torque: 0.0,
-    });
-    s
-}
-
-/// The miniature world (as `shared/src/mission/tests.rs`): height, vertical speed and a roll
-/// tilt for the lifts.
-#[derive(Clone, Debug)]
-struct World {
-    scenario: Scenario,
-    height: f32,
-    speed: f32,
-    /// Upward acceleration of the last tick, m/s^2 (the accelerometer reads it).
-    climb: f32,
-    tilt: f32,
-    tilt_rate: f32,
-}
-
-impl World {
-    fn new(scenario: &Scenario) -> Self {
-        Self {
-            scenario: scenario.clone(),
-            height: 0.0,
-            speed: 0.0,
-            climb: 0.0,
-            tilt: 0.0,
-            tilt_rate: 0.0,
-        }
-    }
-
-    /// The sensors at `tick`: the IMU sample and, every fourth tick, a motion-capture fix.
-    fn input(&self, tick: u64, command: Option<OperatorCommand>) -> TickInput {
-        let time_us = tick * DT_US;
-        let attitude = Quat::from_euler(self.tilt, 0.0, 0.0);
-        let accel = attitude.inverse_rotate(Vec3::new(0.0, 0.0, -GRAVITY - self.climb));
-        // A real sensor never repeats itself (the mission's IMU monitor stops on one that does).
-        let h = tick.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40;
-        let dither = (h as f32 / (1u64 << 24) as f32 - 0.5) * 2e-3;
-        TickInput {
-            time_us,
-            imu: ImuSample {
-                gyro: Vec3::new(self.tilt_rate, 0.0, dither),
-                accel,
-            },
-            mocap: tick.is_multiple_of(4).then_some(MocapFix {
-                position: Vec3::new(0.0, 0.0, -self.height),
-                attitude,
-                stamp_us: time_us,
-            }),
-            command,
-            faults: HardwareFaults::NONE,
-            // The ground station's heartbeat every tick: these properties are the operator's
-            // commands, not the link's loss (tests/ground_loss_battery.rs).
-            supervision: Supervision::LINKED,
-        }
-    }
-
-    /// One tick under the rotors' `thrusts` with the robots at `robots`.
-    fn advance(&mut self, thrusts: &[f32; MAX_ROBOTS], robots: &[f32]) {
-        let dt = DT_US as f32 * 1e-6;
-        let s = &self.scenario;
-        let truth = s.truth.expect("a true payload");
-        let own = s.robots.mass * GRAVITY;
-        let n = s.robots.count();
-        let made = &thrusts[..n];
-        // A lift: the robots above their own weight tip the payload past their lift-off.
-        let lifting: Vec<usize> = (0..n).filter(|&i| made[i] > own + 0.05).collect();
-        let total: f32 = made.iter().sum();
-        let weight = (truth.mass + n as f32 * s.robots.mass) * GRAVITY;
-        if self.height <= 0.0 && !lifting.is_empty() && total < 0.9 * weight {
-            let points: Vec<Vec2> = lifting
-                .iter()
-                .map(|&i| s.payload.rail.point_at(robots[i]))
-                .collect();
-            let lambda = lift_off_thrust(&s.payload.hull, truth.com, truth.mass, &points, 0.1)
-                .unwrap_or(f32::INFINITY);
-            let excess = made[lifting[0]] - lambda;
-            self.tilt_rate = if excess > 0.0 { 0.02 * excess } else { 0.0 };
-        } else {
-            self.tilt_rate = -self.tilt / 0.2;
-        }
-        self.tilt += self.tilt_rate * dt;
-        let before = self.speed;
-        self.speed += (total - weight) / (weight / GRAVITY) * dt;
-        self.height += self.speed * dt;
-        if self.height <= 0.0 {
-            self.height = 0.0;
-            self.speed = self.speed.max(0.0);
-        }
-        self.climb = (self.speed - before) / dt;
-    }
+/// The miniature world (`test_support::world`) with the ground station's heartbeat every tick:
+/// these properties are the operator's commands, not the link's loss
+/// (tests/ground_loss_battery.rs).
+fn linked_world(scenario: &Scenario) -> World {
+    let mut world = World::new(scenario);
+    world.heartbeat_period = 1;
+    world
 }
 
 /// What the operator (or a ground station) does.
@@ -308,7 +209,7 @@ impl Vehicle {
             params: ParamService::new(ParamValues::DEFAULT),
             mission: Mission::new(scenario, config),
             planner: MissionPlanner::new(scenario, config).expect("planner"),
-            world: World::new(scenario),
+            world: linked_world(scenario),
             tick: 0,
             offered: None,
             command: None,
@@ -507,7 +408,7 @@ impl Vehicle {
         {
             self.result = Some(self.planner.run(job));
         }
-        self.world.advance(&out.thrusts, &out.robots);
+        self.world.advance(&out);
         self.previous = Some(out);
         self.seen.ticks += 1;
         Ok(())
@@ -681,7 +582,7 @@ fn run(case: &Case, scenarios: &mut Vec<(f32, Scenario)>) -> Result<Seen, TestCa
     let s = match scenarios.iter().find(|(m, _)| *m == case.mass) {
         Some((_, s)) => s.clone(),
         None => {
-            let s = scenario(case.mass);
+            let s = straight_up_scenario(case.mass);
             scenarios.push((case.mass, s.clone()));
             s
         }
@@ -807,7 +708,7 @@ fn found_cases_hold() {
 /// see arming.
 #[test]
 fn a_restart_in_any_phase_comes_up_disarmed_and_never_arms_by_itself() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut rng = 0x2545_F491_4F6C_DD1Du64;
     let mut next = move |n: u64| {
         rng ^= rng << 13;

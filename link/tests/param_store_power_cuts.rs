@@ -12,143 +12,17 @@
 //! the new one; a value once read must read the same at every later start; and the store must
 //! take a write at once.
 //!
-//! The flash model follows the Pixhawk's parameter memory, the SPI FRAM on which the board
-//! emulates a NOR flash (`firmware/src/board/fram.rs`): writes and erases go byte by byte in
-//! address order, and a cut leaves the operation's first bytes done and the rest untouched.
-//! Writes here only clear bits, as on NOR flash (the FRAM stores the bytes as given: the two
-//! differ only where a write would set a cleared bit).
+//! The flash is `test_support::flash::CutFlash`, the model of the Pixhawk's parameter memory
+//! (the SPI FRAM on which the board emulates a NOR flash), here cut at a chosen byte.
 
-use embedded_storage_async::nor_flash::{
-    ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
-};
 use link::signing::KEY_LEN;
 use link::store::ParamStore;
 use shared::mission::params::{COUNT, ParamValues, TABLE};
+use test_support::flash::{Cut, CutFlash, PAGE, block_on};
+use test_support::rng::Rng;
 
-const PAGE: usize = 1024;
 const PAGES: usize = 4;
 const RANGE: core::ops::Range<u32> = 0..(PAGE * PAGES) as u32;
-
-/// A byte-serial flash that loses power after a number of bytes written or erased.
-#[derive(Clone)]
-struct Flash {
-    bytes: Vec<u8>,
-    /// Bytes left before the power dies (none: no cut planned).
-    until_cut: Option<usize>,
-    dead: bool,
-    /// Cuts that happened.
-    cuts: usize,
-}
-
-#[derive(Debug)]
-struct PowerCut;
-
-impl NorFlashError for PowerCut {
-    fn kind(&self) -> NorFlashErrorKind {
-        NorFlashErrorKind::Other
-    }
-}
-
-impl Flash {
-    fn new() -> Self {
-        Self {
-            bytes: vec![0xFF; PAGE * PAGES],
-            until_cut: None,
-            dead: false,
-            cuts: 0,
-        }
-    }
-
-    /// Of `len` bytes, how many happen before the power dies (`Err` when it does).
-    fn take(&mut self, len: usize) -> Result<usize, usize> {
-        if self.dead {
-            return Err(0);
-        }
-        match self.until_cut {
-            Some(left) if left < len => {
-                self.dead = true;
-                self.until_cut = None;
-                self.cuts += 1;
-                Err(left)
-            }
-            Some(left) => {
-                self.until_cut = Some(left - len);
-                Ok(len)
-            }
-            None => Ok(len),
-        }
-    }
-
-    /// Power back, no cut planned.
-    fn restart(&mut self) {
-        self.dead = false;
-        self.until_cut = None;
-    }
-}
-
-impl ErrorType for Flash {
-    type Error = PowerCut;
-}
-
-impl ReadNorFlash for Flash {
-    const READ_SIZE: usize = 1;
-    async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), PowerCut> {
-        if self.dead {
-            return Err(PowerCut);
-        }
-        let at = offset as usize;
-        bytes.copy_from_slice(&self.bytes[at..at + bytes.len()]);
-        Ok(())
-    }
-    fn capacity(&self) -> usize {
-        self.bytes.len()
-    }
-}
-
-impl NorFlash for Flash {
-    const WRITE_SIZE: usize = 4;
-    const ERASE_SIZE: usize = PAGE;
-    async fn erase(&mut self, from: u32, to: u32) -> Result<(), PowerCut> {
-        let (from, to) = (from as usize, to as usize);
-        let (done, result) = match self.take(to - from) {
-            Ok(n) => (n, Ok(())),
-            Err(n) => (n, Err(PowerCut)),
-        };
-        self.bytes[from..from + done].fill(0xFF);
-        result
-    }
-    async fn write(&mut self, offset: u32, data: &[u8]) -> Result<(), PowerCut> {
-        let at = offset as usize;
-        let (done, result) = match self.take(data.len()) {
-            Ok(n) => (n, Ok(())),
-            Err(n) => (n, Err(PowerCut)),
-        };
-        for (cell, &b) in self.bytes[at..at + done].iter_mut().zip(data) {
-            *cell &= b;
-        }
-        result
-    }
-}
-
-fn block_on<T>(f: impl core::future::Future<Output = T>) -> T {
-    embassy_futures::block_on(f)
-}
-
-/// A small deterministic generator (xorshift).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-}
 
 /// A random write: a parameter (any of the table, in its range) or the signing key.
 #[derive(Clone, Copy, Debug)]
@@ -160,7 +34,7 @@ enum Write {
 fn random_write(rng: &mut Rng) -> Write {
     if rng.below(10) == 0 {
         let key = [1 + rng.below(250) as u8; KEY_LEN];
-        return Write::Signing(key, rng.next() >> 16);
+        return Write::Signing(key, rng.next_u64() >> 16);
     }
     // A few parameters often (pages fill with their old items and are collected), any other
     // sometimes.
@@ -191,30 +65,30 @@ struct Durable {
 /// Loads the store after a restart, the load itself possibly cut (then restarted, until a
 /// load runs through): what it read.
 fn restart_and_load(
-    mut flash: Flash,
+    mut flash: CutFlash,
     rng: &mut Rng,
     cut_loads: &mut usize,
-) -> (ParamStore<Flash>, ParamValues, Signing) {
+) -> (ParamStore<CutFlash>, ParamValues, Signing) {
     loop {
         flash.restart();
         // Sometimes the power fails again during the start (a repair may write).
         if rng.below(2) == 0 {
-            flash.until_cut = Some(rng.below(64) as usize);
+            flash.plan(Cut::AfterBytes(rng.below(64) as usize));
         }
-        let before = flash.cuts;
+        let before = flash.cuts();
         let mut store = ParamStore::new(flash, RANGE).expect("range");
         let mut values = ParamValues::DEFAULT;
         let loaded = block_on(store.load(&mut values));
         let signing = block_on(store.load_signing());
         flash = store.into_flash().expect("the flash");
-        if flash.cuts > before {
+        if flash.cuts() > before {
             *cut_loads += 1;
             continue;
         }
         assert_eq!(loaded.error, None, "{loaded:?}");
         assert_eq!(loaded.refused, 0, "{loaded:?}");
         let signing = signing.expect("the signing key reads");
-        flash.until_cut = None;
+        flash.restart();
         let store = ParamStore::new(flash, RANGE).expect("range");
         return (store, values, signing);
     }
@@ -224,17 +98,19 @@ fn restart_and_load(
 /// (or, sometimes, by a clean restart); returns the cuts during writes and during loads, and
 /// counts in `kept_new` the cut writes whose new value was read back.
 fn life(seed: u64, cycles: usize, kept_new: &mut usize) -> (usize, usize) {
-    let mut rng = Rng(seed | 1);
+    let mut rng = Rng::new(seed | 1);
     let mut durable = Durable {
         params: ParamValues::DEFAULT,
         signing: None,
     };
-    let mut flash = Flash::new();
+    let mut flash = CutFlash::new(PAGES);
     let mut cut_loads = 0;
     let mut cut_writes = 0;
     for cycle in 0..cycles {
         // A cut within the next few dozen items (an erase is a page, an item about 32 bytes).
-        flash.until_cut = (rng.below(8) != 0).then(|| rng.below(3000) as usize);
+        if rng.below(8) != 0 {
+            flash.plan(Cut::AfterBytes(rng.below(3000) as usize));
+        }
         let mut store = ParamStore::new(flash, RANGE).expect("range");
         let mut in_flight = None;
         for _ in 0..1 + rng.below(80) {
@@ -249,9 +125,7 @@ fn life(seed: u64, cycles: usize, kept_new: &mut usize) -> (usize, usize) {
                 // is still in flight; the new one must be what the next start reads.
                 Ok(()) if rng.below(12) == 0 => {
                     let mut flash_cut = store.into_flash().expect("the flash");
-                    flash_cut.dead = true;
-                    flash_cut.until_cut = None;
-                    flash_cut.cuts += 1;
+                    flash_cut.cut_now();
                     store = ParamStore::new(flash_cut, RANGE).expect("range");
                     in_flight = Some(w);
                     cut_writes += 1;
@@ -264,7 +138,7 @@ fn life(seed: u64, cycles: usize, kept_new: &mut usize) -> (usize, usize) {
                 Err(e) => {
                     let flash_cut = store.into_flash().expect("the flash");
                     assert!(
-                        flash_cut.dead,
+                        flash_cut.is_dead(),
                         "seed {seed} cycle {cycle}: {e} without a cut"
                     );
                     store = ParamStore::new(flash_cut, RANGE).expect("range");

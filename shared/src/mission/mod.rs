@@ -27,6 +27,3 @@ pub use machine::{
 };
 pub use phases::{AbortReason, Phase, Reason, Transition};
 pub use supervision::{Notice, Supervision, SupervisionConfig};
-
-#[cfg(test)]
-mod tests;

@@ -3,7 +3,7 @@
 //! battery's two thresholds.
 
 use super::*;
-use crate::mission::supervision::{GcsLossAction, LinkResponse, Notice};
+use shared::mission::supervision::{GcsLossAction, LinkResponse, Notice};
 
 /// Ticks a second.
 const SECOND: u64 = 400;
@@ -66,7 +66,7 @@ fn landing_reason(run: &Run) -> Option<(u64, Reason)> {
 
 #[test]
 fn without_a_ground_link_the_mission_does_not_start() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     world.gcs_until = 0;
     let seen = fly(
@@ -91,7 +91,7 @@ fn without_a_ground_link_the_mission_does_not_start() {
 
 #[test]
 fn a_link_lost_on_the_ground_stops_the_mission_before_take_off() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     // The last heartbeat at 2 s, in the pre-flight checks; lost 1 s later.
     world.gcs_until = 2 * SECOND + 2;
@@ -110,7 +110,7 @@ fn a_link_lost_on_the_ground_stops_the_mission_before_take_off() {
 
 #[test]
 fn a_link_lost_in_flight_with_continue_flies_the_plan_to_its_landing() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let takeoff = takeoff_tick(&s);
     let mut world = World::new(&s);
     world.gcs_until = takeoff + SECOND;
@@ -150,7 +150,7 @@ fn a_link_lost_in_flight_with_continue_flies_the_plan_to_its_landing() {
 
 #[test]
 fn a_link_lost_in_flight_with_hold_holds_then_lands_in_place() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let takeoff = takeoff_tick(&s);
     let mut world = World::new(&s);
     world.gcs_until = takeoff + 3 * SECOND;
@@ -193,7 +193,7 @@ fn a_link_lost_in_flight_with_hold_holds_then_lands_in_place() {
 
 #[test]
 fn a_link_back_during_the_hold_resumes_the_plan() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let takeoff = takeoff_tick(&s);
     let mut world = World::new(&s);
     world.gcs_until = takeoff + 3 * SECOND;
@@ -225,7 +225,7 @@ fn a_link_back_during_the_hold_resumes_the_plan() {
 
 #[test]
 fn a_low_battery_refuses_the_start_and_stops_the_mission_on_the_ground() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     world.battery = Some(13.5);
     let seen = fly(&s, MissionConfig::default(), &mut world, |_, _| {});
@@ -253,7 +253,7 @@ fn a_low_battery_refuses_the_start_and_stops_the_mission_on_the_ground() {
 
 #[test]
 fn a_low_battery_in_flight_warns_and_the_flight_goes_on() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let takeoff = takeoff_tick(&s);
     let mut world = World::new(&s);
     world.battery = Some(16.0);
@@ -274,7 +274,7 @@ fn a_low_battery_in_flight_warns_and_the_flight_goes_on() {
 
 #[test]
 fn a_critical_battery_in_flight_lands_in_place() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let takeoff = takeoff_tick(&s);
     let mut world = World::new(&s);
     world.battery = Some(16.0);

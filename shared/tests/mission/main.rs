@@ -3,162 +3,15 @@
 //! feeds IMU samples and motion-capture fixes; the jobs run on the planner at their deadline,
 //! late, or never; the operator's commands come at chosen instants.
 
-use std::vec::Vec;
-
-use crate::control::imu_monitor::ImuFailure;
-use crate::control::navigator::{ImuSample, MocapFix};
-use crate::control::trajectory::FlightPhase;
-use crate::control::vector::{Quat, Vec3};
-use crate::estimation::Measurement;
-use crate::geometry::Vec2;
-use crate::liftoff_thrust::lift_off_thrust;
-use crate::mission::{
+use shared::control::imu_monitor::ImuFailure;
+use shared::control::trajectory::FlightPhase;
+use shared::estimation::Measurement;
+use shared::mission::{
     AbortReason, CommandRefusal, HardwareFaults, JobRequest, Mission, MissionConfig,
-    MissionPlanner, OperatorCommand, Phase, Reason, Supervision, TickInput, TickOutput,
+    MissionPlanner, OperatorCommand, Phase, Reason, TickOutput,
 };
-use crate::paper::{checked, rect_sim1};
-use crate::scenario::{FlightSetup, GRAVITY, Scenario, Truth};
-
-const DT_US: u64 = 2500;
-
-/// rect-sim1 with a flight straight up to 0.5 m and back (the world has no horizontal motion).
-fn scenario(mass: f32) -> Scenario {
-    let mut s = checked(rect_sim1());
-    s.truth = Some(Truth {
-        com: Vec2::new(0.33, 0.01),
-        mass,
-    });
-    s.flight = Some(FlightSetup {
-        target: [0.0, 0.0, 0.5],
-        disturbance_torque: 0.0,
-    });
-    s
-}
-
-/// The miniature world: height, vertical speed, and a roll tilt for the lifts.
-struct World {
-    scenario: Scenario,
-    height: f32,
-    speed: f32,
-    /// Upward acceleration of the last tick, m/s^2 (the accelerometer reads it).
-    climb: f32,
-    tilt: f32,
-    tilt_rate: f32,
-    /// The rotors make `1 / map_error` of what is commanded.
-    map_error: f32,
-    mocap: bool,
-    /// Highest the payload can get (an obstacle above), m.
-    ceiling: f32,
-    /// What the drivers report.
-    faults: HardwareFaults,
-    /// The IMU repeats this sample instead of measuring.
-    frozen_imu: Option<ImuSample>,
-    /// The ground station sends its heartbeat (once a second, from the first tick) before
-    /// this tick.
-    gcs_until: u64,
-    /// The battery's voltage, V.
-    battery: Option<f32>,
-}
-
-impl World {
-    fn new(scenario: &Scenario) -> Self {
-        Self {
-            scenario: scenario.clone(),
-            height: 0.0,
-            speed: 0.0,
-            climb: 0.0,
-            tilt: 0.0,
-            tilt_rate: 0.0,
-            map_error: 1.0,
-            mocap: true,
-            ceiling: f32::INFINITY,
-            faults: HardwareFaults::NONE,
-            gcs_until: u64::MAX,
-            battery: None,
-            frozen_imu: None,
-        }
-    }
-
-    /// The IMU's sample at `tick`: the truth with a little noise (a real sensor never repeats
-    /// itself; the mission's IMU monitor flags one that does).
-    fn imu(&self, tick: u64) -> ImuSample {
-        let attitude = Quat::from_euler(self.tilt, 0.0, 0.0);
-        let accel = attitude.inverse_rotate(Vec3::new(0.0, 0.0, -GRAVITY - self.climb));
-        let h = tick.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40;
-        let dither = (h as f32 / (1u64 << 24) as f32 - 0.5) * 2e-3;
-        ImuSample {
-            gyro: Vec3::new(self.tilt_rate, 0.0, dither),
-            accel,
-        }
-    }
-
-    fn input(&self, tick: u64, command: Option<OperatorCommand>) -> TickInput {
-        let time_us = tick * DT_US;
-        let attitude = Quat::from_euler(self.tilt, 0.0, 0.0);
-        TickInput {
-            time_us,
-            imu: self.frozen_imu.unwrap_or_else(|| self.imu(tick)),
-            mocap: (self.mocap && tick % 4 == 0).then_some(MocapFix {
-                position: Vec3::new(0.0, 0.0, -self.height),
-                attitude,
-                stamp_us: time_us,
-            }),
-            command,
-            faults: self.faults,
-            supervision: Supervision {
-                gcs_heartbeat: tick < self.gcs_until && tick % 400 == 1,
-                battery_volts: self.battery,
-            },
-        }
-    }
-
-    /// Advances the world by one tick under the mission's outputs.
-    fn advance(&mut self, out: &TickOutput) {
-        let dt = DT_US as f32 * 1e-6;
-        let s = &self.scenario;
-        let truth = s.truth.unwrap_or(Truth {
-            com: Vec2::default(),
-            mass: 1.0,
-        });
-        let own = s.robots.mass * GRAVITY;
-        let n = s.robots.count();
-        let made: Vec<f32> = out.thrusts[..n]
-            .iter()
-            .map(|t| t / self.map_error)
-            .collect();
-        // A lift: the robots above their own weight tip the payload past their lift-off.
-        let lifting: Vec<usize> = (0..n).filter(|&i| made[i] > own + 0.05).collect();
-        let total: f32 = made.iter().sum();
-        let weight = (truth.mass + n as f32 * s.robots.mass) * GRAVITY;
-        if self.height <= 0.0 && !lifting.is_empty() && total < 0.9 * weight {
-            let points: Vec<Vec2> = lifting
-                .iter()
-                .map(|&i| s.payload.rail.point_at(out.robots[i]))
-                .collect();
-            let lambda = lift_off_thrust(&s.payload.hull, truth.com, truth.mass, &points, 0.1)
-                .unwrap_or(f32::INFINITY);
-            let excess = made[lifting[0]] - lambda;
-            self.tilt_rate = if excess > 0.0 { 0.02 * excess } else { 0.0 };
-        } else {
-            self.tilt_rate = -self.tilt / 0.2;
-        }
-        self.tilt += self.tilt_rate * dt;
-        // Vertical flight: a point mass on the ground.
-        let before = self.speed;
-        let acceleration = (total - weight) / (weight / GRAVITY);
-        self.speed += acceleration * dt;
-        self.height += self.speed * dt;
-        if self.height <= 0.0 {
-            self.height = 0.0;
-            self.speed = self.speed.max(0.0);
-        }
-        if self.height >= self.ceiling {
-            self.height = self.ceiling;
-            self.speed = self.speed.min(0.0);
-        }
-        self.climb = (self.speed - before) / dt;
-    }
-}
+use shared::scenario::Scenario;
+use test_support::world::{DT_US, World, straight_up_scenario};
 
 /// How the jobs come back.
 #[derive(Clone, Copy, PartialEq)]
@@ -175,7 +28,7 @@ struct Run {
     last: TickOutput,
     mission: Mission,
     job_ticks: Vec<(u64, u64, &'static str)>,
-    replies: Vec<(u64, crate::mission::CommandReply)>,
+    replies: Vec<(u64, shared::mission::CommandReply)>,
 }
 
 fn run_with(
@@ -258,7 +111,7 @@ fn tick_of(run: &Run, phase: Phase) -> u64 {
 
 #[test]
 fn the_whole_mission_runs_and_every_job_is_taken_at_its_deadline() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     let r = run(&s, &mut world, &[]);
     let seen = phases(&r);
@@ -300,7 +153,7 @@ fn the_whole_mission_runs_and_every_job_is_taken_at_its_deadline() {
 
 #[test]
 fn a_job_that_does_not_come_back_by_its_deadline_aborts_on_the_ground() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     let r = run_with(
         &s,
@@ -324,7 +177,7 @@ fn a_job_that_does_not_come_back_by_its_deadline_aborts_on_the_ground() {
 
 #[test]
 fn the_caller_is_told_when_the_next_tick_needs_a_result() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     let mut planner = MissionPlanner::new(&s, MissionConfig::default()).unwrap();
     let mut mission = Mission::new(&s, MissionConfig::default());
@@ -353,14 +206,14 @@ fn the_caller_is_told_when_the_next_tick_needs_a_result() {
         waited >= 4,
         "pair, update, formation and flight jobs: {waited}"
     );
-    assert!(!mission.deliver(crate::mission::JobResult::Updated(Err(
+    assert!(!mission.deliver(shared::mission::JobResult::Updated(Err(
         AbortReason::JobOverrun
     ))));
 }
 
 #[test]
 fn a_payload_too_heavy_for_the_grid_aborts_before_arming() {
-    let s = scenario(20.0);
+    let s = straight_up_scenario(20.0);
     let mut world = World::new(&s);
     let r = run(&s, &mut world, &[]);
     assert!(
@@ -388,7 +241,7 @@ fn a_payload_too_heavy_for_the_grid_aborts_before_arming() {
 
 #[test]
 fn without_motion_capture_the_checks_fail() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     world.mocap = false;
     let r = run(&s, &mut world, &[]);
@@ -400,7 +253,7 @@ fn without_motion_capture_the_checks_fail() {
 
 #[test]
 fn estimation_that_does_not_converge_never_flies() {
-    let mut s = scenario(3.5);
+    let mut s = straight_up_scenario(3.5);
     s.estimation.max_measurements = 1;
     s.estimation.threshold = 0.999;
     let mut world = World::new(&s);
@@ -414,7 +267,7 @@ fn estimation_that_does_not_converge_never_flies() {
 
 #[test]
 fn a_thin_thrust_margin_never_flies() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     let config = MissionConfig {
         max_hover_fraction: 0.3,
@@ -442,7 +295,7 @@ fn a_thin_thrust_margin_never_flies() {
 
 #[test]
 fn the_operator_aborts_on_the_ground_in_any_phase() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     // Ticks that fall in checks, a lift, and the rearrangement's formation decision.
     let probe = run(&s, &mut World::new(&s), &[]);
     let in_lift = tick_of(&probe, Phase::Lifting) + 100;
@@ -468,7 +321,7 @@ fn the_operator_aborts_on_the_ground_in_any_phase() {
 
 #[test]
 fn commands_out_of_place_are_refused_with_a_reason() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     let r = run(
         &s,
@@ -504,7 +357,7 @@ fn takeoff_tick(s: &Scenario) -> u64 {
 
 #[test]
 fn kill_in_flight_stops_the_rotors_on_the_same_tick() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let at = takeoff_tick(&s) + 1200; // 3 s into the flight
     let mut world = World::new(&s);
     let mut height_at_kill = 0.0;
@@ -529,7 +382,7 @@ fn kill_in_flight_stops_the_rotors_on_the_same_tick() {
 
 #[test]
 fn land_now_lands_where_the_vehicle_is() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let at = takeoff_tick(&s) + 1200;
     let mut world = World::new(&s);
     let r = run(&s, &mut world, &[(at, OperatorCommand::LandNow)]);
@@ -550,7 +403,7 @@ fn land_now_lands_where_the_vehicle_is() {
 
 #[test]
 fn an_abort_in_flight_lands_instead_of_dropping() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let at = takeoff_tick(&s) + 1200;
     let mut world = World::new(&s);
     let r = run(&s, &mut world, &[(at, OperatorCommand::Abort)]);
@@ -561,7 +414,7 @@ fn an_abort_in_flight_lands_instead_of_dropping() {
 
 #[test]
 fn a_payload_that_does_not_leave_the_ground_stops_the_rotors() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     let takeoff = takeoff_tick(&s);
     let r = run_with(
@@ -597,7 +450,7 @@ fn a_payload_that_does_not_leave_the_ground_stops_the_rotors() {
 
 #[test]
 fn losing_position_in_flight_descends_and_stops_after_the_expected_touchdown() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let at = takeoff_tick(&s) + 2000; // 5 s into the flight: at 0.5 m
     let mut world = World::new(&s);
     let mut height_at_detection = 0.0;
@@ -650,7 +503,7 @@ fn losing_position_in_flight_descends_and_stops_after_the_expected_touchdown() {
 #[test]
 fn a_plan_point_out_of_reach_lands_where_the_vehicle_is() {
     // An obstacle at 0.3 m: the take-off's end (0.5 m) is never reached.
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     world.ceiling = 0.3;
     // This world has no attitude dynamics (commanded torques turn nothing) and the ceiling
@@ -679,7 +532,7 @@ fn a_plan_point_out_of_reach_lands_where_the_vehicle_is() {
 
 #[test]
 fn an_unloaded_mission_refuses_to_start_and_a_loaded_one_flies() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     let mut mission = Mission::UNLOADED;
     let out = mission.step(&world.input(1, Some(OperatorCommand::Start)));
@@ -723,7 +576,7 @@ fn an_unloaded_mission_refuses_to_start_and_a_loaded_one_flies() {
 /// with the robot named, rotors off.
 #[test]
 fn a_stalled_robot_on_the_ground_stops_the_mission() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     let r = run_with(
         &s,
@@ -778,7 +631,7 @@ fn fault_reasons_concern_the_missions_robots() {
 /// A fault while idle (before the start) that has cleared changes nothing: the mission flies.
 #[test]
 fn a_fault_cleared_before_the_start_is_no_abort() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     world.faults.imu = true;
     let r = run_with(
@@ -802,7 +655,7 @@ fn a_fault_cleared_before_the_start_is_no_abort() {
 /// the reason is the IMU.
 #[test]
 fn an_imu_fault_in_flight_lands() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let at = takeoff_tick(&s) + 1200;
     let mut world = World::new(&s);
     let mut rotors_at_fault = 0.0;
@@ -841,7 +694,7 @@ fn an_imu_fault_in_flight_lands() {
 /// 100 ms and the mission stops on the ground with the reason, rotors never armed.
 #[test]
 fn a_frozen_imu_on_the_ground_stops_the_mission() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     let mut frozen_at = None;
     let r = run_with(
@@ -882,7 +735,7 @@ fn a_frozen_imu_on_the_ground_stops_the_mission() {
 /// dropped), then disarms, and the reason is the frozen IMU.
 #[test]
 fn a_frozen_imu_in_flight_lands_on_motion_capture() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let at = takeoff_tick(&s) + 1200;
     let mut world = World::new(&s);
     let r = run_with(
@@ -920,7 +773,7 @@ fn a_frozen_imu_in_flight_lands_on_motion_capture() {
 /// on the ground the report changes nothing.
 #[test]
 fn a_rotor_reported_stopped_in_flight_is_flown_without_and_lands() {
-    let s = scenario(3.5);
+    let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);
     world.faults.rotors_out = 1 << 2;
     let mut reported_at = None;
