@@ -11,6 +11,7 @@ pub mod cli;
 pub mod commands;
 pub mod estimate_report;
 pub mod figures;
+pub mod flight_log;
 pub mod formation_report;
 pub mod harness;
 pub mod hil;

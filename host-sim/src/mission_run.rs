@@ -22,9 +22,11 @@ use shared::mission::{
 };
 use shared::scenario::Scenario;
 
+use crate::flight_log::LogFile;
 use crate::harness::{CONTROL_HZ, DROP_TILT_DEG};
 use crate::plant::sensors::{ImuNoise, Sensors};
 use crate::plant::{PHYSICS_DT, Plant, PlantConfig};
+use std::path::PathBuf;
 
 /// Longest mission simulated, s.
 pub const MISSION_TIME_LIMIT: f32 = 900.0;
@@ -61,6 +63,8 @@ pub struct MissionSetup {
     /// Failure injection: rotors that stop in flight ([`crate::inject::rotors_out`] makes
     /// them from `--inject rotor-out:J@T`).
     pub rotors_out: Vec<RotorStop>,
+    /// Write the mission's flight log (ULog) to this file.
+    pub log: Option<PathBuf>,
 }
 
 /// A rotor that stops: from `after` seconds after take-off began, robot `robot`'s rotor
@@ -198,6 +202,7 @@ impl Default for MissionSetup {
             gcs_loss: None,
             battery_drop: None,
             rotors_out: Vec::new(),
+            log: None,
         }
     }
 }
@@ -700,6 +705,8 @@ pub struct InProcess {
     pub jobs: Vec<JobRequest>,
     /// Every refused start, in order.
     pub refusals: Vec<CommandRefusal>,
+    /// The flight log being written, if one is.
+    log: Option<LogFile>,
 }
 
 impl InProcess {
@@ -713,6 +720,7 @@ impl InProcess {
             reasons: Vec::new(),
             jobs: Vec::new(),
             refusals: Vec::new(),
+            log: None,
         })
     }
 
@@ -724,7 +732,7 @@ impl InProcess {
 
 impl Autopilot for InProcess {
     fn step(&mut self, sensed: &Sensed) -> Result<Commanded> {
-        let out = self.mission.step(&TickInput {
+        let input = TickInput {
             time_us: sensed.time_us,
             imu: sensed.imu,
             mocap: sensed.mocap,
@@ -734,7 +742,12 @@ impl Autopilot for InProcess {
                 gcs_heartbeat: sensed.gcs_heartbeat,
                 battery_volts: Some(sensed.battery_volts),
             },
-        });
+        };
+        let out = self.mission.step(&input);
+        // Recorded as the firmware's control step records it: before a job's result is taken.
+        if let Some(log) = &mut self.log {
+            log.step(&input, &out, &self.mission);
+        }
         if let Some(job) = &out.job {
             // The firmware runs it off the tick; its result is taken at its deadline tick
             // either way.
@@ -872,7 +885,17 @@ pub fn run(
     on_phase: &mut dyn FnMut(f32, &str, &str),
 ) -> Result<(MissionOutcome, InProcess)> {
     let mut autopilot = InProcess::new(scenario, setup.config)?;
+    if let Some(path) = &setup.log {
+        autopilot.log = Some(LogFile::create(
+            path,
+            &setup.config,
+            scenario.robots.max_thrust,
+        )?);
+    }
     let record = fly(scenario, setup, &mut autopilot, on_phase)?;
+    if let Some(log) = autopilot.log.take() {
+        log.finish()?;
+    }
     let mission = autopilot.mission();
     let delivered = mission.phase() == Phase::Disarmed
         && mission.abort_reason().is_none()

@@ -1,6 +1,7 @@
 //! The vehicle's MAVLink link as plain, synchronous, `no_std` logic:
 //! what the firmware and the hardware-in-the-loop plant say to each other, and how.
 //!
+//! - [`flight_log`]: what the vehicle records of a mission, as ULog.
 //! - [`frame`]: MAVLink 2 framing: a byte-at-a-time parser that survives any byte stream, and
 //!   the encoder (the `mavlink` crate's message types, CRCs and payload encoding).
 //! - [`hil_ethernet`]: the HIL link's Ethernet framing (QEMU's LAN9118 to the plant's UDP).
@@ -19,6 +20,7 @@
 //! - [`status`]: `STATUSTEXT` (long texts in chunks, and their reassembly) and named values.
 //! - [`telemetry`]: `SYS_STATUS`, `ATTITUDE_QUATERNION`, `LOCAL_POSITION_NED` at set rates.
 //! - [`timesync`]: `TIMESYNC`: the motion-capture computer's clock on the vehicle's.
+//! - [`ulog`]: PX4's ULog flight log format, each message's encoder.
 //! - [`vehicle`]: the vehicle's dispatch of received frames.
 //!
 //! Nothing here does I/O, allocates or panics on input: the firmware runs it under embassy on
@@ -37,6 +39,7 @@ extern crate std;
 
 pub mod command;
 pub mod command_wire;
+pub mod flight_log;
 pub mod frame;
 pub mod ftp;
 pub mod hil;
@@ -49,6 +52,7 @@ pub mod status;
 pub mod store;
 pub mod telemetry;
 pub mod timesync;
+pub mod ulog;
 pub mod vehicle;
 
 /// The trait of every message type (its id, `CRC_EXTRA`, encoding).

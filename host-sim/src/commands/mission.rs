@@ -82,6 +82,10 @@ pub struct MissionArgs {
     /// (phases, lifts against the model, height, attitude, thrusts) into this folder.
     #[arg(long, value_name = "DIR")]
     output: Option<PathBuf>,
+    /// Write the mission's flight log to this file (ULog, PX4's format: PlotJuggler, Flight
+    /// Review and pyulog open it; docs/formats.md#flight-logs).
+    #[arg(long, value_name = "FILE.ulg")]
+    log: Option<PathBuf>,
 }
 
 /// How a mission came out, for the exit code: dropped, aborted (or its start refused),
@@ -144,6 +148,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
             map_error,
             config,
             mocap_lost_after_takeoff: mocap_lost_after,
+            log: args.log.clone(),
             ..MissionSetup::default()
         },
     );
@@ -162,7 +167,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
     })?;
     progress?;
     let wall_s = started.elapsed().as_secs_f64();
-    let written = match &args.output {
+    let mut written = match &args.output {
         Some(dir) => mission_figures::write(
             dir,
             &loaded.name,
@@ -171,6 +176,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
         )?,
         None => Vec::new(),
     };
+    written.extend(args.log.iter().cloned());
     if json {
         print_json(json!({
             "scenario": loaded.name,

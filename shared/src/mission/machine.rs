@@ -170,6 +170,12 @@ impl Mission {
         self.estimate
     }
 
+    /// The estimate after the latest lift's update (before and after convergence), once a
+    /// lift's result has come back.
+    pub fn latest_estimate(&self) -> Option<Estimate> {
+        self.latest
+    }
+
     /// Lifts taken so far (as far as the results have come back).
     pub fn measurements(&self) -> u32 {
         self.latest.map_or(0, |e| e.measurements)

@@ -1,0 +1,15 @@
+//! The flight log (docs/formats.md#flight-logs): what the vehicle records of a mission, as
+//! ULog ([`crate::ulog`]) that PX4's tools open.
+//!
+//! - [`topics`]: the logged topics, PX4's names where the meaning is PX4's, with their
+//!   formats, and the fixed-size [`topics::Record`] of each.
+//! - [`recorder`]: what a control step records, from the mission's input and output.
+//! - [`file`]: the log's definitions (formats, information, parameters, subscriptions) and
+//!   each record as a ULog message.
+//!
+//! The firmware and the simulator record with the same code, so a simulated flight and a real
+//! one are compared in one tool.
+
+pub mod file;
+pub mod recorder;
+pub mod topics;

@@ -1,0 +1,357 @@
+//! What one control step records: from the mission's input and output (and the mission's
+//! state after the step) to the log's records and strings. The firmware's control step and
+//! the simulator's harness call [`Recorder::step`] after each `Mission::step`, so both logs
+//! hold the same records at the same times.
+//!
+//! Rates: at every step (400 Hz) `sensor_combined`, `vehicle_attitude`,
+//! `vehicle_angular_velocity` and `actuator_outputs`; `vehicle_local_position` at 100 Hz;
+//! `vehicle_mocap_odometry` with each fix; `battery_status` and `rail_position` at 10 Hz;
+//! `vehicle_status` and `fault` when they change and once a second; `lift`, `formation` and
+//! `adaptation` when they happen. Each transition is a logged string (its reason), and so is
+//! each notice of the supervision.
+
+use super::topics::{Record, per_robot};
+use crate::ulog::LogLevel;
+use core::fmt::Write as _;
+use heapless::String;
+use shared::control::trajectory::FlightPhase;
+use shared::estimation::Measurement;
+use shared::flight::adapt::AdaptEvent;
+use shared::mission::supervision::BatteryLevel;
+use shared::mission::{Mission, Phase, Reason, TickInput, TickOutput};
+
+/// The longest logged string, bytes (a longer text is cut at a character boundary).
+pub const TEXT_CAPACITY: usize = 160;
+
+/// Steps between two records of a 100 Hz topic.
+const EVERY_100_HZ: u64 = 4;
+/// Steps between two records of a 10 Hz topic.
+const EVERY_10_HZ: u64 = 40;
+/// Steps between two records of a topic written when it changes, at least.
+const EVERY_SECOND: u64 = 400;
+
+/// One entry of the log: a record of a topic, or a logged string.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LogEntry {
+    /// A topic's record.
+    Record(Record),
+    /// A logged string.
+    Text {
+        /// Its level.
+        level: LogLevel,
+        /// When, us.
+        timestamp: u64,
+        /// What it says.
+        text: String<TEXT_CAPACITY>,
+    },
+}
+
+impl LogEntry {
+    /// A logged string of `text` (cut to [`TEXT_CAPACITY`] bytes).
+    pub fn text(level: LogLevel, timestamp: u64, text: impl core::fmt::Display) -> Self {
+        let mut s = Cut(String::new());
+        let _ = write!(s, "{text}");
+        Self::Text {
+            level,
+            timestamp,
+            text: s.0,
+        }
+    }
+}
+
+/// A string that keeps what fits and drops the rest (whole characters).
+struct Cut(String<TEXT_CAPACITY>);
+
+impl core::fmt::Write for Cut {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        for c in s.chars() {
+            if self.0.push(c).is_err() {
+                break;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The mission's phase as the log's `mission_phase` number: 0 idle, 1 pre-flight checks,
+/// 2 selecting a pair, 3 moving robots, 4 lifting, 5 relaxing, 6 deciding the formation,
+/// 7 rearranging, 8 arming, 9 take-off, 10 trajectory, 11 hover, 12 landing, 13 touchdown,
+/// 14 disarmed, 15 aborted.
+pub fn phase_code(phase: Phase) -> u8 {
+    match phase {
+        Phase::Idle => 0,
+        Phase::PreflightChecks => 1,
+        Phase::SelectingPair => 2,
+        Phase::MovingRobots => 3,
+        Phase::Lifting => 4,
+        Phase::Relaxing => 5,
+        Phase::DecidingFormation => 6,
+        Phase::Rearranging => 7,
+        Phase::Arming => 8,
+        Phase::Flying(FlightPhase::Takeoff) => 9,
+        Phase::Flying(FlightPhase::Transit) => 10,
+        Phase::Flying(FlightPhase::Hover) => 11,
+        Phase::Flying(FlightPhase::Land) => 12,
+        Phase::Flying(FlightPhase::Done) => 13,
+        Phase::Disarmed => 14,
+        Phase::Aborted => 15,
+    }
+}
+
+/// PX4's `nav_state` nearest a phase: take-off 17 (`AUTO_TAKEOFF`), hover 4 (`AUTO_LOITER`),
+/// landing and touchdown 18 (`AUTO_LAND`), every other phase 3 (`AUTO_MISSION`).
+pub fn nav_state(phase: Phase) -> u8 {
+    match phase {
+        Phase::Flying(FlightPhase::Takeoff) => 17,
+        Phase::Flying(FlightPhase::Hover) => 4,
+        Phase::Flying(FlightPhase::Land | FlightPhase::Done) => 18,
+        _ => 3,
+    }
+}
+
+/// PX4's battery warning: 0 none, 1 low, 2 critical.
+fn battery_warning(level: BatteryLevel) -> u8 {
+    match level {
+        BatteryLevel::Ok => 0,
+        BatteryLevel::Low => 1,
+        BatteryLevel::Critical => 2,
+    }
+}
+
+/// The state the recorder keeps between steps.
+#[derive(Clone, Debug, Default)]
+pub struct Recorder {
+    steps: u64,
+    /// The last `vehicle_status` written: armed, navigation state, phase.
+    status: Option<(bool, u8, u8)>,
+    /// The last `fault` written: its fields after the timestamp.
+    fault: Option<(u8, u8, bool, bool, bool, u8)>,
+    /// The pair chosen for the lift under way and its information.
+    pair: Option<(u8, f32)>,
+    /// A lift read whose estimate has not come back yet.
+    reading: Option<(u64, Option<f32>)>,
+    /// Lifts whose update has come back (at the last `lift` record).
+    lifts: u32,
+}
+
+impl Recorder {
+    /// A recorder at the mission's start.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Records the step that took `input` and gave `out`; `mission` is the mission after the
+    /// step, `max_thrust` one rotor's maximum thrust, N. Each entry goes to `entry`.
+    pub fn step(
+        &mut self,
+        input: &TickInput,
+        out: &TickOutput,
+        mission: &Mission,
+        max_thrust: f32,
+        entry: &mut impl FnMut(LogEntry),
+    ) {
+        let t = input.time_us;
+        let every = |n: u64| self.steps.is_multiple_of(n);
+        let (at_100_hz, at_10_hz, at_1_hz) =
+            (every(EVERY_100_HZ), every(EVERY_10_HZ), every(EVERY_SECOND));
+        self.steps += 1;
+        let mut put = |r: Record| entry(LogEntry::Record(r));
+
+        let imu = input.imu;
+        put(Record::SensorCombined {
+            timestamp: t,
+            gyro_rad: [imu.gyro.x, imu.gyro.y, imu.gyro.z],
+            accelerometer_m_s2: [imu.accel.x, imu.accel.y, imu.accel.z],
+            integral_dt: 2500,
+        });
+        let att = out.nav.attitude;
+        let q = att.attitude;
+        put(Record::VehicleAttitude {
+            timestamp: t,
+            q: [q.w, q.x, q.y, q.z],
+        });
+        put(Record::VehicleAngularVelocity {
+            timestamp: t,
+            xyz: [att.rate.x, att.rate.y, att.rate.z],
+        });
+        let n = out.robots.len();
+        let mut output = [0.0; shared::scenario::MAX_ROBOTS];
+        if max_thrust > 0.0 {
+            for (o, thrust) in output.iter_mut().zip(&out.thrusts[..n]) {
+                *o = (thrust / max_thrust).clamp(0.0, 1.0);
+            }
+        }
+        put(Record::ActuatorOutputs {
+            timestamp: t,
+            noutputs: n as u32,
+            output,
+        });
+        if at_100_hz {
+            let pos = out.nav.position;
+            put(Record::VehicleLocalPosition {
+                timestamp: t,
+                valid: pos.valid,
+                position: [pos.position.x, pos.position.y, pos.position.z],
+                velocity: [pos.velocity.x, pos.velocity.y, pos.velocity.z],
+            });
+        }
+        if let Some(fix) = input.mocap {
+            let q = fix.attitude;
+            put(Record::VehicleMocapOdometry {
+                timestamp: t,
+                timestamp_sample: fix.stamp_us,
+                position: [fix.position.x, fix.position.y, fix.position.z],
+                q: [q.w, q.x, q.y, q.z],
+            });
+        }
+        let warning = battery_warning(mission.battery_level());
+        if at_10_hz {
+            put(Record::BatteryStatus {
+                timestamp: t,
+                voltage_v: mission.battery_volts(),
+                warning,
+            });
+            put(Record::RailPosition {
+                timestamp: t,
+                robots: n as u8,
+                commanded_m: per_robot(&out.robots),
+            });
+        }
+        let status = (out.armed, nav_state(out.phase), phase_code(out.phase));
+        if at_1_hz || self.status != Some(status) {
+            put(Record::VehicleStatus {
+                timestamp: t,
+                armed: status.0,
+                nav_state: status.1,
+                mission_phase: status.2,
+            });
+            self.status = Some(status);
+        }
+        let f = input.faults;
+        let fault = (
+            f.rotors_out,
+            f.stalled_robots,
+            f.imu,
+            mission.imu_dropped(),
+            mission.link_up(),
+            warning,
+        );
+        if at_1_hz || self.fault != Some(fault) {
+            put(Record::Fault {
+                timestamp: t,
+                rotors_out: fault.0,
+                stalled_robots: fault.1,
+                imu: fault.2,
+                imu_dropped: fault.3,
+                gcs_link: fault.4,
+                battery_warning: fault.5,
+            });
+            self.fault = Some(fault);
+        }
+        self.estimation(t, out, mission, &mut put);
+        if let Some(a) = out.adaptation {
+            let (event, com_mass, duration_s) = match a {
+                AdaptEvent::Shifted { com, mass } => (0, [com.x, com.y, mass], f32::NAN),
+                AdaptEvent::Moving { duration } => (1, [f32::NAN; 3], duration),
+                AdaptEvent::Rebalanced => (2, [f32::NAN; 3], f32::NAN),
+                AdaptEvent::GaveUp => (3, [f32::NAN; 3], f32::NAN),
+            };
+            put(Record::Adaptation {
+                timestamp: t,
+                event,
+                com_mass,
+                duration_s,
+            });
+            if a == AdaptEvent::Rebalanced {
+                put(Record::Formation {
+                    timestamp: t,
+                    robots: n as u8,
+                    position_m: per_robot(&out.robots),
+                    det_bbt: f32::NAN,
+                    in_flight: true,
+                });
+            }
+        }
+        if let Some(tr) = out.transition {
+            let level = if matches!(tr.reason, Reason::Abort(_)) {
+                LogLevel::Critical
+            } else {
+                LogLevel::Info
+            };
+            entry(LogEntry::text(
+                level,
+                t,
+                Transition(tr.to.name(), &tr.reason),
+            ));
+        }
+        if let Some(notice) = out.notice {
+            entry(LogEntry::text(LogLevel::Warning, t, notice));
+        }
+    }
+
+    /// The estimation's records: a lift once its reading's update has come back, the
+    /// formation once decided.
+    fn estimation(
+        &mut self,
+        t: u64,
+        out: &TickOutput,
+        mission: &Mission,
+        put: &mut impl FnMut(Record),
+    ) {
+        if let Some(tr) = out.transition {
+            match tr.reason {
+                Reason::PairChosen { group, information } => {
+                    self.pair = Some((group as u8, information));
+                }
+                Reason::LiftRead(m) => {
+                    let thrust = match m {
+                        Measurement::Lifted { thrust } => Some(thrust),
+                        Measurement::CouldNotLift => None,
+                    };
+                    self.reading = Some((t, thrust));
+                }
+                Reason::FormationChosen(det) => {
+                    if let Some(positions) = mission.formation() {
+                        put(Record::Formation {
+                            timestamp: t,
+                            robots: positions.len() as u8,
+                            position_m: per_robot(positions),
+                            det_bbt: det,
+                            in_flight: false,
+                        });
+                    }
+                }
+                _ => {}
+            }
+        }
+        // The update of a reading comes back some steps after it (a job): the lift is
+        // recorded with the estimate after it.
+        let estimate = mission.latest_estimate();
+        let lifts = mission.measurements();
+        if let Some((_, thrust)) = self.reading
+            && lifts > self.lifts
+        {
+            let (pair, information) = self.pair.unwrap_or((u8::MAX, f32::NAN));
+            put(Record::Lift {
+                timestamp: t,
+                pair,
+                information_nats: information,
+                thrust_n: thrust,
+                lifts,
+                theta: estimate.map_or([f32::NAN; 3], |e| e.theta),
+                confidence: estimate.map_or(f32::NAN, |e| e.confidence),
+            });
+            self.lifts = lifts;
+            self.reading = None;
+        }
+    }
+}
+
+/// A transition as its logged string: `phase: reason`.
+struct Transition<'a>(&'a str, &'a Reason);
+
+impl core::fmt::Display for Transition<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{}: {}", self.0, self.1)
+    }
+}

@@ -1,0 +1,190 @@
+//! The simulator's flight log (`mission --log`, docs/formats.md#flight-logs): the file is
+//! ULog as PX4 writes it, read here message by message (header, definitions before data, a
+//! subscription for every data message, each topic's timestamps in order, a `lift` record for
+//! every lift, a logged string for every phase), and opened by pyulog, the reference reader
+//! (`tests/ulog_check.py`). Without python3 and pyulog the second test says it was skipped and
+//! why; with `HIL_REQUIRED=1` (CI, which installs pyulog) it fails instead.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use host_sim::mission_run::{self, MissionSetup};
+use host_sim::scenario_file;
+use link::flight_log::topics::Topic;
+use shared::mission::params::TABLE;
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Flies rect-ex1 with its log written to a fresh file; the mission's outcome and the log.
+fn fly_logged(name: &str) -> (mission_run::MissionOutcome, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("flight-log-test-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary folder");
+    let path = dir.join("rect-ex1.ulg");
+    let loaded =
+        scenario_file::load(&workspace().join("tests/scenarios/rect-ex1.toml")).expect("loads");
+    let setup = MissionSetup {
+        log: Some(path.clone()),
+        ..MissionSetup::default()
+    };
+    let (outcome, _) =
+        mission_run::run(&loaded.scenario, &setup, &mut |_, _, _| {}).expect("the mission runs");
+    assert!(outcome.delivered);
+    (outcome, path)
+}
+
+/// One ULog message: its type and payload.
+struct Message<'a> {
+    kind: u8,
+    payload: &'a [u8],
+}
+
+/// The log's messages after the 16-byte header; panics on a message that runs past the end.
+fn messages(bytes: &[u8]) -> Vec<Message<'_>> {
+    assert_eq!(&bytes[..7], b"ULog\x01\x12\x35", "the file magic");
+    let mut at = 16;
+    let mut out = Vec::new();
+    while at < bytes.len() {
+        let size = u16::from_le_bytes([bytes[at], bytes[at + 1]]) as usize;
+        let kind = bytes[at + 2];
+        let end = at + 3 + size;
+        assert!(
+            end <= bytes.len(),
+            "a '{}' message runs past the end",
+            kind as char
+        );
+        out.push(Message {
+            kind,
+            payload: &bytes[at + 3..end],
+        });
+        at = end;
+    }
+    out
+}
+
+fn u64_at(b: &[u8], at: usize) -> u64 {
+    u64::from_le_bytes(b[at..at + 8].try_into().expect("8 bytes"))
+}
+
+#[test]
+fn the_mission_log_is_ulog_with_every_topic_parameter_lift_and_phase() {
+    let (outcome, path) = fly_logged("structure");
+    let bytes = std::fs::read(&path).expect("the log was written");
+    let all = messages(&bytes);
+    assert_eq!(all[0].kind, b'B', "the flag bits come first");
+    let first_data = all.iter().position(|m| m.kind == b'D').expect("data");
+    for m in &all[..first_data] {
+        assert!(
+            b"BFIPA".contains(&m.kind),
+            "'{}' before the data",
+            m.kind as char
+        );
+    }
+    let formats: Vec<&str> = all
+        .iter()
+        .filter(|m| m.kind == b'F')
+        .map(|m| std::str::from_utf8(m.payload).expect("text"))
+        .collect();
+    for topic in Topic::ALL {
+        assert!(
+            formats.contains(&topic.format()),
+            "{} has no format",
+            topic.name()
+        );
+    }
+    let parameters: Vec<&[u8]> = all
+        .iter()
+        .filter(|m| m.kind == b'P')
+        .map(|m| &m.payload[1..1 + m.payload[0] as usize])
+        .collect();
+    assert_eq!(parameters.len(), TABLE.len());
+    for spec in &TABLE {
+        let kind = if spec.integer { "int32_t" } else { "float" };
+        let key = format!("{kind} {}", spec.name);
+        assert!(parameters.contains(&key.as_bytes()), "no parameter {key}");
+    }
+
+    // Data: every message id subscribed before its data, each topic's time in order.
+    let mut subscribed: HashMap<u16, String> = HashMap::new();
+    let mut last: HashMap<u16, u64> = HashMap::new();
+    let mut count: HashMap<String, usize> = HashMap::new();
+    let mut strings = Vec::new();
+    for m in &all {
+        match m.kind {
+            b'A' => {
+                let id = u16::from_le_bytes([m.payload[1], m.payload[2]]);
+                let name = String::from_utf8(m.payload[3..].to_vec()).expect("a name");
+                subscribed.insert(id, name);
+            }
+            b'D' => {
+                let id = u16::from_le_bytes([m.payload[0], m.payload[1]]);
+                let name = subscribed.get(&id).expect("data of a subscribed id");
+                let t = u64_at(m.payload, 2);
+                let before = last.insert(id, t).unwrap_or(0);
+                assert!(t >= before, "{name}: time {t} after {before}");
+                *count.entry(name.clone()).or_default() += 1;
+            }
+            b'L' => strings.push(String::from_utf8(m.payload[9..].to_vec()).expect("text")),
+            _ => {}
+        }
+    }
+    let ticks = count["sensor_combined"];
+    assert_eq!(ticks as u64, outcome.ticks, "an IMU sample a control step");
+    assert_eq!(count["actuator_outputs"], ticks);
+    assert_eq!(count["lift"], outcome.lifts.len(), "a lift record a lift");
+    assert_eq!(count["formation"], 1);
+    for (phase, _) in &outcome.phases {
+        assert!(
+            strings.iter().any(|s| s.starts_with(&format!("{phase}: "))),
+            "no logged string for the phase {phase}"
+        );
+    }
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn pyulog_opens_the_mission_log() {
+    let (_, path) = fly_logged("pyulog");
+    let mut args: Vec<String> = vec![
+        workspace()
+            .join("tests/ulog_check.py")
+            .display()
+            .to_string(),
+        path.display().to_string(),
+        TABLE.len().to_string(),
+    ];
+    // Every topic but `adaptation`, which has data only when the load shifts in flight
+    // (pyulog lists the topics that have data).
+    args.extend(
+        Topic::ALL
+            .iter()
+            .filter(|t| **t != Topic::Adaptation)
+            .map(|t| t.name().to_string()),
+    );
+    let output = match Command::new("python3").args(&args).output() {
+        Ok(output) => output,
+        Err(e) => return skip(&format!("python3 cannot be run ({e})")),
+    };
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    if output.status.code() == Some(2) {
+        return skip(stderr.trim());
+    }
+    assert!(output.status.success(), "pyulog: {stderr}");
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "{}", stdout.trim());
+    let _ = std::fs::remove_file(&path);
+}
+
+fn skip(reason: &str) {
+    if std::env::var("HIL_REQUIRED").is_ok_and(|v| v == "1") {
+        panic!("flight log: HIL_REQUIRED=1 but {reason}");
+    }
+    use std::io::Write;
+    let _ = writeln!(
+        std::io::stderr(),
+        "flight log with pyulog: SKIPPED: {reason}"
+    );
+}
