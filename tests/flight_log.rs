@@ -137,7 +137,9 @@ fn the_mission_log_is_ulog_with_every_topic_parameter_lift_and_phase() {
     assert_eq!(count["formation"], 1);
     for (phase, _) in &outcome.phases {
         assert!(
-            strings.iter().any(|s| s.starts_with(&format!("{phase}: "))),
+            strings
+                .iter()
+                .any(|s| s.starts_with(&format!("phase: {phase}: "))),
             "no logged string for the phase {phase}"
         );
     }

@@ -19,16 +19,18 @@ use core::fmt::Write as _;
 
 use heapless::Vec;
 pub use link::command::OperatorCommand;
+use link::flight_log::recorder::step_texts;
 pub use link::hil::{MAX_ROBOTS, MocapFix};
 pub use link::status::MissionState;
 use link::status::Text;
 use link::telemetry::VehicleSnapshot;
+use link::ulog::LogLevel;
 use shared::control::navigator::{ImuSample, MocapFix as Fix};
 use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
 use shared::mission::supervision::BatteryLevel;
 use shared::mission::{
-    AbortReason, CommandRefusal, HardwareFaults, Mission, MissionConfig, MissionPlanner, Notice,
+    CommandRefusal, HardwareFaults, Mission, MissionConfig, MissionPlanner,
     OperatorCommand as Command, Phase, Reason, Supervision, TickInput as MissionInput,
 };
 use shared::scenario::Scenario;
@@ -202,6 +204,17 @@ impl Default for Autonomy {
     }
 }
 
+/// The `STATUSTEXT` severity of a text's level.
+fn severity(level: LogLevel) -> Severity {
+    match level {
+        LogLevel::Emergency | LogLevel::Alert | LogLevel::Critical => Severity::Critical,
+        LogLevel::Error => Severity::Error,
+        LogLevel::Warning => Severity::Warning,
+        LogLevel::Notice => Severity::Notice,
+        LogLevel::Info | LogLevel::Debug => Severity::Info,
+    }
+}
+
 fn command(c: OperatorCommand) -> Command {
     match c {
         OperatorCommand::Start => Command::Start,
@@ -285,34 +298,15 @@ impl Autonomy {
             command.zip(out.reply).map(|(given, reply)| {
                 let result = match reply.outcome {
                     Ok(()) => CommandResult::Accepted,
-                    Err(why) => {
-                        report.text(
-                            Severity::Error,
-                            format_args!("command {} refused: {why}", reply.command.name()),
-                        );
-                        match why {
-                            CommandRefusal::AlreadyStarted => CommandResult::TemporarilyRejected,
-                            _ => CommandResult::Denied,
-                        }
-                    }
+                    Err(CommandRefusal::AlreadyStarted) => CommandResult::TemporarilyRejected,
+                    Err(_) => CommandResult::Denied,
                 };
                 (given, result)
             })
         };
+        // What the step says to people (the log keeps the same texts).
+        step_texts(&out, &mut |level, text| report.text(severity(level), text));
         if let Some(t) = out.transition {
-            let severity = match t.reason {
-                Reason::Abort(
-                    AbortReason::Killed
-                    | AbortReason::TakeoffFailed { .. }
-                    | AbortReason::BatteryCritical { .. },
-                ) => Severity::Critical,
-                Reason::Abort(_) => Severity::Warning,
-                _ => Severity::Info,
-            };
-            report.text(
-                severity,
-                format_args!("phase: {}: {}", t.to.name(), t.reason),
-            );
             match t.reason {
                 Reason::PairChosen { group, .. } => {
                     report.value("lift_pair", Value::Int(group as i32));
@@ -332,17 +326,6 @@ impl Autonomy {
                 Reason::FormationChosen(det) => report.value("det", Value::Float(det)),
                 _ => {}
             }
-        }
-        if let Some(event) = out.adaptation {
-            report.text(Severity::Notice, format_args!("adapt: {event}"));
-        }
-        if let Some(notice) = out.notice {
-            let severity = match notice {
-                Notice::BatteryCritical { .. } => Severity::Critical,
-                Notice::LinkRegained { .. } => Severity::Notice,
-                _ => Severity::Warning,
-            };
-            report.text(severity, format_args!("{notice}"));
         }
         let robots = if self.loaded {
             out.robots.len().min(MAX_ROBOTS)

@@ -7,8 +7,8 @@
 //! `vehicle_angular_velocity` and `actuator_outputs`; `vehicle_local_position` at 100 Hz;
 //! `vehicle_mocap_odometry` with each fix; `battery_status` and `rail_position` at 10 Hz;
 //! `vehicle_status` and `fault` when they change and once a second; `lift`, `formation` and
-//! `adaptation` when they happen. Each transition is a logged string (its reason), and so is
-//! each notice of the supervision.
+//! `adaptation` when they happen. What the step says to people ([`step_texts`], the
+//! firmware's `STATUSTEXT`s) is each a logged string.
 
 use super::topics::{Record, per_robot};
 use crate::ulog::LogLevel;
@@ -18,7 +18,7 @@ use shared::control::trajectory::FlightPhase;
 use shared::estimation::Measurement;
 use shared::flight::adapt::AdaptEvent;
 use shared::mission::supervision::BatteryLevel;
-use shared::mission::{Mission, Phase, Reason, TickInput, TickOutput};
+use shared::mission::{AbortReason, Mission, Notice, Phase, Reason, TickInput, TickOutput};
 
 /// The longest logged string, bytes (a longer text is cut at a character boundary).
 pub const TEXT_CAPACITY: usize = 160;
@@ -48,9 +48,9 @@ pub enum LogEntry {
 
 impl LogEntry {
     /// A logged string of `text` (cut to [`TEXT_CAPACITY`] bytes).
-    pub fn text(level: LogLevel, timestamp: u64, text: impl core::fmt::Display) -> Self {
+    pub fn text(level: LogLevel, timestamp: u64, text: core::fmt::Arguments<'_>) -> Self {
         let mut s = Cut(String::new());
-        let _ = write!(s, "{text}");
+        let _ = s.write_fmt(text);
         Self::Text {
             level,
             timestamp,
@@ -272,21 +272,9 @@ impl Recorder {
                 });
             }
         }
-        if let Some(tr) = out.transition {
-            let level = if matches!(tr.reason, Reason::Abort(_)) {
-                LogLevel::Critical
-            } else {
-                LogLevel::Info
-            };
-            entry(LogEntry::text(
-                level,
-                t,
-                Transition(tr.to.name(), &tr.reason),
-            ));
-        }
-        if let Some(notice) = out.notice {
-            entry(LogEntry::text(LogLevel::Warning, t, notice));
-        }
+        step_texts(out, &mut |level, text| {
+            entry(LogEntry::text(level, t, text))
+        });
     }
 
     /// The estimation's records: a lift once its reading's update has come back, the
@@ -347,11 +335,42 @@ impl Recorder {
     }
 }
 
-/// A transition as its logged string: `phase: reason`.
-struct Transition<'a>(&'a str, &'a Reason);
-
-impl core::fmt::Display for Transition<'_> {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "{}: {}", self.0, self.1)
+/// The texts a step says to people, each with its level: what the firmware sends as
+/// `STATUSTEXT` and the log keeps as logged strings. Each transition as `phase: NAME: reason`
+/// (critical for a kill, a failed take-off or a critical battery, a warning for another
+/// abort), each step of the in-flight adaptation as `adapt: ...` (notice), each notice of the
+/// supervision (critical for a critical battery, notice for a link regained, else a warning)
+/// and a refused command as `command NAME refused: why` (error).
+pub fn step_texts(out: &TickOutput, each: &mut impl FnMut(LogLevel, core::fmt::Arguments<'_>)) {
+    if let Some(reply) = out.reply
+        && let Err(why) = reply.outcome
+    {
+        each(
+            LogLevel::Error,
+            format_args!("command {} refused: {why}", reply.command.name()),
+        );
+    }
+    if let Some(t) = out.transition {
+        let level = match t.reason {
+            Reason::Abort(
+                AbortReason::Killed
+                | AbortReason::TakeoffFailed { .. }
+                | AbortReason::BatteryCritical { .. },
+            ) => LogLevel::Critical,
+            Reason::Abort(_) => LogLevel::Warning,
+            _ => LogLevel::Info,
+        };
+        each(level, format_args!("phase: {}: {}", t.to.name(), t.reason));
+    }
+    if let Some(event) = out.adaptation {
+        each(LogLevel::Notice, format_args!("adapt: {event}"));
+    }
+    if let Some(notice) = out.notice {
+        let level = match notice {
+            Notice::BatteryCritical { .. } => LogLevel::Critical,
+            Notice::LinkRegained { .. } => LogLevel::Notice,
+            _ => LogLevel::Warning,
+        };
+        each(level, format_args!("{notice}"));
     }
 }
