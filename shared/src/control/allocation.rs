@@ -112,39 +112,41 @@ impl core::fmt::Display for AllocationError {
 impl core::error::Error for AllocationError {}
 
 type Effectiveness = SMatrix<f32, 4, MAX_ROBOTS>;
-type Mixing = SMatrix<f32, MAX_ROBOTS, 4>;
 /// Thrust, roll and pitch rows of an effectiveness matrix.
 type Rows3 = SMatrix<f32, 3, MAX_ROBOTS>;
+/// A mixing matrix with `R` axes, one column per axis and one thrust per rotor in each
+/// (zeros past the rotors in use): the layout [`Mixer`] keeps.
+type MixColumns<const R: usize> = [[f32; MAX_ROBOTS]; R];
 
 /// Whether `product` (effectiveness times mixing) is the identity: a nearly singular
 /// `A A^T` inverts to garbage in f32, and the mixing must reproduce each axis it claims.
-fn reproduces<const R: usize>(product: &SMatrix<f32, R, R>) -> bool {
-    (0..R).all(|r| {
-        (0..R).all(|c| {
+fn reproduces<const R: usize>(product: &[[f32; R]; R]) -> bool {
+    product.iter().enumerate().all(|(r, row)| {
+        row.iter().enumerate().all(|(c, &v)| {
             let want = if r == c { 1.0 } else { 0.0 };
-            (product[(r, c)] - want).abs() <= 1e-3
+            (v - want).abs() <= 1e-3
         })
     })
 }
 
-/// The columns of `a`, each as an array (nalgebra stores a matrix column after column).
-fn columns_of<const R: usize>(a: &SMatrix<f32, R, MAX_ROBOTS>) -> [[f32; R]; MAX_ROBOTS] {
-    let data = a.as_slice();
-    core::array::from_fn(|i| core::array::from_fn(|r| data[i * R + r]))
+/// The first `count` columns of `a`, each as an array, borrowed from its storage (nalgebra
+/// stores a matrix column after column).
+fn used_columns<const R: usize>(a: &SMatrix<f32, R, MAX_ROBOTS>, count: usize) -> &[[f32; R]] {
+    &a.data.0[..count.min(MAX_ROBOTS)]
 }
 
 /// The right pseudo-inverse `a^T (a a^T)^-1` of `a`'s first `count` columns (the rest of
-/// `a` is zero, and so are the result's rows past `count`), or `None` when `a a^T` is not
-/// positive definite (the rows are not independent). `a a^T = L D L^T` (`L` unit lower
-/// triangular), and each rotor's row of the result solves `L D L^T m_i = a_i` for its column
-/// `a_i`: products over the rotors in use only and no explicit inverse (a rebuild is a job;
-/// this is most of its cost).
+/// `a` is zero, and so are the result's rotors past `count`), as one column per row of `a`,
+/// or `None` when `a a^T` is not positive definite (the rows are not independent).
+/// `a a^T` (only its lower triangle summed) `= L D L^T` (`L` unit lower triangular), and each
+/// rotor's row of the result solves `L D L^T m_i = a_i` for its column `a_i`, multiplying by
+/// the pivots' reciprocals: products over the rotors in use only and no explicit inverse (a
+/// rebuild is a job; this is most of its cost).
 fn pseudo_inverse<const R: usize>(
     a: &SMatrix<f32, R, MAX_ROBOTS>,
     count: usize,
-) -> Option<SMatrix<f32, MAX_ROBOTS, R>> {
-    let all = columns_of(a);
-    let columns = &all[..count.min(MAX_ROBOTS)];
+) -> Option<MixColumns<R>> {
+    let columns = used_columns(a, count);
     let mut gram = [[0.0f32; R]; R];
     for col in columns {
         for r in 0..R {
@@ -174,8 +176,8 @@ fn pseudo_inverse<const R: usize>(
             l[i][j] = v * inv_d[j];
         }
     }
-    let mut rows = [[0.0f32; R]; MAX_ROBOTS];
-    for (row, col) in rows.iter_mut().zip(columns) {
+    let mut out = [[0.0f32; MAX_ROBOTS]; R];
+    for (i, col) in columns.iter().enumerate() {
         // L y = a_i, D z = y, L^T x = z.
         let mut y = *col;
         for r in 0..R {
@@ -191,34 +193,42 @@ fn pseudo_inverse<const R: usize>(
                 y[r] -= l[k][r] * y[k];
             }
         }
-        *row = y;
+        for (axis, &v) in out.iter_mut().zip(&y) {
+            axis[i] = v;
+        }
     }
-    Some(SMatrix::<f32, MAX_ROBOTS, R>::from_fn(|i, k| rows[i][k]))
+    Some(out)
+}
+
+/// Whether every thrust of mixing `m` for its first `count` rotors is finite.
+fn all_finite<const R: usize>(m: &MixColumns<R>, count: usize) -> bool {
+    m.iter()
+        .all(|axis| axis[..count.min(MAX_ROBOTS)].iter().all(|v| v.is_finite()))
 }
 
 /// `a m` over the first `count` rotors.
 fn product<const R: usize>(
     a: &SMatrix<f32, R, MAX_ROBOTS>,
-    m: &SMatrix<f32, MAX_ROBOTS, R>,
+    m: &MixColumns<R>,
     count: usize,
-) -> SMatrix<f32, R, R> {
+) -> [[f32; R]; R] {
     let mut p = [[0.0f32; R]; R];
-    for (i, col) in columns_of(a).iter().take(count).enumerate() {
+    for (i, col) in used_columns(a, count).iter().enumerate() {
         for c in 0..R {
-            let share = m[(i, c)];
+            let share = m[c][i];
             for r in 0..R {
                 p[r][c] += col[r] * share;
             }
         }
     }
-    SMatrix::<f32, R, R>::from_fn(|r, c| p[r][c])
+    p
 }
 
 /// The pseudo-inverse `a^T (a a^T)^-1` of thrust, roll and pitch rows of `count` rotors, if
 /// they are independent.
-fn right_inverse(a: &Rows3, count: usize) -> Option<SMatrix<f32, MAX_ROBOTS, 3>> {
+fn right_inverse(a: &Rows3, count: usize) -> Option<MixColumns<3>> {
     let m = pseudo_inverse(a, count)?;
-    (m.iter().all(|v| v.is_finite()) && reproduces(&product(a, &m, count))).then_some(m)
+    (all_finite(&m, count) && reproduces(&product(a, &m, count))).then_some(m)
 }
 
 /// Smallest share of the hover a flown rotor must carry, as a fraction of the flown rotors'
@@ -232,7 +242,7 @@ const MIN_HOVER_SHARE: f32 = 0.2;
 /// out and the rest solved again. Returns the rows left (the rotors left out with zero
 /// columns) and the pseudo-inverse of those rows; `None` when they can no longer produce the
 /// three axes.
-fn hovering_rotors(a: &Rows3, count: usize) -> Option<(Rows3, SMatrix<f32, MAX_ROBOTS, 3>)> {
+fn hovering_rotors(a: &Rows3, count: usize) -> Option<(Rows3, MixColumns<3>)> {
     let mut left = *a;
     for _ in 0..count {
         let m = right_inverse(&left, count)?;
@@ -240,7 +250,7 @@ fn hovering_rotors(a: &Rows3, count: usize) -> Option<(Rows3, SMatrix<f32, MAX_R
         let least = MIN_HOVER_SHARE / math::max(flown as f32, 1.0);
         let mut worst: Option<(usize, f32)> = None;
         for i in (0..count).filter(|&i| left[(0, i)] != 0.0) {
-            let share = m[(i, 0)];
+            let share = m[0][i];
             if share < least && worst.is_none_or(|(_, w)| share < w) {
                 worst = Some((i, share));
             }
@@ -362,39 +372,29 @@ impl Mixer {
         max_thrust: f32,
         a: Effectiveness,
     ) -> Result<Self, AllocationError> {
-        let mut mixing = Mixing::zeros();
-        match kind {
+        let columns = match kind {
             MixerKind::Allocation => {
-                mixing = pseudo_inverse(&a, count).ok_or(AllocationError::Uncontrollable)?;
+                let columns = pseudo_inverse(&a, count).ok_or(AllocationError::Uncontrollable)?;
+                // A nearly singular `A A^T` inverts to garbage in f32: the mixing must
+                // reproduce each axis it claims (the identity on the rows inverted).
+                if !all_finite(&columns, count) || !reproduces(&product(&a, &columns, count)) {
+                    return Err(AllocationError::Uncontrollable);
+                }
+                columns
             }
             MixerKind::EqualSplit => {
                 let b: SMatrix<f32, 3, MAX_ROBOTS> = a.fixed_rows::<3>(1).into_owned();
-                let torque_columns =
+                let [roll, pitch, yaw] =
                     pseudo_inverse(&b, count).ok_or(AllocationError::Uncontrollable)?;
-                for i in 0..count {
-                    mixing[(i, 0)] = 1.0 / count as f32;
-                    for axis in 0..3 {
-                        mixing[(i, axis + 1)] = torque_columns[(i, axis)];
-                    }
+                let mut collective = [0.0f32; MAX_ROBOTS];
+                collective[..count].fill(1.0 / count as f32);
+                let columns = [collective, roll, pitch, yaw];
+                if !all_finite(&columns, count) {
+                    return Err(AllocationError::Uncontrollable);
                 }
+                columns
             }
-        }
-        if mixing.iter().any(|v| !v.is_finite()) {
-            return Err(AllocationError::Uncontrollable);
-        }
-        if kind == MixerKind::Allocation {
-            // A nearly singular `A A^T` inverts to garbage in f32: the mixing must reproduce
-            // each axis it claims (the identity on the rows inverted).
-            if !reproduces(&product(&a, &mixing, count)) {
-                return Err(AllocationError::Uncontrollable);
-            }
-        }
-        let mut columns = [[0.0f32; MAX_ROBOTS]; 4];
-        for (axis, column) in columns.iter_mut().enumerate() {
-            for (i, slot) in column.iter_mut().enumerate().take(count) {
-                *slot = mixing[(i, axis)];
-            }
-        }
+        };
         Ok(Self {
             kind,
             count,
@@ -433,12 +433,8 @@ impl Mixer {
         // Fly only the rotors that can share the hover: one held at zero by its column could
         // not go below it for a torque, and the allocator would give up roll and pitch.
         let (flown, m3) = hovering_rotors(&a3, count).unwrap_or((a3, plain));
-        let mut columns = [[0.0f32; MAX_ROBOTS]; 4];
-        for (axis, column) in columns.iter_mut().take(3).enumerate() {
-            for (i, slot) in column.iter_mut().enumerate().take(count) {
-                *slot = m3[(i, axis)];
-            }
-        }
+        let [collective, roll, pitch] = m3;
+        let mut columns = [collective, roll, pitch, [0.0f32; MAX_ROBOTS]];
         let mut full = a;
         full.fixed_rows_mut::<3>(0).copy_from(&flown);
         for i in 0..count {
