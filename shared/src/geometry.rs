@@ -419,16 +419,15 @@ impl ConvexHull {
         &self.vertices
     }
 
-    /// Edge `i` as (start, end), counter-clockwise.
-    fn edge(&self, i: usize) -> (Vec2, Vec2) {
-        let n = self.vertices.len();
-        (self.vertices[i], self.vertices[(i + 1) % n])
+    /// The hull's edges as (start, end), counter-clockwise, without a division per edge.
+    fn edges(&self) -> impl Iterator<Item = (Vec2, Vec2)> + '_ {
+        let ends = self.vertices.iter().skip(1).chain(self.vertices.first());
+        self.vertices.iter().copied().zip(ends.copied())
     }
 
     /// True when `p` lies inside the hull or within `tolerance` metres outside its boundary.
     pub fn contains(&self, p: Vec2, tolerance: f32) -> bool {
-        (0..self.vertices.len()).all(|i| {
-            let (a, b) = self.edge(i);
+        self.edges().all(|(a, b)| {
             let d = b - a;
             let side = d.cross(p - a);
             if tolerance >= 0.0 {
@@ -445,19 +444,22 @@ impl ConvexHull {
     /// `sup { t >= 0 : origin + t * direction in H }`: how far along `direction` (in units of its
     /// length) a point starting at `origin` can travel before it leaves the hull.
     /// `None` when `origin` is outside the hull; `f32::INFINITY` when `direction` is zero.
+    ///
+    /// One pass over the edges: each edge's side of `origin` is the containment test's
+    /// ([`Self::contains`] with a tolerance of `1e-6`) and the slack the ray uses up.
     pub fn exit_distance(&self, origin: Vec2, direction: Vec2) -> Option<f32> {
-        if !self.contains(origin, 1e-6) {
-            return None;
-        }
+        const TOLERANCE: f32 = 1e-6;
         let mut t_max = f32::INFINITY;
-        for i in 0..self.vertices.len() {
-            let (a, b) = self.edge(i);
+        for (a, b) in self.edges() {
             let d = b - a;
+            let side = d.cross(origin - a);
+            if !(side >= 0.0 || side * side <= TOLERANCE * TOLERANCE * d.dot(d)) {
+                return None;
+            }
             // Inside: d x (p - a) >= 0. Along the ray it falls at rate d x direction.
             let rate = d.cross(direction);
             if rate < 0.0 {
-                let slack = d.cross(origin - a).max(0.0);
-                t_max = t_max.min(slack / -rate);
+                t_max = t_max.min(side.max(0.0) / -rate);
             }
         }
         Some(t_max)

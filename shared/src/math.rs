@@ -172,21 +172,22 @@ pub fn ln_sum_exp_from(terms: &[f32], top: f32) -> f32 {
 pub fn exp_nonpositive(x: f32) -> f32 {
     const LN2_HI: f32 = 0.693_145_75;
     const LN2_LO: f32 = 1.428_606_8e-6;
-    if x.is_nan() || x < -87.0 {
-        return exp(x);
+    // One comparison for both exceptions: NaN fails it as anything below -87 does.
+    if x >= -87.0 {
+        let t = x * core::f32::consts::LOG2_E;
+        // The nearest whole number: `-t >= 0`, and truncating `-t + 1/2` rounds it.
+        let k = -((0.5 - t) as i32);
+        let kf = k as f32;
+        let r = (x - kf * LN2_HI) - kf * LN2_LO;
+        let p = 1.0
+            + r * (1.0
+                + r * (0.5
+                    + r * (1.0 / 6.0
+                        + r * (1.0 / 24.0
+                            + r * (1.0 / 120.0 + r * (1.0 / 720.0 + r * (1.0 / 5040.0)))))));
+        return p * f32::from_bits(((k + 127) as u32) << 23);
     }
-    let t = x * core::f32::consts::LOG2_E;
-    // The nearest whole number: `-t >= 0`, and truncating `-t + 1/2` rounds it.
-    let k = -((0.5 - t) as i32);
-    let kf = k as f32;
-    let r = (x - kf * LN2_HI) - kf * LN2_LO;
-    let p = 1.0
-        + r * (1.0
-            + r * (0.5
-                + r * (1.0 / 6.0
-                    + r * (1.0 / 24.0
-                        + r * (1.0 / 120.0 + r * (1.0 / 720.0 + r * (1.0 / 5040.0)))))));
-    p * f32::from_bits(((k + 127) as u32) << 23)
+    exp(x)
 }
 
 /// Sorts a short slice by `less` (insertion sort, stable). The hull's points and a face's

@@ -428,15 +428,12 @@ impl Estimator {
             size: g.size,
             robot_mass: self.robot_mass,
         };
-        let update = self
-            .posterior
-            .update(&self.grid, &cell, &self.likelihood, measurement);
-        self.guard.update(
+        let update = self.guard.update_with_grid(
+            &mut self.posterior,
             &self.grid,
             &cell,
             &self.likelihood,
             measurement,
-            update.shift,
         );
         self.measurements += 1;
         if matches!(measurement, Measurement::Lifted { .. }) {

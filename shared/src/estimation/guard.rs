@@ -18,7 +18,9 @@ use heapless::Vec;
 
 use crate::estimation::grid::{Grid, GridError};
 use crate::estimation::likelihood::{LiftLikelihood, Measurement};
-use crate::estimation::posterior::{CellModel, CellShares};
+use crate::estimation::posterior::{
+    CellModel, CellShares, CellTerms, Posterior, Reading, UpdatePass, UpdateSummary,
+};
 use crate::geometry::{ConvexHull, Vec2};
 use crate::math;
 use crate::scenario::MAX_GRID_POINTS;
@@ -150,12 +152,134 @@ impl GuardBand {
         measurement: Measurement,
         shift: f32,
     ) {
+        let reading = Reading {
+            cell,
+            likelihood,
+            measurement,
+        };
+        let res = grid.resolution();
+        let mut terms = [0.0; 27];
+        for c in 0..grid.com_len() {
+            if self.supports_mass_faces(grid, c) {
+                let shares = cell.shares(grid.com(c), res[0], res[1]);
+                self.weigh_mass_faces(grid, c, &shares, &reading, &mut terms);
+            }
+        }
+        self.finish_update(grid, &reading, shift, &mut terms);
+    }
+
+    /// Bayes update of the grid's `posterior` and of the guard band with one reading, as
+    /// [`Posterior::update`] and then [`Self::update`] make them, in one pass over the grid's
+    /// COM points: the two mass faces lie over the grid's COM points, so each COM's lift
+    /// shares (most of a point's cost) serve its grid block and its two mass-face points.
+    pub fn update_with_grid(
+        &mut self,
+        posterior: &mut Posterior,
+        grid: &Grid,
+        cell: &CellModel<'_>,
+        likelihood: &LiftLikelihood,
+        measurement: Measurement,
+    ) -> UpdateSummary {
+        let reading = Reading {
+            cell,
+            likelihood,
+            measurement,
+        };
+        let res = grid.resolution();
+        let mut terms = [0.0; 27];
+        let mut pass = UpdatePass::START;
+        for c in 0..grid.com_len() {
+            let on_grid = posterior.supports_com(grid, c);
+            let on_faces = self.supports_mass_faces(grid, c);
+            if !on_grid && !on_faces {
+                continue;
+            }
+            let shares = cell.shares(grid.com(c), res[0], res[1]);
+            if on_grid {
+                posterior.weigh_com(grid, c, &shares, &reading, &mut terms, &mut pass);
+            }
+            if on_faces {
+                self.weigh_mass_faces(grid, c, &shares, &reading, &mut terms);
+            }
+        }
+        let summary = posterior.renormalise(pass);
+        self.finish_update(grid, &reading, summary.shift, &mut terms);
+        summary
+    }
+
+    /// The mass faces (below and above): the last two, each with one point per grid COM.
+    fn mass_faces(&self) -> [Face; 2] {
+        [self.faces[4], self.faces[5]]
+    }
+
+    /// Whether either mass face's points over grid COM point `c` have support.
+    fn supports_mass_faces(&self, grid: &Grid, c: usize) -> bool {
+        let ns = grid.scale_len();
+        self.mass_faces().iter().any(|face| {
+            let base = face.start + c * ns;
+            self.ln_p[base..base + ns]
+                .iter()
+                .any(|v| *v != f32::NEG_INFINITY)
+        })
+    }
+
+    /// Adds the reading's cell log-likelihood to the mass faces' points over grid COM point
+    /// `c`, whose cell's lift shares are `shares` (the renormalising shift comes after, in
+    /// [`Self::finish_update`]).
+    fn weigh_mass_faces(
+        &mut self,
+        grid: &Grid,
+        c: usize,
+        shares: &CellShares,
+        reading: &Reading<'_, '_>,
+        terms: &mut CellTerms,
+    ) {
+        let ns = grid.scale_len();
+        let res_mass = grid.resolution()[2];
+        for face in self.mass_faces() {
+            let base = face.start + c * ns;
+            if self.ln_p[base..base + ns]
+                .iter()
+                .all(|v| *v == f32::NEG_INFINITY)
+            {
+                continue;
+            }
+            let mass = self.theta(grid, &face, c)[2];
+            for is in 0..ns {
+                let l = reading.cell.likelihood(
+                    shares,
+                    mass,
+                    res_mass,
+                    grid.scale(is),
+                    reading.likelihood,
+                    reading.measurement,
+                    terms,
+                );
+                let slot = &mut self.ln_p[base + is];
+                *slot = match l {
+                    Some(l) if slot.is_finite() => *slot + l.ln_mean,
+                    _ => f32::NEG_INFINITY,
+                };
+            }
+        }
+    }
+
+    /// The rest of an update once the mass faces are weighed: the COM faces' points (their
+    /// COMs lie beyond the grid's, so they work out their own lift shares), then `shift`
+    /// off the mass faces' points.
+    fn finish_update(
+        &mut self,
+        grid: &Grid,
+        reading: &Reading<'_, '_>,
+        shift: f32,
+        terms: &mut CellTerms,
+    ) {
         let ns = grid.scale_len();
         let res = grid.resolution();
         // The COM faces list the masses of one COM one after another: its sub-points' lift
         // shares (the geometry, most of a point's cost) are worked out once for them all.
         let mut shares_at: Option<(Vec2, CellShares)> = None;
-        for face in self.faces {
+        for face in &self.faces[..4] {
             for k in 0..face.len {
                 let base = face.start + k * ns;
                 if self.ln_p[base..base + ns]
@@ -164,23 +288,24 @@ impl GuardBand {
                 {
                     continue;
                 }
-                let theta = self.theta(grid, &face, k);
+                let theta = self.theta(grid, face, k);
                 let com = Vec2::new(theta[0], theta[1]);
                 let shares = match &shares_at {
                     Some((at, shares)) if *at == com => shares,
                     _ => {
-                        let shares = cell.shares(com, res[0], res[1]);
+                        let shares = reading.cell.shares(com, res[0], res[1]);
                         &shares_at.insert((com, shares)).1
                     }
                 };
                 for is in 0..ns {
-                    let l = cell.likelihood(
+                    let l = reading.cell.likelihood(
                         shares,
                         theta[2],
                         res[2],
                         grid.scale(is),
-                        likelihood,
-                        measurement,
+                        reading.likelihood,
+                        reading.measurement,
+                        terms,
                     );
                     let slot = &mut self.ln_p[base + is];
                     *slot = match l {
@@ -189,6 +314,14 @@ impl GuardBand {
                     };
                 }
             }
+        }
+        // Every finite mass-face value was weighed in this update (the rest are -inf, which
+        // the shift leaves so): `(value + ln_mean) - shift` as the COM faces' points have it.
+        for face in self.mass_faces() {
+            let ns_len = face.len * ns;
+            self.ln_p[face.start..face.start + ns_len]
+                .iter_mut()
+                .for_each(|v| *v -= shift);
         }
     }
 
@@ -206,6 +339,69 @@ mod tests {
     use crate::estimation::posterior::Posterior;
     use crate::liftoff_thrust::group_centroid;
     use crate::paper::{checked, rect_sim1};
+
+    /// The one-pass update of the grid and the guard band gives, bit for bit, what the grid's
+    /// update and then the guard band's own give (lifted and censored readings, with and
+    /// without the thrust-scale axis).
+    #[test]
+    fn the_update_with_the_grid_is_the_two_updates_bit_for_bit() {
+        use crate::estimation::grid::ThrustScaleAxis;
+        use crate::paper::l_sim1;
+        let readings = [
+            (0.12, 0.56, Measurement::Lifted { thrust: 6.2 }),
+            (1.88, 2.22, Measurement::Lifted { thrust: 9.1 }),
+            (3.0, 3.44, Measurement::CouldNotLift),
+            (0.3, 0.9, Measurement::Lifted { thrust: 4.4 }),
+        ];
+        let scale = ThrustScaleAxis {
+            min: 0.9,
+            max: 1.1,
+            step: 0.1,
+        };
+        for (input, scale) in [
+            (rect_sim1(), None),
+            (l_sim1(), None),
+            (l_sim1(), Some(scale)),
+        ] {
+            let scenario = checked(input);
+            let hull = &scenario.payload.hull;
+            let grid = Grid::new(&scenario.estimation, scale).unwrap();
+            let mut apart = (
+                Posterior::uniform_on_hull(&grid, hull).unwrap(),
+                GuardBand::new(&grid, hull).unwrap(),
+            );
+            let mut together = apart.clone();
+            let likelihood = LiftLikelihood {
+                sigma: 1.0,
+                max_thrust: 14.2,
+            };
+            let rail = &scenario.payload.rail;
+            for (a, b, reading) in readings {
+                let points = [rail.point_at(a), rail.point_at(b)];
+                let cell = CellModel {
+                    hull,
+                    centroid: group_centroid(&points).unwrap(),
+                    size: 2,
+                    robot_mass: 0.1,
+                };
+                let update = apart.0.update(&grid, &cell, &likelihood, reading);
+                apart
+                    .1
+                    .update(&grid, &cell, &likelihood, reading, update.shift);
+                let joint = together.1.update_with_grid(
+                    &mut together.0,
+                    &grid,
+                    &cell,
+                    &likelihood,
+                    reading,
+                );
+                assert_eq!(joint, update);
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<std::vec::Vec<_>>();
+                assert_eq!(bits(apart.0.ln_values()), bits(together.0.ln_values()));
+                assert_eq!(bits(&apart.1.ln_p), bits(&together.1.ln_p));
+            }
+        }
+    }
 
     /// The guard band is the grid one point wider, restricted to its outer layers: after the
     /// same readings, each face's mass relative to the inner grid must be what a posterior on

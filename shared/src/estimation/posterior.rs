@@ -31,6 +31,9 @@ pub struct CellShares {
     ln_terms: f32,
 }
 
+/// Scratch for one cell's likelihood terms: 9 COM sub-points times 3 mass sub-points.
+pub type CellTerms = [f32; 27];
+
 /// What one update did to the posterior.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UpdateSummary {
@@ -39,6 +42,23 @@ pub struct UpdateSummary {
     pub ln_best: f32,
     /// What was subtracted from every log-value to bring the largest back to 0.
     pub shift: f32,
+}
+
+/// The running largest values of one update's pass over the grid's COM blocks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UpdatePass {
+    /// The largest updated log-value so far.
+    top: f32,
+    /// The largest sub-point log-likelihood so far.
+    best: f32,
+}
+
+impl UpdatePass {
+    /// A pass that has weighed nothing yet.
+    pub const START: Self = Self {
+        top: f32::NEG_INFINITY,
+        best: f32::NEG_INFINITY,
+    };
 }
 
 /// The lifting group and robots a reading came from, as the cell likelihood needs them.
@@ -52,6 +72,17 @@ pub struct CellModel<'a> {
     pub size: usize,
     /// Mass of one robot, kg.
     pub robot_mass: f32,
+}
+
+/// One reading and what it is weighed with: the group's cell model and the noise model.
+#[derive(Clone, Copy, Debug)]
+pub struct Reading<'a, 'h> {
+    /// The lifting group and robots.
+    pub cell: &'a CellModel<'h>,
+    /// The noise and the censoring limit.
+    pub likelihood: &'a LiftLikelihood,
+    /// What the lift produced.
+    pub measurement: Measurement,
 }
 
 /// A reading's log-likelihood over one cell: the cell average and the best single sub-point.
@@ -86,6 +117,9 @@ impl CellModel<'_> {
 
     /// The reading's log-likelihood over the cell of COM shares `shares`, mass `mass` (mass
     /// resolution `res_mass`) and thrust scale `scale`; `None` when `shares` is empty.
+    /// `terms` is scratch for the sub-points' terms (its contents on entry do not matter: a
+    /// caller keeps one for a whole update instead of clearing a fresh one per cell).
+    #[allow(clippy::too_many_arguments)]
     pub fn likelihood(
         &self,
         shares: &CellShares,
@@ -94,10 +128,10 @@ impl CellModel<'_> {
         scale: f32,
         likelihood: &LiftLikelihood,
         measurement: Measurement,
+        terms: &mut CellTerms,
     ) -> Option<CellLikelihood> {
         // At most 9 shares times 3 masses; the largest term kept as they come (it is both
         // the best and the shift of the log-mean-exp).
-        let mut terms = [0.0f32; 27];
         let mut len = 0;
         let mut top = f32::NEG_INFINITY;
         for &f in &shares.shares {
@@ -168,6 +202,9 @@ impl Posterior {
     /// weighs its neighbouring cells as it should, where a point likelihood would lock onto
     /// whichever point predicts nearest (neighbouring points' predictions differ by about
     /// `sigma` on the paper's grids, so the point posterior is overconfident).
+    ///
+    /// [`crate::estimation::guard::GuardBand::update_with_grid`] makes the same update and
+    /// the guard band's in one pass.
     pub fn update(
         &mut self,
         grid: &Grid,
@@ -175,48 +212,79 @@ impl Posterior {
         likelihood: &LiftLikelihood,
         measurement: Measurement,
     ) -> UpdateSummary {
-        let (nm, ns) = (grid.shape()[2], grid.scale_len());
         let res = grid.resolution();
-        let mut top = f32::NEG_INFINITY;
-        let mut best = f32::NEG_INFINITY;
+        let mut terms = [0.0; 27];
+        let mut pass = UpdatePass::START;
         for c in 0..grid.com_len() {
-            let block = c * nm * ns..(c + 1) * nm * ns;
-            if self.ln_p[block.clone()]
-                .iter()
-                .all(|v| *v == f32::NEG_INFINITY)
-            {
-                continue;
-            }
-            let shares = cell.shares(grid.com(c), res[0], res[1]);
-            for im in 0..nm {
-                for is in 0..ns {
-                    let i = (c * nm + im) * ns + is;
-                    if self.ln_p[i] == f32::NEG_INFINITY {
-                        continue;
-                    }
-                    let Some(l) = cell.likelihood(
-                        &shares,
-                        grid.mass(im),
-                        res[2],
-                        grid.scale(is),
-                        likelihood,
-                        measurement,
-                    ) else {
-                        continue;
-                    };
-                    self.ln_p[i] += l.ln_mean;
-                    top = math::max(top, self.ln_p[i]);
-                    best = math::max(best, l.ln_best);
-                }
+            if self.supports_com(grid, c) {
+                let shares = cell.shares(grid.com(c), res[0], res[1]);
+                let reading = Reading {
+                    cell,
+                    likelihood,
+                    measurement,
+                };
+                self.weigh_com(grid, c, &shares, &reading, &mut terms, &mut pass);
             }
         }
-        let shift = if top.is_finite() { top } else { 0.0 };
+        self.renormalise(pass)
+    }
+
+    /// Whether any point of COM point `c`'s block (its masses and scales) has support.
+    pub fn supports_com(&self, grid: &Grid, c: usize) -> bool {
+        let block = grid.len() / grid.com_len().max(1);
+        self.ln_p[c * block..(c + 1) * block]
+            .iter()
+            .any(|v| *v != f32::NEG_INFINITY)
+    }
+
+    /// The first half of [`Self::update`] for COM point `c`, whose cell's lift shares are
+    /// `shares`: adds the reading's cell log-likelihood to each supported point of its block
+    /// and keeps the largest values in `pass`.
+    pub fn weigh_com(
+        &mut self,
+        grid: &Grid,
+        c: usize,
+        shares: &CellShares,
+        reading: &Reading<'_, '_>,
+        terms: &mut CellTerms,
+        pass: &mut UpdatePass,
+    ) {
+        let (nm, ns) = (grid.shape()[2], grid.scale_len());
+        let res_mass = grid.resolution()[2];
+        for im in 0..nm {
+            for is in 0..ns {
+                let i = (c * nm + im) * ns + is;
+                if self.ln_p[i] == f32::NEG_INFINITY {
+                    continue;
+                }
+                let Some(l) = reading.cell.likelihood(
+                    shares,
+                    grid.mass(im),
+                    res_mass,
+                    grid.scale(is),
+                    reading.likelihood,
+                    reading.measurement,
+                    terms,
+                ) else {
+                    continue;
+                };
+                self.ln_p[i] += l.ln_mean;
+                pass.top = math::max(pass.top, self.ln_p[i]);
+                pass.best = math::max(pass.best, l.ln_best);
+            }
+        }
+    }
+
+    /// The second half of [`Self::update`], once every COM block is weighed: shifts the
+    /// log-values so that the largest is 0.
+    pub fn renormalise(&mut self, pass: UpdatePass) -> UpdateSummary {
+        let shift = if pass.top.is_finite() { pass.top } else { 0.0 };
         self.ln_p
             .iter_mut()
             .filter(|v| v.is_finite())
             .for_each(|v| *v -= shift);
         UpdateSummary {
-            ln_best: best,
+            ln_best: pass.best,
             shift,
         }
     }
