@@ -4,6 +4,9 @@
 //! - [`topics`]: the logged topics, PX4's names where the meaning is PX4's, with their
 //!   formats, and the fixed-size [`topics::Record`] of each.
 //! - [`recorder`]: what a control step records, from the mission's input and output.
+//! - [`stream`]: the control step's bytes to the task that stores them: whole messages or
+//!   none, losses as dropouts, the start and end of a mission's log.
+//! - [`keeper`]: the storing side: a numbered log per mission in storage, written in blocks.
 //! - [`file`]: the log's definitions (formats, information, parameters, subscriptions) and
 //!   each record as a ULog message.
 //!
@@ -11,5 +14,7 @@
 //! one are compared in one tool.
 
 pub mod file;
+pub mod keeper;
 pub mod recorder;
+pub mod stream;
 pub mod topics;

@@ -1,0 +1,308 @@
+//! The log's bytes between the control step and the task that stores them: the control step
+//! turns each entry into its ULog message and hands it whole to a byte ring that never makes
+//! it wait ([`LogRing`]); a message that finds no room is dropped and counted, and the first
+//! message that fits after a loss is preceded by a ULog dropout saying how long the loss
+//! lasted. Two marker messages, never written to a file, tell the storing side where a
+//! mission's log starts and ends ([`Piece`], read back by [`Splitter`]).
+
+use super::file::entry_message;
+use super::recorder::LogEntry;
+use crate::ulog::{MESSAGE_CAPACITY, Message};
+use heapless::Vec;
+
+/// Message type of the start marker (payload: the start time, us, `u64`).
+const START: u8 = 0x01;
+/// Message type of the end marker (no payload).
+const END: u8 = 0x02;
+
+/// The ring the control step writes to: whole messages or nothing, never waiting.
+pub trait LogRing {
+    /// Bytes that can be written now.
+    fn free(&self) -> usize;
+    /// Writes `bytes`, at most [`Self::free`] of them.
+    fn put(&mut self, bytes: &[u8]);
+}
+
+/// The control step's side: what it wrote and lost.
+#[derive(Clone, Debug, Default)]
+pub struct LogWriter {
+    /// A mission's log is being written.
+    open: bool,
+    /// When the loss under way began, us.
+    lost_since: Option<u64>,
+    /// Messages lost since the log started.
+    lost: u32,
+}
+
+impl LogWriter {
+    /// Nothing written yet.
+    pub const fn new() -> Self {
+        Self {
+            open: false,
+            lost_since: None,
+            lost: 0,
+        }
+    }
+
+    /// Whether a mission's log is open.
+    pub fn is_open(&self) -> bool {
+        self.open
+    }
+
+    /// Messages lost since the log started (the ring was full).
+    pub fn lost(&self) -> u32 {
+        self.lost
+    }
+
+    /// Starts a mission's log at `time_us`. The start marker is a few bytes; when even they
+    /// find no room the log does not start (the next step tries again): returns whether it did.
+    pub fn start(&mut self, ring: &mut impl LogRing, time_us: u64) -> bool {
+        let mut marker = [0u8; 11];
+        marker[..3].copy_from_slice(&[8, 0, START]);
+        marker[3..].copy_from_slice(&time_us.to_le_bytes());
+        if ring.free() < marker.len() {
+            return false;
+        }
+        ring.put(&marker);
+        self.open = true;
+        self.lost_since = None;
+        self.lost = 0;
+        true
+    }
+
+    /// Ends the mission's log; returns whether the end marker went in (when it did not, the
+    /// next step tries again and the log stays open until then).
+    pub fn end(&mut self, ring: &mut impl LogRing) -> bool {
+        if !self.open {
+            return true;
+        }
+        if ring.free() < 3 {
+            return false;
+        }
+        ring.put(&[0, 0, END]);
+        self.open = false;
+        true
+    }
+
+    /// Writes one entry at `now_us` (nothing while no log is open).
+    pub fn entry(&mut self, ring: &mut impl LogRing, entry: &LogEntry, now_us: u64) {
+        if !self.open {
+            return;
+        }
+        // Every entry fits a message: the recorder cuts its strings to fit.
+        let Ok(message) = entry_message(entry) else {
+            return;
+        };
+        self.message(ring, &message, now_us);
+    }
+
+    /// Writes one message at `now_us`, after a dropout message when messages were lost.
+    pub fn message(&mut self, ring: &mut impl LogRing, message: &Message, now_us: u64) {
+        let bytes = message.as_bytes();
+        let dropout = self.lost_since.map(|since| {
+            let ms = (now_us.saturating_sub(since) / 1000).clamp(1, u64::from(u16::MAX));
+            Message::dropout(ms as u16)
+        });
+        let needed = bytes.len() + dropout.as_ref().map_or(0, |d| d.as_bytes().len());
+        if ring.free() < needed {
+            self.lost += 1;
+            self.lost_since.get_or_insert(now_us);
+            return;
+        }
+        if let Some(d) = dropout {
+            ring.put(d.as_bytes());
+            self.lost_since = None;
+        }
+        ring.put(bytes);
+    }
+}
+
+/// What the storing side reads out of the ring.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Piece<'a> {
+    /// A mission's log starts at this time, us: open a new file and write its definitions.
+    Start(u64),
+    /// One ULog message, whole: append it.
+    Message(&'a [u8]),
+    /// The mission's log ends: close the file.
+    End,
+}
+
+/// Cuts the ring's bytes, read in any chunks, back into whole messages and markers.
+#[derive(Clone, Debug, Default)]
+pub struct Splitter {
+    message: Vec<u8, MESSAGE_CAPACITY>,
+    /// Bytes of a message too long to hold still to pass over (the writer makes none: only a
+    /// corrupt ring has one).
+    skip: usize,
+}
+
+impl Splitter {
+    /// Nothing read yet.
+    pub const fn new() -> Self {
+        Self {
+            message: Vec::new(),
+            skip: 0,
+        }
+    }
+
+    /// Takes `bytes` and gives each piece they complete to `each`.
+    pub fn push(&mut self, mut bytes: &[u8], each: &mut impl FnMut(Piece<'_>)) {
+        while !bytes.is_empty() {
+            if self.skip > 0 {
+                let n = self.skip.min(bytes.len());
+                self.skip -= n;
+                bytes = &bytes[n..];
+                continue;
+            }
+            let wanted = if self.message.len() < 3 {
+                3
+            } else {
+                3 + usize::from(u16::from_le_bytes([self.message[0], self.message[1]]))
+            };
+            if wanted > MESSAGE_CAPACITY {
+                self.skip = wanted - self.message.len();
+                self.message.clear();
+                continue;
+            }
+            let take = (wanted - self.message.len()).min(bytes.len());
+            // Within the capacity: checked above.
+            let _ = self.message.extend_from_slice(&bytes[..take]);
+            bytes = &bytes[take..];
+            let size = |m: &[u8]| 3 + usize::from(u16::from_le_bytes([m[0], m[1]]));
+            if self.message.len() < 3 || self.message.len() < size(&self.message) {
+                continue;
+            }
+            match self.message[2] {
+                START if self.message.len() == 11 => {
+                    let mut t = [0u8; 8];
+                    t.copy_from_slice(&self.message[3..11]);
+                    each(Piece::Start(u64::from_le_bytes(t)));
+                }
+                END => each(Piece::End),
+                _ => each(Piece::Message(&self.message)),
+            }
+            self.message.clear();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flight_log::topics::Record;
+    use crate::ulog::LogLevel;
+    use std::vec::Vec as StdVec;
+
+    /// A ring of `capacity` bytes read out by the test.
+    struct TestRing {
+        bytes: StdVec<u8>,
+        capacity: usize,
+    }
+
+    impl LogRing for TestRing {
+        fn free(&self) -> usize {
+            self.capacity - self.bytes.len()
+        }
+        fn put(&mut self, bytes: &[u8]) {
+            assert!(bytes.len() <= self.free(), "put past the free room");
+            self.bytes.extend_from_slice(bytes);
+        }
+    }
+
+    fn status(t: u64) -> LogEntry {
+        LogEntry::Record(Record::VehicleStatus {
+            timestamp: t,
+            armed: false,
+            nav_state: 3,
+            mission_phase: 1,
+        })
+    }
+
+    fn split(bytes: &[u8], chunk: usize) -> StdVec<(char, u64)> {
+        let mut splitter = Splitter::new();
+        let mut out = StdVec::new();
+        for c in bytes.chunks(chunk) {
+            splitter.push(c, &mut |p| {
+                out.push(match p {
+                    Piece::Start(t) => ('<', t),
+                    Piece::End => ('>', 0),
+                    Piece::Message(m) => (m[2] as char, m.len() as u64),
+                })
+            });
+        }
+        out
+    }
+
+    #[test]
+    fn entries_between_the_markers_come_back_whole_in_any_chunks() {
+        let mut ring = TestRing {
+            bytes: StdVec::new(),
+            capacity: 10_000,
+        };
+        let mut w = LogWriter::new();
+        w.entry(&mut ring, &status(1), 1);
+        assert!(ring.bytes.is_empty(), "nothing before the start");
+        assert!(w.start(&mut ring, 42));
+        w.entry(&mut ring, &status(2), 2);
+        let text = LogEntry::text(LogLevel::Info, 3, format_args!("phase: lift: robots in place"));
+        w.entry(&mut ring, &text, 3);
+        assert!(w.end(&mut ring));
+        w.entry(&mut ring, &status(4), 4);
+        for chunk in [1, 2, 7, 64, 10_000] {
+            let pieces = split(&ring.bytes, chunk);
+            assert_eq!(
+                pieces,
+                [('<', 42), ('D', 16), ('L', 3 + 9 + 28), ('>', 0)],
+                "chunks of {chunk}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_full_ring_drops_whole_messages_and_says_how_long_in_a_dropout() {
+        let mut ring = TestRing {
+            bytes: StdVec::new(),
+            capacity: 11 + 16 + 10,
+        };
+        let mut w = LogWriter::new();
+        assert!(w.start(&mut ring, 0));
+        w.entry(&mut ring, &status(1_000), 1_000);
+        // No room for another 16 bytes: lost, from 2 ms to 9 ms.
+        w.entry(&mut ring, &status(2_000), 2_000);
+        w.entry(&mut ring, &status(9_000), 9_000);
+        assert_eq!(w.lost(), 2);
+        assert_eq!(ring.bytes.len(), 27);
+        // The reader empties the ring: the next message comes after a 9 ms dropout.
+        let read: StdVec<u8> = ring.bytes.drain(..).collect();
+        w.entry(&mut ring, &status(11_000), 11_000);
+        let mut all = read;
+        all.extend_from_slice(&ring.bytes);
+        assert_eq!(split(&all, 5), [('<', 0), ('D', 16), ('O', 5), ('D', 16)]);
+        let dropout = &ring.bytes[..5];
+        assert_eq!(u16::from_le_bytes([dropout[3], dropout[4]]), 9);
+    }
+
+    #[test]
+    fn markers_wait_for_room_and_a_corrupt_length_is_skipped() {
+        let mut ring = TestRing {
+            bytes: StdVec::new(),
+            capacity: 5,
+        };
+        let mut w = LogWriter::new();
+        assert!(!w.start(&mut ring, 7));
+        assert!(!w.is_open());
+        ring.capacity = 20;
+        assert!(w.start(&mut ring, 7));
+        ring.capacity = ring.bytes.len() + 2;
+        assert!(!w.end(&mut ring));
+        assert!(w.is_open());
+        // A message longer than any the writer makes is passed over; what follows is read.
+        let mut bytes = StdVec::from([0xE8, 0x03, b'D']);
+        bytes.extend_from_slice(&[7; 1000]);
+        bytes.extend_from_slice(&[0, 0, END]);
+        for chunk in [1, 8, 2000] {
+            assert_eq!(split(&bytes, chunk), [('>', 0)], "chunks of {chunk}");
+        }
+    }
+}
