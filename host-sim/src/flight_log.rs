@@ -1,91 +1,155 @@
-//! The simulator's flight log: the firmware's recorder and ULog encoder
-//! (`link::flight_log`, docs/formats.md#flight-logs) writing to a file, so a simulated
-//! mission's log opens in the same tools as a real flight's.
+//! The simulator's flight log: the firmware's mission log (`link::flight_log`,
+//! docs/formats.md#flight-logs) run after each step, its ring emptied into the same keeper
+//! the firmware stores with, the keeper's storage one file. So a simulated mission's log holds
+//! what the firmware's would, and opens in the same tools.
 
-use anyhow::{Context, Result};
-use link::flight_log::file::{LogInfo, entry_message, write_start};
-use link::flight_log::recorder::{LogEntry, Recorder};
+use anyhow::{Context, Result, anyhow};
+use link::flight_log::file::LogInfo;
+use link::flight_log::keeper::{LogKeeper, LogStorage};
+use link::flight_log::session::MissionLog;
+use link::flight_log::stream::{LogRing, Splitter};
 use shared::mission::{Mission, MissionConfig, TickInput, TickOutput};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// `sys_name` of the simulator's logs.
+/// `sys_name` of the simulator's logs (the firmware's is the same).
 pub const SYS_NAME: &str = "rail-transport";
 /// `ver_hw` of the simulator's logs.
 pub const VER_HW: &str = "SITL host-sim";
 
-/// A ULog file being written, with the recorder that fills it.
-pub struct LogFile {
+/// The ring between the mission log and the keeper: emptied after every step, so never full.
+struct StepBytes(Vec<u8>);
+
+impl LogRing for StepBytes {
+    fn free(&self) -> usize {
+        usize::MAX
+    }
+    fn put(&mut self, bytes: &[u8]) {
+        self.0.extend_from_slice(bytes);
+    }
+}
+
+/// The keeper's storage: the one file of `--log`.
+struct OneFile {
     path: PathBuf,
-    out: BufWriter<File>,
-    recorder: Recorder,
+    out: Option<BufWriter<File>>,
+    size: u32,
+}
+
+impl LogStorage for OneFile {
+    type Error = std::io::Error;
+    fn count(&mut self) -> std::io::Result<u16> {
+        Ok(u16::from(self.out.is_some()))
+    }
+    fn size(&mut self, _: u16) -> std::io::Result<u32> {
+        Ok(self.size)
+    }
+    fn create(&mut self) -> std::io::Result<u16> {
+        self.out = Some(BufWriter::new(File::create(&self.path)?));
+        self.size = 0;
+        Ok(0)
+    }
+    fn append(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        let out = self.out.as_mut().ok_or(std::io::ErrorKind::NotConnected)?;
+        out.write_all(bytes)?;
+        self.size += bytes.len() as u32;
+        Ok(())
+    }
+    fn close(&mut self) -> std::io::Result<()> {
+        match self.out.as_mut() {
+            Some(out) => out.flush(),
+            None => Ok(()),
+        }
+    }
+    fn read(&mut self, _: u16, _: u32, _: &mut [u8]) -> std::io::Result<usize> {
+        Ok(0)
+    }
+    fn erase_all(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// A mission's flight log being written to a file.
+pub struct LogFile {
+    log: MissionLog,
+    ring: StepBytes,
+    splitter: Splitter,
+    keeper: LogKeeper,
+    storage: OneFile,
+    config: MissionConfig,
     max_thrust: f32,
-    /// The first write error (the rest of the log is then lost; reported at the end).
+    /// The first storage error (the rest of the log is then lost; reported at the end).
     failed: Option<std::io::Error>,
 }
 
 impl LogFile {
-    /// Creates `path` and writes the log's start: the definitions and `config`'s parameters.
+    /// A log to `path`, its parameters `config`'s; the file is created when the mission
+    /// starts. Checks now that the file can be created.
     pub fn create(path: &Path, config: &MissionConfig, max_thrust: f32) -> Result<Self> {
-        let file = File::create(path)
+        File::create(path)
             .with_context(|| format!("cannot create the flight log {}", path.display()))?;
-        let mut out = BufWriter::new(file);
+        Ok(Self {
+            log: MissionLog::new(),
+            ring: StepBytes(Vec::new()),
+            splitter: Splitter::new(),
+            keeper: LogKeeper::new(),
+            storage: OneFile {
+                path: path.to_path_buf(),
+                out: None,
+                size: 0,
+            },
+            config: *config,
+            max_thrust,
+            failed: None,
+        })
+    }
+
+    /// Logs one control step.
+    pub fn step(&mut self, input: &TickInput, out: &TickOutput, mission: &Mission) {
+        self.log
+            .step(input, out, mission, self.max_thrust, &mut self.ring);
         let info = LogInfo {
             sys_name: SYS_NAME,
             ver_sw: env!("CARGO_PKG_VERSION"),
             ver_hw: VER_HW,
             start_us: 0,
         };
-        let mut failed = None;
-        write_start(&info, config, &mut |bytes| {
-            if failed.is_none()
-                && let Err(e) = out.write_all(bytes)
-            {
-                failed = Some(e);
-            }
-        })
-        .map_err(|e| anyhow::anyhow!("the flight log's definitions: {e}"))?;
-        Ok(Self {
-            path: path.to_path_buf(),
-            out,
-            recorder: Recorder::new(),
-            max_thrust,
-            failed,
-        })
-    }
-
-    /// Records one control step.
-    pub fn step(&mut self, input: &TickInput, out: &TickOutput, mission: &Mission) {
         let Self {
-            out: file,
-            recorder,
+            ring,
+            splitter,
+            keeper,
+            storage,
+            config,
             failed,
-            max_thrust,
             ..
         } = self;
-        recorder.step(input, out, mission, *max_thrust, &mut |entry: LogEntry| {
-            if failed.is_some() {
-                return;
-            }
-            // Every entry fits a message (the recorder cuts its strings to fit).
-            if let Ok(message) = entry_message(&entry)
-                && let Err(e) = file.write_all(message.as_bytes())
+        splitter.push(&ring.0, &mut |piece| {
+            if let Err(e) = keeper.take(storage, piece, &info, config)
+                && failed.is_none()
             {
                 *failed = Some(e);
             }
         });
+        ring.0.clear();
     }
 
-    /// Flushes the file; an error of any write is reported here, naming the file.
+    /// Ends the log (closing it when the run ended before the mission did); an error of any
+    /// write is reported here, naming the file.
     pub fn finish(mut self) -> Result<PathBuf> {
+        let path = self.storage.path.clone();
         if let Some(e) = self.failed.take() {
-            return Err(e)
-                .with_context(|| format!("writing the flight log {}", self.path.display()));
+            return Err(e).with_context(|| format!("writing the flight log {}", path.display()));
         }
-        self.out
-            .flush()
-            .with_context(|| format!("writing the flight log {}", self.path.display()))?;
-        Ok(self.path)
+        if self.storage.out.is_none() {
+            return Err(anyhow!(
+                "the flight log {} is empty: the mission never started",
+                path.display()
+            ));
+        }
+        self.storage
+            .close()
+            .with_context(|| format!("writing the flight log {}", path.display()))?;
+        Ok(path)
     }
 }

@@ -150,10 +150,7 @@ impl LogKeeper {
     }
 
     /// Writes out what is gathered and closes the open log.
-    fn finish<S: LogStorage>(
-        &mut self,
-        storage: &mut S,
-    ) -> Result<Option<KeeperEvent>, S::Error> {
+    fn finish<S: LogStorage>(&mut self, storage: &mut S) -> Result<Option<KeeperEvent>, S::Error> {
         let Some((id, _)) = self.open else {
             return Ok(None);
         };
@@ -174,8 +171,8 @@ impl LogKeeper {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::flight_log::stream::{LogRing, LogWriter, Splitter};
     use crate::flight_log::recorder::LogEntry;
+    use crate::flight_log::stream::{LogRing, LogWriter, Splitter};
     use crate::flight_log::topics::Record;
     use std::vec::Vec as StdVec;
 
@@ -194,7 +191,10 @@ pub(crate) mod tests {
             Ok(self.logs.len() as u16)
         }
         fn size(&mut self, id: u16) -> Result<u32, Self::Error> {
-            self.logs.get(usize::from(id)).map(|l| l.len() as u32).ok_or("no such log")
+            self.logs
+                .get(usize::from(id))
+                .map(|l| l.len() as u32)
+                .ok_or("no such log")
         }
         fn create(&mut self) -> Result<u16, Self::Error> {
             self.logs.push(StdVec::new());
@@ -206,7 +206,10 @@ pub(crate) mod tests {
             if self.fail_after.is_some_and(|n| self.appends > n) {
                 return Err("card removed");
             }
-            self.logs.last_mut().ok_or("no log open")?.extend_from_slice(bytes);
+            self.logs
+                .last_mut()
+                .ok_or("no log open")?
+                .extend_from_slice(bytes);
             Ok(())
         }
         fn close(&mut self) -> Result<(), Self::Error> {
@@ -266,12 +269,15 @@ pub(crate) mod tests {
         let mut splitter = Splitter::new();
         let mut events = StdVec::new();
         for c in ring.chunks(chunk) {
-            splitter.push(c, &mut |piece| {
-                match keeper.take(storage, piece, &INFO, &MissionConfig::DEFAULT) {
-                    Ok(Some(e)) => events.push(e),
-                    Ok(None) => {}
-                    Err(_) => events.push(KeeperEvent::Failed),
-                }
+            splitter.push(c, &mut |piece| match keeper.take(
+                storage,
+                piece,
+                &INFO,
+                &MissionConfig::DEFAULT,
+            ) {
+                Ok(Some(e)) => events.push(e),
+                Ok(None) => {}
+                Err(_) => events.push(KeeperEvent::Failed),
             });
         }
         events
@@ -296,9 +302,14 @@ pub(crate) mod tests {
         );
         // The definitions, then the 1000 records of 16 bytes each (3 + 2 + 8 + 3).
         let mut definitions = StdVec::new();
-        write_start(&LogInfo { start_us: 100, ..INFO }, &MissionConfig::DEFAULT, &mut |b| {
-            definitions.extend_from_slice(b)
-        })
+        write_start(
+            &LogInfo {
+                start_us: 100,
+                ..INFO
+            },
+            &MissionConfig::DEFAULT,
+            &mut |b| definitions.extend_from_slice(b),
+        )
         .expect("fits");
         assert_eq!(storage.logs[0][..definitions.len()], definitions[..]);
         assert_eq!(storage.logs[0].len(), definitions.len() + 1000 * 16);

@@ -245,7 +245,11 @@ mod tests {
         assert!(ring.bytes.is_empty(), "nothing before the start");
         assert!(w.start(&mut ring, 42));
         w.entry(&mut ring, &status(2), 2);
-        let text = LogEntry::text(LogLevel::Info, 3, format_args!("phase: lift: robots in place"));
+        let text = LogEntry::text(
+            LogLevel::Info,
+            3,
+            format_args!("phase: lift: robots in place"),
+        );
         w.entry(&mut ring, &text, 3);
         assert!(w.end(&mut ring));
         w.entry(&mut ring, &status(4), 4);
