@@ -1,14 +1,17 @@
-//! The simulator's flight log (`mission --log`, docs/formats.md#flight-logs): the file is
-//! ULog as PX4 writes it, read here message by message (header, definitions before data, a
+//! The flight log (docs/formats.md#flight-logs). The simulator's (`mission --log`) is ULog as
+//! PX4 writes it, read here message by message (header, definitions before data, a
 //! subscription for every data message, each topic's timestamps in order, a `lift` record for
 //! every lift, a logged string for every phase), and opened by pyulog, the reference reader
-//! (`tests/ulog_check.py`). Without python3 and pyulog the second test says it was skipped and
-//! why; with `HIL_REQUIRED=1` (CI, which installs pyulog) it fails instead.
+//! (`tests/ulog_check.py`). The firmware's, flown under QEMU with `hil --storage`, is the
+//! simulator's message for message (but the pack voltage, which the plant sends at 10 Hz in
+//! millivolts), and pyulog opens it too. Without python3 and pyulog, or QEMU, a test says it
+//! was skipped and why; with `HIL_REQUIRED=1` (CI, which installs them) it fails instead.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use host_sim::hil::qemu;
 use host_sim::mission_run::{self, MissionSetup};
 use host_sim::scenario_file;
 use link::flight_log::topics::Topic;
@@ -149,6 +152,19 @@ fn the_mission_log_is_ulog_with_every_topic_parameter_lift_and_phase() {
 #[test]
 fn pyulog_opens_the_mission_log() {
     let (_, path) = fly_logged("pyulog");
+    match pyulog_check(&path) {
+        Ok(report) => {
+            use std::io::Write;
+            let _ = writeln!(std::io::stderr(), "{report}");
+        }
+        Err(why) => skip(&why),
+    }
+    let _ = std::fs::remove_file(&path);
+}
+
+/// Runs `tests/ulog_check.py` on `path` for the topics of a normal flight: its report, or why
+/// it could not run (`Err`, to skip).
+fn pyulog_check(path: &Path) -> Result<String, String> {
     let mut args: Vec<String> = vec![
         workspace()
             .join("tests/ulog_check.py")
@@ -165,19 +181,83 @@ fn pyulog_opens_the_mission_log() {
             .filter(|t| **t != Topic::Adaptation)
             .map(|t| t.name().to_string()),
     );
-    let output = match Command::new("python3").args(&args).output() {
-        Ok(output) => output,
-        Err(e) => return skip(&format!("python3 cannot be run ({e})")),
-    };
-    let stdout = String::from_utf8_lossy(&output.stdout);
+    let output = Command::new("python3")
+        .args(&args)
+        .output()
+        .map_err(|e| format!("python3 cannot be run ({e})"))?;
     let stderr = String::from_utf8_lossy(&output.stderr);
     if output.status.code() == Some(2) {
-        return skip(stderr.trim());
+        return Err(stderr.trim().to_string());
     }
-    assert!(output.status.success(), "pyulog: {stderr}");
-    use std::io::Write;
-    let _ = writeln!(std::io::stderr(), "{}", stdout.trim());
-    let _ = std::fs::remove_file(&path);
+    assert!(
+        output.status.success(),
+        "pyulog on {}: {stderr}",
+        path.display()
+    );
+    Ok(String::from_utf8_lossy(&output.stdout).trim().to_string())
+}
+
+#[test]
+fn the_firmware_in_the_loop_keeps_the_simulators_log_in_its_storage() {
+    if !qemu::available() {
+        qemu::note_skipped(true);
+        return skip("qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)");
+    }
+    let elf = match qemu::test_image(&workspace()) {
+        Ok(elf) => elf,
+        Err(why) => return skip(&why),
+    };
+    let (_, host_log) = fly_logged("hil");
+    let storage = host_log.with_file_name("storage");
+    let _ = std::fs::remove_dir_all(&storage);
+    let output = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .arg("hil")
+        .arg("--scenario")
+        .arg(workspace().join("tests/scenarios/rect-ex1.toml"))
+        .arg("--qemu")
+        .arg(&elf)
+        .arg("--storage")
+        .arg(&storage)
+        .output()
+        .expect("host-sim runs");
+    assert!(
+        output.status.success(),
+        "hil: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let firmware_log = storage.join("log-000.ulg");
+    let host_bytes = std::fs::read(&host_log).expect("the host's log");
+    let firmware_bytes = std::fs::read(&firmware_log).expect("the firmware left its log");
+    let data = |all: &[u8]| -> Vec<Vec<u8>> {
+        messages(all)
+            .into_iter()
+            .filter(|m| b"DLO".contains(&m.kind))
+            .map(|m| [&[m.kind][..], m.payload].concat())
+            .collect()
+    };
+    let (host, firmware) = (data(&host_bytes), data(&firmware_bytes));
+    assert_eq!(host.len(), firmware.len(), "as many messages");
+    let battery = Topic::BatteryStatus.msg_id().to_le_bytes();
+    for (i, (h, f)) in host.iter().zip(&firmware).enumerate() {
+        if h[0] == b'D' && h[1..3] == battery {
+            assert_eq!(
+                f[..11],
+                h[..11],
+                "message {i}: a battery record at the same time"
+            );
+        } else {
+            assert_eq!(f, h, "message {i} differs");
+        }
+    }
+    match pyulog_check(&firmware_log) {
+        Ok(report) => {
+            use std::io::Write;
+            let _ = writeln!(std::io::stderr(), "firmware's log: {report}");
+        }
+        Err(why) => skip(&why),
+    }
+    let _ = std::fs::remove_dir_all(&storage);
+    let _ = std::fs::remove_file(&host_log);
 }
 
 fn skip(reason: &str) {

@@ -108,7 +108,7 @@ impl LogFile {
     /// Logs one control step.
     pub fn step(&mut self, input: &TickInput, out: &TickOutput, mission: &Mission) {
         self.log
-            .step(input, out, mission, self.max_thrust, &mut self.ring);
+            .step(input, out, mission, self.max_thrust, &mut self.ring, |_| {});
         let info = LogInfo {
             sys_name: SYS_NAME,
             ver_sw: env!("CARGO_PKG_VERSION"),

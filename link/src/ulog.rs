@@ -248,70 +248,131 @@ fn typed_key(kind: &str, len: Option<usize>, name: &str) -> Result<String<280>, 
     Ok(key)
 }
 
-/// Packs a data message's fields, little endian, in the order the format lists them.
-#[derive(Clone, Debug, Default)]
+/// Packs a data message's fields, little endian, in the order the format lists them, into a
+/// fixed buffer (a field that does not fit marks the whole overflowed).
+#[derive(Clone, Debug)]
 pub struct Packer<const N: usize> {
-    bytes: Vec<u8, N>,
+    bytes: [u8; N],
+    len: usize,
     overflow: bool,
+}
+
+impl<const N: usize> Default for Packer<N> {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl<const N: usize> Packer<N> {
     /// Nothing packed yet.
-    pub fn new() -> Self {
+    pub const fn new() -> Self {
         Self {
-            bytes: Vec::new(),
+            bytes: [0; N],
+            len: 0,
             overflow: false,
         }
     }
 
-    fn put(mut self, b: &[u8]) -> Self {
-        if self.bytes.extend_from_slice(b).is_err() {
-            self.overflow = true;
+    /// A data message's start ('D', `msg_id`); [`Self::message`] fills in its size.
+    pub fn data(msg_id: u16) -> Self {
+        let mut p = Self::new();
+        p.put([0, 0, b'D']).u16(msg_id);
+        p
+    }
+
+    /// A logged string ('L') of `level` at `timestamp_us` saying `text`, cut at a character
+    /// boundary where the buffer ends; [`Self::message`] fills in its size.
+    pub fn logged_string(
+        level: LogLevel,
+        timestamp_us: u64,
+        text: core::fmt::Arguments<'_>,
+    ) -> Self {
+        let mut p = Self::new();
+        p.put([0, 0, b'L', level.byte()]).u64(timestamp_us);
+        let _ = core::fmt::Write::write_fmt(&mut Cut(&mut p), text);
+        p
+    }
+
+    /// Appends `b`, whose length the compiler knows (so a field is a plain store).
+    fn put<const K: usize>(&mut self, b: [u8; K]) -> &mut Self {
+        match self.bytes.get_mut(self.len..self.len + K) {
+            Some(to) => {
+                to.copy_from_slice(&b);
+                self.len += K;
+            }
+            None => self.overflow = true,
         }
         self
     }
 
     /// A `uint64_t`.
-    pub fn u64(self, v: u64) -> Self {
-        self.put(&v.to_le_bytes())
+    pub fn u64(&mut self, v: u64) -> &mut Self {
+        self.put(v.to_le_bytes())
     }
 
     /// A `uint32_t`.
-    pub fn u32(self, v: u32) -> Self {
-        self.put(&v.to_le_bytes())
+    pub fn u32(&mut self, v: u32) -> &mut Self {
+        self.put(v.to_le_bytes())
     }
 
     /// An `int32_t`.
-    pub fn i32(self, v: i32) -> Self {
-        self.put(&v.to_le_bytes())
+    pub fn i32(&mut self, v: i32) -> &mut Self {
+        self.put(v.to_le_bytes())
     }
 
     /// A `uint16_t`.
-    pub fn u16(self, v: u16) -> Self {
-        self.put(&v.to_le_bytes())
+    pub fn u16(&mut self, v: u16) -> &mut Self {
+        self.put(v.to_le_bytes())
     }
 
     /// A `uint8_t` (or a `bool`, 0 or 1).
-    pub fn u8(self, v: u8) -> Self {
-        self.put(&[v])
+    pub fn u8(&mut self, v: u8) -> &mut Self {
+        self.put([v])
     }
 
     /// A `float`.
-    pub fn f32(self, v: f32) -> Self {
-        self.put(&v.to_le_bytes())
+    pub fn f32(&mut self, v: f32) -> &mut Self {
+        self.put(v.to_le_bytes())
     }
 
     /// A `float[K]`.
-    pub fn f32s(mut self, v: &[f32]) -> Self {
+    pub fn f32s(&mut self, v: &[f32]) -> &mut Self {
         for x in v {
-            self = self.f32(*x);
+            self.f32(*x);
         }
         self
     }
 
     /// The packed bytes (`None` if they overflowed the buffer).
-    pub fn finish(self) -> Option<Vec<u8, N>> {
-        (!self.overflow).then_some(self.bytes)
+    pub fn bytes(&self) -> Option<&[u8]> {
+        (!self.overflow).then_some(&self.bytes[..self.len])
+    }
+
+    /// A message started by [`Self::data`]: its size written into its header, its bytes.
+    pub fn message(&mut self) -> Option<&[u8]> {
+        if self.overflow || self.len < 3 {
+            return None;
+        }
+        let size = (self.len - 3) as u16;
+        self.bytes[..2].copy_from_slice(&size.to_le_bytes());
+        Some(&self.bytes[..self.len])
+    }
+}
+
+/// Writes text into a packer, whole characters while they fit, the rest dropped.
+struct Cut<'a, const N: usize>(&'a mut Packer<N>);
+
+impl<const N: usize> core::fmt::Write for Cut<'_, N> {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        let p = &mut *self.0;
+        let room = N - p.len;
+        let mut n = s.len().min(room);
+        while !s.is_char_boundary(n) {
+            n -= 1;
+        }
+        p.bytes[p.len..p.len + n].copy_from_slice(&s.as_bytes()[..n]);
+        p.len += n;
+        Ok(())
     }
 }
 
@@ -376,10 +437,15 @@ mod tests {
         assert_eq!(&a.as_bytes()[2..6], &[b'A', 0, 7, 0]);
         assert_eq!(&a.as_bytes()[6..], b"sensor_combined");
 
-        let payload = Packer::<16>::new().u64(42).f32(1.5).finish().unwrap();
-        let d = Message::data(7, &payload).unwrap();
+        let mut p = Packer::<16>::new();
+        p.u64(42).f32(1.5);
+        let payload = p.bytes().unwrap();
+        let d = Message::data(7, payload).unwrap();
         assert_eq!(d.as_bytes()[..5], [14, 0, b'D', 7, 0]);
-        assert_eq!(&d.as_bytes()[5..], payload.as_slice());
+        assert_eq!(&d.as_bytes()[5..], payload);
+        let mut direct = Packer::<32>::data(7);
+        direct.u64(42).f32(1.5);
+        assert_eq!(direct.message(), Some(d.as_bytes()));
 
         let l = Message::logged_string(LogLevel::Warning, 99, "battery low").unwrap();
         let b = l.as_bytes();
@@ -404,6 +470,19 @@ mod tests {
             Message::add_subscription(0, 1, &text[..300]),
             Err(UlogError::BadName)
         );
-        assert!(Packer::<4>::new().u64(1).finish().is_none());
+        assert!(Packer::<4>::new().u64(1).bytes().is_none());
+        // A text is cut at a character boundary where the buffer ends.
+        let mut t = Packer::<16>::logged_string(LogLevel::Info, 5, format_args!("h\u{e9}llo"));
+        assert_eq!(&t.message().unwrap()[12..], b"h\xc3\xa9l");
+        let mut whole = Packer::<64>::logged_string(LogLevel::Error, 9, format_args!("{}", 42));
+        assert_eq!(
+            whole.message(),
+            Some(
+                Message::logged_string(LogLevel::Error, 9, "42")
+                    .unwrap()
+                    .as_bytes()
+            )
+        );
+        assert!(Packer::<6>::data(1).u64(1).message().is_none());
     }
 }

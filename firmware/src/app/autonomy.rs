@@ -20,6 +20,8 @@ use core::fmt::Write as _;
 use heapless::Vec;
 pub use link::command::OperatorCommand;
 use link::flight_log::recorder::step_texts;
+use link::flight_log::session::MissionLog;
+use link::flight_log::stream::{LogRing, NoRing};
 pub use link::hil::{MAX_ROBOTS, MocapFix};
 pub use link::status::MissionState;
 use link::status::Text;
@@ -196,6 +198,8 @@ pub struct TickOutput {
 pub struct Autonomy {
     mission: Mission,
     loaded: bool,
+    /// The mission's flight log.
+    log: MissionLog,
 }
 
 impl Default for Autonomy {
@@ -239,6 +243,7 @@ impl Autonomy {
         Self {
             mission: Mission::unloaded(),
             loaded: false,
+            log: MissionLog::without_step_texts(),
         }
     }
 
@@ -252,8 +257,18 @@ impl Autonomy {
         }
     }
 
-    /// One control step.
+    /// One control step, keeping no log.
     pub fn tick(&mut self, input: &TickInput<'_>) -> TickOutput {
+        self.tick_logged(input, &mut NoRing)
+    }
+
+    /// Messages of the flight log lost since it opened (its ring was full).
+    pub fn log_lost(&self) -> u32 {
+        self.log.lost()
+    }
+
+    /// One control step, its flight log (from the mission's start to its end) into `ring`.
+    pub fn tick_logged(&mut self, input: &TickInput<'_>, ring: &mut impl LogRing) -> TickOutput {
         let mut report = Report::default();
         if let Some((scenario, config)) = input.payload {
             if self.mission.phase() == Phase::Idle || self.state().is_over() {
@@ -274,7 +289,7 @@ impl Autonomy {
         // matches: refused for now, the mission never sees it.
         let held_back = input.loading && input.command == Some(OperatorCommand::Start);
         let command = input.command.filter(|_| !held_back);
-        let out = self.mission.step(&MissionInput {
+        let mission_input = MissionInput {
             time_us: input.time_us,
             imu: ImuSample {
                 gyro: Vec3::new(input.imu.gyro[0], input.imu.gyro[1], input.imu.gyro[2]),
@@ -284,7 +299,8 @@ impl Autonomy {
             command: command.map(self::command),
             faults: input.faults,
             supervision: input.supervision,
-        });
+        };
+        let out = self.mission.step(&mission_input);
         // Its COMMAND_ACK says TEMPORARILY_REJECTED, and a text says why and what to do.
         let ack = if held_back {
             report.text(
@@ -327,6 +343,27 @@ impl Autonomy {
                 _ => {}
             }
         }
+        // Every text of the step, as the ground gets it (formatted once), goes in the log too.
+        let texts = &report.texts;
+        self.log.step(
+            &mission_input,
+            &out,
+            &self.mission,
+            self.mission.robot_max_thrust(),
+            ring,
+            |log| {
+                for line in texts {
+                    let level = match line.severity {
+                        Severity::Critical => LogLevel::Critical,
+                        Severity::Error => LogLevel::Error,
+                        Severity::Warning => LogLevel::Warning,
+                        Severity::Notice => LogLevel::Notice,
+                        Severity::Info => LogLevel::Info,
+                    };
+                    log.text(level, input.time_us, format_args!("{}", line.text));
+                }
+            },
+        );
         let robots = if self.loaded {
             out.robots.len().min(MAX_ROBOTS)
         } else {

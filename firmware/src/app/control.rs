@@ -20,6 +20,7 @@ use link::hil::{Actuators, JobDeadline, VehicleClock};
 
 use super::autonomy::{Autonomy, CommandResult, JobResult, Severity, TickInput, TickOutput, Value};
 use super::comms::{Outbound, SensorSample};
+use super::logger::RingEnd;
 use super::{
     ARMED, COMMANDS, GCS_HEARTBEAT, IDLE_COUNTS, IN_HIL, JOB_REQUESTS, JOB_RESULTS,
     LINK_BATTERY_MV, LOADING, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD, SENSOR, VEHICLE,
@@ -118,7 +119,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             },
         };
         let imu_failed = input.faults.imu;
-        let mut out = autonomy.tick(&input);
+        let mut out = autonomy.tick_logged(&input, &mut RingEnd);
         if late {
             out.report
                 .text(Severity::Critical, format_args!("job late at its deadline"));

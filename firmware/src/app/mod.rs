@@ -1,4 +1,4 @@
-//! The application, written once for every board: four tasks on three
+//! The application, written once for every board: five tasks on three
 //! executors, embassy's multi-priority pattern.
 //!
 //! | task | executor | does |
@@ -6,6 +6,7 @@
 //! | [`control`] | [`CONTROL_EXECUTOR`], an `InterruptExecutor` at the highest priority | one step of the autonomy per IMU sample (400 Hz), actuator outputs |
 //! | [`comms`] receive and send | [`LINK_EXECUTOR`], an `InterruptExecutor` below control | MAVLink: HIL sensors in, commands, FTP, status out |
 //! | [`jobs`] | thread mode (`WFI` between polls) | the autonomy's long computations, off the tick |
+//! | [`logger`] | thread mode | the flight log from its ring into the board's storage |
 //!
 //! The tasks talk through the channels and signals below, never by shared mutable state. The
 //! autonomy sits behind one narrow seam, [`autonomy`]: the integration point of the mission.
@@ -14,6 +15,7 @@ pub mod autonomy;
 pub mod comms;
 pub mod control;
 pub mod jobs;
+pub mod logger;
 
 use core::sync::atomic::{AtomicBool, AtomicU8, AtomicU32, Ordering};
 
@@ -183,6 +185,7 @@ pub fn run(
         link_tx,
         outputs,
         param_flash,
+        log_storage,
         irqs,
     } = parts;
 
@@ -214,6 +217,13 @@ pub fn run(
     match jobs::jobs() {
         Ok(token) => spawner.spawn(token),
         Err(_) => panic!("job task not spawned"),
+    }
+    if <Selected as crate::board::Board>::keeps_logs() {
+        logger::LOGGING.store(true, Ordering::Relaxed);
+        match logger::logger(log_storage) {
+            Ok(token) => spawner.spawn(token),
+            Err(_) => panic!("logger task not spawned"),
+        }
     }
     board_tasks(spawner);
     loop {

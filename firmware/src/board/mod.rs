@@ -74,6 +74,11 @@ pub trait Board: 'static {
     /// Where the payload description is kept (two slots of whole erase pages, apart from
     /// [`Board::PARAM_RANGE`]).
     const PAYLOAD_RANGE: core::ops::Range<u32>;
+    /// Where the flight logs are kept ([`NoLogStorage`] on a board without a driver for it).
+    type LogStorage: link::flight_log::keeper::LogStorage + Send + 'static;
+    /// Bytes of the ring between the control step and the logger task (0: no flight log).
+    /// At 400 Hz the mission's log comes at about 91 KB/s: 64 KiB hold 0.7 s of it.
+    const LOG_RING_BYTES: usize;
 
     /// A free-running counter (wrapping) for measuring the control tick.
     fn cycle_count() -> u32;
@@ -81,6 +86,11 @@ pub trait Board: 'static {
     /// Whether the link in use may set the signing key (`SETUP_SIGNING`): a wired link the
     /// operator plugs in by hand (the Pixhawk's USB), never a radio.
     fn key_setup_allowed() -> bool;
+
+    /// Whether the board keeps flight logs this run (it has a ring, and storage for them).
+    fn keeps_logs() -> bool {
+        Self::LOG_RING_BYTES > 0
+    }
 
     /// What the board's drivers report failed now (none on a board without drivers).
     fn hardware_faults() -> shared::mission::HardwareFaults {
@@ -123,6 +133,8 @@ pub struct Parts<B: Board> {
     pub outputs: B::Outputs,
     /// The parameters' flash.
     pub param_flash: B::ParamFlash,
+    /// Where the flight logs go.
+    pub log_storage: B::LogStorage,
     /// The executors' interrupts.
     pub irqs: ExecutorIrqs<B::Irq>,
 }
@@ -144,4 +156,43 @@ pub fn check_flash_access(
         return Err(NorFlashErrorKind::OutOfBounds);
     }
     Ok(())
+}
+
+/// The log storage of a board that has no driver for one yet: every operation fails, saying
+/// so (the vehicle flies and keeps no log).
+pub struct NoLogStorage;
+
+/// Why [`NoLogStorage`] fails.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NoLogDriver;
+
+impl core::fmt::Display for NoLogDriver {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("this board has no driver for its log storage yet")
+    }
+}
+
+impl link::flight_log::keeper::LogStorage for NoLogStorage {
+    type Error = NoLogDriver;
+    fn count(&mut self) -> Result<u16, NoLogDriver> {
+        Ok(0)
+    }
+    fn size(&mut self, _: u16) -> Result<u32, NoLogDriver> {
+        Err(NoLogDriver)
+    }
+    fn create(&mut self) -> Result<u16, NoLogDriver> {
+        Err(NoLogDriver)
+    }
+    fn append(&mut self, _: &[u8]) -> Result<(), NoLogDriver> {
+        Err(NoLogDriver)
+    }
+    fn close(&mut self) -> Result<(), NoLogDriver> {
+        Ok(())
+    }
+    fn read(&mut self, _: u16, _: u32, _: &mut [u8]) -> Result<usize, NoLogDriver> {
+        Err(NoLogDriver)
+    }
+    fn erase_all(&mut self) -> Result<(), NoLogDriver> {
+        Ok(())
+    }
 }

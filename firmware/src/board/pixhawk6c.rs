@@ -139,6 +139,9 @@ impl Board for Pixhawk6c {
     type Outputs = Outputs;
     type Irq = Interrupt;
     type ParamFlash = super::fram::Fram;
+    // The microSD card (SDMMC, FAT) has no driver yet: the board keeps no flight log.
+    type LogStorage = super::NoLogStorage;
+    const LOG_RING_BYTES: usize = 0;
     /// The first 8 KiB of the FRAM: eight pages, room for every parameter many times over
     /// (the rest stays free for the payload description).
     const PARAM_RANGE: core::ops::Range<u32> = 0..(8 * super::fram::PAGE) as u32;
@@ -512,6 +515,7 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
         link_tx,
         outputs,
         param_flash: fram,
+        log_storage: super::NoLogStorage,
         irqs: ExecutorIrqs {
             control: Interrupt::SPDIF_RX,
             link: Interrupt::CEC,

@@ -41,8 +41,9 @@ pub struct HilArgs {
     #[arg(long, value_name = "ELF")]
     pub qemu: Option<PathBuf>,
     /// With --qemu: keep the firmware's parameter flash in this directory (file
-    /// firmware-params.bin), so parameters set in one run are there in the next. Without it
-    /// every run starts from the defaults.
+    /// firmware-params.bin), so parameters set in one run are there in the next, and its
+    /// flight logs (log-000.ulg, log-001.ulg, ...: one per mission, ULog). Without it every
+    /// run starts from the defaults and keeps no log.
     #[arg(long, value_name = "DIR", requires = "qemu")]
     pub storage: Option<PathBuf>,
     /// With --qemu: the board's link to the plant: `ethernet` (its LAN9118, frames as UDP

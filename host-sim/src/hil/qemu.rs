@@ -323,6 +323,8 @@ impl Qemu {
             .args(["-semihosting-config", "enable=on,target=native"])
             .arg("-kernel")
             .arg(&elf);
+        // The image's command line (`-append`): words the firmware reads through semihosting.
+        let mut words: Vec<&str> = Vec::new();
         match serial {
             Serial::Tcp(port) => {
                 cmd.args([
@@ -339,9 +341,17 @@ impl Qemu {
             }
             Serial::Udp { plant, qemu } => {
                 // The firmware reads its link from the command line (semihosting).
-                cmd.args(["-serial", "null", "-append", "hil-link=ethernet", "-nic"])
+                words.push("hil-link=ethernet");
+                cmd.args(["-serial", "null", "-nic"])
                     .arg(format!("socket,udp={plant},localaddr={qemu}"));
             }
+        }
+        // With storage the firmware keeps its flight logs there (docs/formats.md#flight-logs).
+        if storage.is_some() {
+            words.push("flight-log=on");
+        }
+        if !words.is_empty() {
+            cmd.arg("-append").arg(words.join(" "));
         }
         // For debugging the firmware in the loop: more of QEMU's options, e.g. `-s` for a gdb
         // server on port 1234 or `-d guest_errors` (docs/firmware.md#hil-transports).

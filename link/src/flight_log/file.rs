@@ -1,9 +1,7 @@
-//! The log as a file: its start (header, definitions, subscriptions) and each entry as a
-//! ULog message. Whoever writes the log (the firmware's logger task, the simulator) writes the
-//! start once, then each entry's message as it comes, and a [`Message::dropout`] where
-//! entries were lost.
+//! The log as a file: its start (header, definitions, subscriptions), written by the
+//! storing side when a mission's log opens; the messages after it come from the control step
+//! ([`super::stream`]).
 
-use super::recorder::LogEntry;
 use super::topics::Topic;
 use crate::ulog::{Message, UlogError, file_header};
 use shared::mission::MissionConfig;
@@ -51,18 +49,6 @@ pub fn write_start(
         out(Message::add_subscription(0, topic.msg_id(), topic.name())?.as_bytes());
     }
     Ok(())
-}
-
-/// An entry as its ULog message.
-pub fn entry_message(entry: &LogEntry) -> Result<Message, UlogError> {
-    match entry {
-        LogEntry::Record(r) => Message::data(r.topic().msg_id(), &r.pack()),
-        LogEntry::Text {
-            level,
-            timestamp,
-            text,
-        } => Message::logged_string(*level, *timestamp, text),
-    }
 }
 
 #[cfg(test)]

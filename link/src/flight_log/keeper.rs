@@ -171,7 +171,6 @@ impl LogKeeper {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::flight_log::recorder::LogEntry;
     use crate::flight_log::stream::{LogRing, LogWriter, Splitter};
     use crate::flight_log::topics::Record;
     use std::vec::Vec as StdVec;
@@ -252,13 +251,13 @@ pub(crate) mod tests {
         let mut w = LogWriter::new();
         w.start(&mut ring, 100);
         for t in 0..records {
-            let r = LogEntry::Record(Record::VehicleStatus {
+            let r = Record::VehicleStatus {
                 timestamp: 100 + t,
                 armed: true,
                 nav_state: 3,
                 mission_phase: 9,
-            });
-            w.entry(&mut ring, &r, 100 + t);
+            };
+            w.record(&mut ring, &r, 100 + t);
         }
         w.end(&mut ring);
         ring.0

@@ -12,8 +12,6 @@
 
 use super::topics::{Record, per_robot};
 use crate::ulog::LogLevel;
-use core::fmt::Write as _;
-use heapless::String;
 use shared::control::trajectory::FlightPhase;
 use shared::estimation::Measurement;
 use shared::flight::adapt::AdaptEvent;
@@ -30,47 +28,12 @@ const EVERY_10_HZ: u64 = 40;
 /// Steps between two records of a topic written when it changes, at least.
 const EVERY_SECOND: u64 = 400;
 
-/// One entry of the log: a record of a topic, or a logged string.
-#[derive(Clone, Debug, PartialEq)]
-pub enum LogEntry {
+/// Where the recorder's records and texts go.
+pub trait RecordSink {
     /// A topic's record.
-    Record(Record),
-    /// A logged string.
-    Text {
-        /// Its level.
-        level: LogLevel,
-        /// When, us.
-        timestamp: u64,
-        /// What it says.
-        text: String<TEXT_CAPACITY>,
-    },
-}
-
-impl LogEntry {
-    /// A logged string of `text` (cut to [`TEXT_CAPACITY`] bytes).
-    pub fn text(level: LogLevel, timestamp: u64, text: core::fmt::Arguments<'_>) -> Self {
-        let mut s = Cut(String::new());
-        let _ = s.write_fmt(text);
-        Self::Text {
-            level,
-            timestamp,
-            text: s.0,
-        }
-    }
-}
-
-/// A string that keeps what fits and drops the rest (whole characters).
-struct Cut(String<TEXT_CAPACITY>);
-
-impl core::fmt::Write for Cut {
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        for c in s.chars() {
-            if self.0.push(c).is_err() {
-                break;
-            }
-        }
-        Ok(())
-    }
+    fn record(&mut self, record: &Record);
+    /// A logged string of `level` at `timestamp_us` (cut to [`TEXT_CAPACITY`] bytes).
+    fn text(&mut self, level: LogLevel, timestamp_us: u64, text: core::fmt::Arguments<'_>);
 }
 
 /// The mission's phase as the log's `mission_phase` number: 0 idle, 1 pre-flight checks,
@@ -132,6 +95,9 @@ pub struct Recorder {
     reading: Option<(u64, Option<f32>)>,
     /// Lifts whose update has come back (at the last `lift` record).
     lifts: u32,
+    /// The step's texts are logged by the caller, formatted once for the ground and the log
+    /// (the firmware); otherwise the recorder logs [`step_texts`] itself (the simulator).
+    texts_elsewhere: bool,
 }
 
 impl Recorder {
@@ -140,22 +106,35 @@ impl Recorder {
         Self::default()
     }
 
+    /// Whether the step's texts are left to the caller.
+    pub fn texts_elsewhere(&self) -> bool {
+        self.texts_elsewhere
+    }
+
+    /// A recorder at the mission's start that leaves the step's texts to its caller.
+    pub fn without_step_texts() -> Self {
+        Self {
+            texts_elsewhere: true,
+            ..Self::default()
+        }
+    }
+
     /// Records the step that took `input` and gave `out`; `mission` is the mission after the
-    /// step, `max_thrust` one rotor's maximum thrust, N. Each entry goes to `entry`.
+    /// step, `max_thrust` one rotor's maximum thrust, N. What it records goes to `sink`.
     pub fn step(
         &mut self,
         input: &TickInput,
         out: &TickOutput,
         mission: &Mission,
         max_thrust: f32,
-        entry: &mut impl FnMut(LogEntry),
+        sink: &mut impl RecordSink,
     ) {
         let t = input.time_us;
         let every = |n: u64| self.steps.is_multiple_of(n);
         let (at_100_hz, at_10_hz, at_1_hz) =
             (every(EVERY_100_HZ), every(EVERY_10_HZ), every(EVERY_SECOND));
         self.steps += 1;
-        let mut put = |r: Record| entry(LogEntry::Record(r));
+        let mut put = |r: Record| sink.record(&r);
 
         let imu = input.imu;
         put(Record::SensorCombined {
@@ -272,9 +251,9 @@ impl Recorder {
                 });
             }
         }
-        step_texts(out, &mut |level, text| {
-            entry(LogEntry::text(level, t, text))
-        });
+        if !self.texts_elsewhere {
+            step_texts(out, &mut |level, text| sink.text(level, t, text));
+        }
     }
 
     /// The estimation's records: a lift once its reading's update has come back, the

@@ -5,9 +5,9 @@
 //! lasted. Two marker messages, never written to a file, tell the storing side where a
 //! mission's log starts and ends ([`Piece`], read back by [`Splitter`]).
 
-use super::file::entry_message;
-use super::recorder::LogEntry;
-use crate::ulog::{MESSAGE_CAPACITY, Message};
+use super::recorder::TEXT_CAPACITY;
+use super::topics::Record;
+use crate::ulog::{LogLevel, MESSAGE_CAPACITY, Message, Packer};
 use heapless::Vec;
 
 /// Message type of the start marker (payload: the start time, us, `u64`).
@@ -21,6 +21,17 @@ pub trait LogRing {
     fn free(&self) -> usize;
     /// Writes `bytes`, at most [`Self::free`] of them.
     fn put(&mut self, bytes: &[u8]);
+}
+
+/// No ring: nothing is ever logged (a build or a test that keeps no log).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoRing;
+
+impl LogRing for NoRing {
+    fn free(&self) -> usize {
+        0
+    }
+    fn put(&mut self, _: &[u8]) {}
 }
 
 /// The control step's side: what it wrote and lost.
@@ -84,21 +95,38 @@ impl LogWriter {
         true
     }
 
-    /// Writes one entry at `now_us` (nothing while no log is open).
-    pub fn entry(&mut self, ring: &mut impl LogRing, entry: &LogEntry, now_us: u64) {
+    /// Writes one record at `now_us` (nothing while no log is open).
+    pub fn record(&mut self, ring: &mut impl LogRing, record: &Record, now_us: u64) {
         if !self.open {
             return;
         }
-        // Every entry fits a message: the recorder cuts its strings to fit.
-        let Ok(message) = entry_message(entry) else {
-            return;
-        };
-        self.message(ring, &message, now_us);
+        // Built in place and written as it is: the control step's usual case.
+        if let Some(bytes) = record.message().message() {
+            self.write(ring, bytes, now_us);
+        }
     }
 
-    /// Writes one message at `now_us`, after a dropout message when messages were lost.
-    pub fn message(&mut self, ring: &mut impl LogRing, message: &Message, now_us: u64) {
-        let bytes = message.as_bytes();
+    /// Writes one logged string at `now_us` (cut to [`TEXT_CAPACITY`] bytes; nothing while no
+    /// log is open).
+    pub fn text(
+        &mut self,
+        ring: &mut impl LogRing,
+        level: LogLevel,
+        now_us: u64,
+        text: core::fmt::Arguments<'_>,
+    ) {
+        if !self.open {
+            return;
+        }
+        let mut m = Packer::<{ 12 + TEXT_CAPACITY }>::logged_string(level, now_us, text);
+        if let Some(bytes) = m.message() {
+            self.write(ring, bytes, now_us);
+        }
+    }
+
+    /// Writes one message's `bytes` at `now_us`, after a dropout message when messages were
+    /// lost.
+    fn write(&mut self, ring: &mut impl LogRing, bytes: &[u8], now_us: u64) {
         let dropout = self.lost_since.map(|since| {
             let ms = (now_us.saturating_sub(since) / 1000).clamp(1, u64::from(u16::MAX));
             Message::dropout(ms as u16)
@@ -190,8 +218,6 @@ impl Splitter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flight_log::topics::Record;
-    use crate::ulog::LogLevel;
     use std::vec::Vec as StdVec;
 
     /// A ring of `capacity` bytes read out by the test.
@@ -210,13 +236,13 @@ mod tests {
         }
     }
 
-    fn status(t: u64) -> LogEntry {
-        LogEntry::Record(Record::VehicleStatus {
+    fn status(t: u64) -> Record {
+        Record::VehicleStatus {
             timestamp: t,
             armed: false,
             nav_state: 3,
             mission_phase: 1,
-        })
+        }
     }
 
     fn split(bytes: &[u8], chunk: usize) -> StdVec<(char, u64)> {
@@ -241,18 +267,18 @@ mod tests {
             capacity: 10_000,
         };
         let mut w = LogWriter::new();
-        w.entry(&mut ring, &status(1), 1);
+        w.record(&mut ring, &status(1), 1);
         assert!(ring.bytes.is_empty(), "nothing before the start");
         assert!(w.start(&mut ring, 42));
-        w.entry(&mut ring, &status(2), 2);
-        let text = LogEntry::text(
+        w.record(&mut ring, &status(2), 2);
+        w.text(
+            &mut ring,
             LogLevel::Info,
             3,
             format_args!("phase: lift: robots in place"),
         );
-        w.entry(&mut ring, &text, 3);
         assert!(w.end(&mut ring));
-        w.entry(&mut ring, &status(4), 4);
+        w.record(&mut ring, &status(4), 4);
         for chunk in [1, 2, 7, 64, 10_000] {
             let pieces = split(&ring.bytes, chunk);
             assert_eq!(
@@ -271,15 +297,15 @@ mod tests {
         };
         let mut w = LogWriter::new();
         assert!(w.start(&mut ring, 0));
-        w.entry(&mut ring, &status(1_000), 1_000);
+        w.record(&mut ring, &status(1_000), 1_000);
         // No room for another 16 bytes: lost, from 2 ms to 9 ms.
-        w.entry(&mut ring, &status(2_000), 2_000);
-        w.entry(&mut ring, &status(9_000), 9_000);
+        w.record(&mut ring, &status(2_000), 2_000);
+        w.record(&mut ring, &status(9_000), 9_000);
         assert_eq!(w.lost(), 2);
         assert_eq!(ring.bytes.len(), 27);
         // The reader empties the ring: the next message comes after a 9 ms dropout.
         let read: StdVec<u8> = ring.bytes.drain(..).collect();
-        w.entry(&mut ring, &status(11_000), 11_000);
+        w.record(&mut ring, &status(11_000), 11_000);
         let mut all = read;
         all.extend_from_slice(&ring.bytes);
         assert_eq!(split(&all, 5), [('<', 0), ('D', 16), ('O', 5), ('D', 16)]);

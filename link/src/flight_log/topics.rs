@@ -293,6 +293,9 @@ pub enum Record {
 /// Packed data of one record.
 pub type Packed = Vec<u8, RECORD_CAPACITY>;
 
+/// One record as its whole ULog data message (header, message id, fields).
+pub type DataMessage = Packer<{ RECORD_CAPACITY + 5 }>;
+
 impl Record {
     /// The record's topic.
     pub fn topic(&self) -> Topic {
@@ -334,8 +337,17 @@ impl Record {
 
     /// The record's fields packed as its topic's format lists them.
     pub fn pack(&self) -> Packed {
-        let p = Packer::<RECORD_CAPACITY>::new().u64(self.timestamp());
-        let p = match *self {
+        let mut m = self.message();
+        let bytes = m.message().unwrap_or_default();
+        Vec::from_slice(bytes.get(5..).unwrap_or_default()).unwrap_or_default()
+    }
+
+    /// The record as its ULog data message, built in place (the control step writes it to
+    /// the log's ring as it is).
+    pub fn message(&self) -> DataMessage {
+        let mut m = DataMessage::data(self.topic().msg_id());
+        let p = m.u64(self.timestamp());
+        match *self {
             Self::SensorCombined {
                 gyro_rad,
                 accelerometer_m_s2,
@@ -444,7 +456,7 @@ impl Record {
                 .u8(battery_warning),
         };
         // Every record fits RECORD_CAPACITY (a test packs each).
-        p.finish().unwrap_or_default()
+        m
     }
 }
 

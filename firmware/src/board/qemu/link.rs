@@ -38,8 +38,8 @@ pub enum LinkTx {
 }
 
 /// Whether QEMU's command line for the image (`-append`, through semihosting's
-/// `SYS_GET_CMDLINE`) holds `hil-link=ethernet`.
-fn ethernet_asked_for() -> bool {
+/// `SYS_GET_CMDLINE`) holds `word`.
+pub fn command_line_has(word: &[u8]) -> bool {
     let mut text = [0u8; 256];
     let mut block = [text.as_mut_ptr() as usize, text.len()];
     // SAFETY: SYS_GET_CMDLINE writes at most `block[1]` bytes to `block[0]` and the length it
@@ -52,13 +52,13 @@ fn ethernet_asked_for() -> bool {
     let len = block[1].min(text.len());
     text[..len]
         .split(|b| b.is_ascii_whitespace())
-        .any(|word| word == ETHERNET_WORD)
+        .any(|w| w == word)
 }
 
 /// Brings up the link the command line picks (the UART when the Ethernet controller is
 /// missing); returns its halves and whether it is the Ethernet link.
 pub fn init() -> (LinkRx, LinkTx, bool) {
-    if ethernet_asked_for()
+    if command_line_has(ETHERNET_WORD)
         && let Some((rx, tx)) = ethernet::init()
     {
         return (LinkRx::Ethernet(rx), LinkTx::Ethernet(tx), true);
