@@ -4,7 +4,7 @@
 //! what the firmware's would, and opens in the same tools.
 
 use anyhow::{Context, Result, anyhow};
-use link::flight_log::file::LogInfo;
+use link::flight_log::file::{LogInfo, SYS_NAME};
 use link::flight_log::keeper::{LogKeeper, LogStorage};
 use link::flight_log::session::MissionLog;
 use link::flight_log::stream::{LogRing, Splitter};
@@ -13,8 +13,6 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// `sys_name` of the simulator's logs (the firmware's is the same).
-pub const SYS_NAME: &str = "rail-transport";
 /// `ver_hw` of the simulator's logs.
 pub const VER_HW: &str = "SITL host-sim";
 

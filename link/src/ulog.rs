@@ -3,7 +3,7 @@
 //!
 //! A log is the 16-byte [`file_header`], the definitions (the [`Message::flag_bits`] first,
 //! then [`Message::format`]s, [`Message::info`]s and [`Message::parameter_f32`]s) and the data
-//! ([`Message::add_subscription`], [`Message::data`], [`Message::logged_string`],
+//! ([`Message::add_subscription`], data and logged strings built in place by [`Packer`],
 //! [`Message::dropout`], [`Message::sync`]). Every message is a 3-byte header (payload size,
 //! type) and its payload, little endian. A message is built whole in a fixed buffer; the
 //! caller writes its bytes wherever the log goes.
@@ -183,28 +183,6 @@ impl Message {
             .put(&[multi_id])?
             .put(&msg_id.to_le_bytes())?
             .put(topic.as_bytes())?
-            .done())
-    }
-
-    /// A data message ('D') of subscription `msg_id`: the topic's fields packed as its format
-    /// says, the timestamp first.
-    pub fn data(msg_id: u16, payload: &[u8]) -> Result<Self, UlogError> {
-        Ok(Self::begin(b'D')
-            .put(&msg_id.to_le_bytes())?
-            .put(payload)?
-            .done())
-    }
-
-    /// A logged string ('L') at `timestamp_us`.
-    pub fn logged_string(
-        level: LogLevel,
-        timestamp_us: u64,
-        text: &str,
-    ) -> Result<Self, UlogError> {
-        Ok(Self::begin(b'L')
-            .put(&[level.byte()])?
-            .put(&timestamp_us.to_le_bytes())?
-            .put(text.as_bytes())?
             .done())
     }
 
@@ -437,18 +415,16 @@ mod tests {
         assert_eq!(&a.as_bytes()[2..6], &[b'A', 0, 7, 0]);
         assert_eq!(&a.as_bytes()[6..], b"sensor_combined");
 
-        let mut p = Packer::<16>::new();
-        p.u64(42).f32(1.5);
-        let payload = p.bytes().unwrap();
-        let d = Message::data(7, payload).unwrap();
-        assert_eq!(d.as_bytes()[..5], [14, 0, b'D', 7, 0]);
-        assert_eq!(&d.as_bytes()[5..], payload);
-        let mut direct = Packer::<32>::data(7);
-        direct.u64(42).f32(1.5);
-        assert_eq!(direct.message(), Some(d.as_bytes()));
+        let mut d = Packer::<32>::data(7);
+        d.u64(42).f32(1.5);
+        let d = d.message().unwrap();
+        assert_eq!(d[..5], [14, 0, b'D', 7, 0]);
+        assert_eq!(u64::from_le_bytes(d[5..13].try_into().unwrap()), 42);
+        assert_eq!(f32::from_le_bytes(d[13..].try_into().unwrap()), 1.5);
 
-        let l = Message::logged_string(LogLevel::Warning, 99, "battery low").unwrap();
-        let b = l.as_bytes();
+        let mut l = Packer::<64>::logged_string(LogLevel::Warning, 99, format_args!("battery low"));
+        let b = l.message().unwrap();
+        assert_eq!(u16::from_le_bytes([b[0], b[1]]) as usize, b.len() - 3);
         assert_eq!((b[2], b[3]), (b'L', b'4'));
         assert_eq!(u64::from_le_bytes(b[4..12].try_into().unwrap()), 99);
         assert_eq!(&b[12..], b"battery low");
@@ -461,10 +437,6 @@ mod tests {
         let long = [b'x'; MESSAGE_CAPACITY];
         let text = core::str::from_utf8(&long).unwrap();
         assert_eq!(Message::format(text), Err(UlogError::TooLong));
-        assert_eq!(
-            Message::logged_string(LogLevel::Info, 0, text),
-            Err(UlogError::TooLong)
-        );
         assert_eq!(Message::parameter_f32("", 1.0), Err(UlogError::BadName));
         assert_eq!(
             Message::add_subscription(0, 1, &text[..300]),
@@ -474,15 +446,6 @@ mod tests {
         // A text is cut at a character boundary where the buffer ends.
         let mut t = Packer::<16>::logged_string(LogLevel::Info, 5, format_args!("h\u{e9}llo"));
         assert_eq!(&t.message().unwrap()[12..], b"h\xc3\xa9l");
-        let mut whole = Packer::<64>::logged_string(LogLevel::Error, 9, format_args!("{}", 42));
-        assert_eq!(
-            whole.message(),
-            Some(
-                Message::logged_string(LogLevel::Error, 9, "42")
-                    .unwrap()
-                    .as_bytes()
-            )
-        );
         assert!(Packer::<6>::data(1).u64(1).message().is_none());
     }
 }

@@ -219,6 +219,17 @@ fn severity(level: LogLevel) -> Severity {
     }
 }
 
+/// A `STATUSTEXT` severity as a logged string's level (the inverse of [`severity`]).
+fn level(severity: Severity) -> LogLevel {
+    match severity {
+        Severity::Critical => LogLevel::Critical,
+        Severity::Error => LogLevel::Error,
+        Severity::Warning => LogLevel::Warning,
+        Severity::Notice => LogLevel::Notice,
+        Severity::Info => LogLevel::Info,
+    }
+}
+
 fn command(c: OperatorCommand) -> Command {
     match c {
         OperatorCommand::Start => Command::Start,
@@ -260,11 +271,6 @@ impl Autonomy {
     /// One control step, keeping no log.
     pub fn tick(&mut self, input: &TickInput<'_>) -> TickOutput {
         self.tick_logged(input, &mut NoRing)
-    }
-
-    /// Messages of the flight log lost since it opened (its ring was full).
-    pub fn log_lost(&self) -> u32 {
-        self.log.lost()
     }
 
     /// One control step, its flight log (from the mission's start to its end) into `ring`.
@@ -353,13 +359,7 @@ impl Autonomy {
             ring,
             |log| {
                 for line in texts {
-                    let level = match line.severity {
-                        Severity::Critical => LogLevel::Critical,
-                        Severity::Error => LogLevel::Error,
-                        Severity::Warning => LogLevel::Warning,
-                        Severity::Notice => LogLevel::Notice,
-                        Severity::Info => LogLevel::Info,
-                    };
+                    let level = level(line.severity);
                     log.text(level, input.time_us, format_args!("{}", line.text));
                 }
             },

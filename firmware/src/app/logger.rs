@@ -8,7 +8,7 @@
 use core::sync::atomic::{AtomicBool, Ordering};
 
 use embassy_sync::pipe::Pipe;
-use link::flight_log::file::LogInfo;
+use link::flight_log::file::{LogInfo, SYS_NAME};
 use link::flight_log::keeper::{KeeperEvent, LogKeeper};
 use link::flight_log::stream::{LogRing, Splitter};
 
@@ -44,9 +44,6 @@ impl LogRing for RingEnd {
         }
     }
 }
-
-/// `sys_name` of the vehicle's logs.
-pub const SYS_NAME: &str = "rail-transport";
 
 /// Reads the ring into `storage`, forever.
 #[embassy_executor::task]

@@ -7,6 +7,9 @@ use crate::ulog::{Message, UlogError, file_header};
 use shared::mission::MissionConfig;
 use shared::mission::params::TABLE;
 
+/// `sys_name` of the vehicle's logs, the firmware's and the simulator's alike.
+pub const SYS_NAME: &str = "rail-transport";
+
 /// What the log's information section says of the vehicle.
 #[derive(Clone, Copy, Debug)]
 pub struct LogInfo<'a> {

@@ -106,9 +106,12 @@ impl Recorder {
         Self::default()
     }
 
-    /// Whether the step's texts are left to the caller.
-    pub fn texts_elsewhere(&self) -> bool {
-        self.texts_elsewhere
+    /// Back to the mission's start (the texts left where they were).
+    pub fn restart(&mut self) {
+        *self = Self {
+            texts_elsewhere: self.texts_elsewhere,
+            ..Self::default()
+        };
     }
 
     /// A recorder at the mission's start that leaves the step's texts to its caller.

@@ -36,11 +36,6 @@ impl MissionLog {
         self.writer.is_open()
     }
 
-    /// Messages lost since the log opened (the ring was full).
-    pub fn lost(&self) -> u32 {
-        self.writer.lost()
-    }
-
     /// Logs the step that took `input` and gave `out` (`mission` after it; `max_thrust` one
     /// rotor's maximum, N) into `ring`; `also` adds what the caller logs of the step itself
     /// (the firmware: the step's texts as the ground gets them), before the log closes.
@@ -65,11 +60,7 @@ impl MissionLog {
             room: ring.free(),
         };
         if running && !self.writer.is_open() && self.writer.start(&mut step, input.time_us) {
-            self.recorder = if self.recorder.texts_elsewhere() {
-                Recorder::without_step_texts()
-            } else {
-                Recorder::new()
-            };
+            self.recorder.restart();
         }
         if self.writer.is_open() {
             let Self { recorder, writer } = self;
