@@ -6,8 +6,8 @@
 use anyhow::{Context, Result, anyhow};
 use link::flight_log::file::{LogInfo, SYS_NAME};
 use link::flight_log::keeper::{LogKeeper, LogStorage};
-use link::flight_log::session::MissionLog;
-use link::flight_log::stream::{LogRing, Splitter};
+use link::flight_log::session::{MissionLog, STEP_BYTES};
+use link::flight_log::stream::{LogRing, LogSpace, Splitter};
 use shared::mission::{Mission, MissionConfig, TickInput, TickOutput};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -17,15 +17,31 @@ use std::path::{Path, PathBuf};
 pub const VER_HW: &str = "SITL host-sim";
 
 /// The ring between the mission log and the keeper: emptied after every step, so never full.
-struct StepBytes(Vec<u8>);
+#[derive(Default)]
+struct StepBytes {
+    bytes: Vec<u8>,
+    len: usize,
+}
+
+impl StepBytes {
+    /// The step's messages.
+    fn written(&self) -> &[u8] {
+        &self.bytes[..self.len]
+    }
+}
+
+impl LogSpace for StepBytes {
+    fn space(&mut self) -> &mut [u8] {
+        self.bytes.resize(self.len + STEP_BYTES, 0);
+        &mut self.bytes[self.len..]
+    }
+    fn commit(&mut self, n: usize) {
+        self.len += n;
+    }
+}
 
 impl LogRing for StepBytes {
-    fn free(&self) -> usize {
-        usize::MAX
-    }
-    fn put(&mut self, bytes: &[u8]) {
-        self.0.extend_from_slice(bytes);
-    }
+    fn flush(&mut self) {}
 }
 
 /// The keeper's storage: the one file of `--log`.
@@ -89,7 +105,7 @@ impl LogFile {
             .with_context(|| format!("cannot create the flight log {}", path.display()))?;
         Ok(Self {
             log: MissionLog::new(),
-            ring: StepBytes(Vec::new()),
+            ring: StepBytes::default(),
             splitter: Splitter::new(),
             keeper: LogKeeper::new(),
             storage: OneFile {
@@ -122,14 +138,14 @@ impl LogFile {
             failed,
             ..
         } = self;
-        splitter.push(&ring.0, &mut |piece| {
+        splitter.push(ring.written(), &mut |piece| {
             if let Err(e) = keeper.take(storage, piece, &info, config)
                 && failed.is_none()
             {
                 *failed = Some(e);
             }
         });
-        ring.0.clear();
+        ring.len = 0;
     }
 
     /// Ends the log (closing it when the run ended before the mission did); an error of any

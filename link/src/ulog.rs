@@ -227,22 +227,24 @@ fn typed_key(kind: &str, len: Option<usize>, name: &str) -> Result<String<280>, 
 }
 
 /// Packs a data message's fields, little endian, in the order the format lists them, into a
-/// fixed buffer (a field that does not fit marks the whole overflowed).
+/// fixed buffer (a field that does not fit marks the whole overflowed). The buffer is its own
+/// (`Packer<[u8; N]>`) or borrowed: a window of the log's ring, so the control step builds its
+/// messages where they are stored.
 #[derive(Clone, Debug)]
-pub struct Packer<const N: usize> {
-    bytes: [u8; N],
+pub struct Packer<B> {
+    bytes: B,
     len: usize,
     overflow: bool,
 }
 
-impl<const N: usize> Default for Packer<N> {
+impl<const N: usize> Default for Packer<[u8; N]> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl<const N: usize> Packer<N> {
-    /// Nothing packed yet.
+impl<const N: usize> Packer<[u8; N]> {
+    /// Nothing packed yet, in a buffer of its own.
     pub const fn new() -> Self {
         Self {
             bytes: [0; N],
@@ -251,29 +253,56 @@ impl<const N: usize> Packer<N> {
         }
     }
 
-    /// A data message's start ('D', `msg_id`); [`Self::message`] fills in its size.
+    /// A data message's start ('D', `msg_id`) in a buffer of its own.
     pub fn data(msg_id: u16) -> Self {
-        let mut p = Self::new();
-        p.put([0, 0, b'D']).u16(msg_id);
-        p
+        Self::data_in([0; N], msg_id)
     }
 
-    /// A logged string ('L') of `level` at `timestamp_us` saying `text`, cut at a character
-    /// boundary where the buffer ends; [`Self::message`] fills in its size.
+    /// A logged string in a buffer of its own (see [`Packer::logged_string_in`]).
     pub fn logged_string(
         level: LogLevel,
         timestamp_us: u64,
         text: core::fmt::Arguments<'_>,
     ) -> Self {
-        let mut p = Self::new();
+        Self::logged_string_in([0; N], level, timestamp_us, text)
+    }
+}
+
+impl<B: AsMut<[u8]>> Packer<B> {
+    /// Nothing packed yet, into `bytes`.
+    pub fn over(bytes: B) -> Self {
+        Self {
+            bytes,
+            len: 0,
+            overflow: false,
+        }
+    }
+
+    /// A data message's start ('D', `msg_id`) in `bytes`; [`Self::message`] fills in its size.
+    pub fn data_in(bytes: B, msg_id: u16) -> Self {
+        let mut p = Self::over(bytes);
+        p.put([0, 0, b'D']).u16(msg_id);
+        p
+    }
+
+    /// A logged string ('L') of `level` at `timestamp_us` saying `text` in `bytes`, cut at a
+    /// character boundary where they end; [`Self::message`] fills in its size.
+    pub fn logged_string_in(
+        bytes: B,
+        level: LogLevel,
+        timestamp_us: u64,
+        text: core::fmt::Arguments<'_>,
+    ) -> Self {
+        let mut p = Self::over(bytes);
         p.put([0, 0, b'L', level.byte()]).u64(timestamp_us);
         let _ = core::fmt::Write::write_fmt(&mut Cut(&mut p), text);
         p
     }
 
     /// Appends `b`, whose length the compiler knows (so a field is a plain store).
+    #[inline(always)]
     fn put<const K: usize>(&mut self, b: [u8; K]) -> &mut Self {
-        match self.bytes.get_mut(self.len..self.len + K) {
+        match self.bytes.as_mut().get_mut(self.len..self.len + K) {
             Some(to) => {
                 to.copy_from_slice(&b);
                 self.len += K;
@@ -284,37 +313,44 @@ impl<const N: usize> Packer<N> {
     }
 
     /// A `uint64_t`.
+    #[inline(always)]
     pub fn u64(&mut self, v: u64) -> &mut Self {
         self.put(v.to_le_bytes())
     }
 
     /// A `uint32_t`.
+    #[inline(always)]
     pub fn u32(&mut self, v: u32) -> &mut Self {
         self.put(v.to_le_bytes())
     }
 
     /// An `int32_t`.
+    #[inline(always)]
     pub fn i32(&mut self, v: i32) -> &mut Self {
         self.put(v.to_le_bytes())
     }
 
     /// A `uint16_t`.
+    #[inline(always)]
     pub fn u16(&mut self, v: u16) -> &mut Self {
         self.put(v.to_le_bytes())
     }
 
     /// A `uint8_t` (or a `bool`, 0 or 1).
+    #[inline(always)]
     pub fn u8(&mut self, v: u8) -> &mut Self {
         self.put([v])
     }
 
     /// A `float`.
+    #[inline(always)]
     pub fn f32(&mut self, v: f32) -> &mut Self {
         self.put(v.to_le_bytes())
     }
 
     /// A `float[K]`.
-    pub fn f32s(&mut self, v: &[f32]) -> &mut Self {
+    #[inline(always)]
+    pub fn f32s<const K: usize>(&mut self, v: &[f32; K]) -> &mut Self {
         for x in v {
             self.f32(*x);
         }
@@ -322,33 +358,44 @@ impl<const N: usize> Packer<N> {
     }
 
     /// The packed bytes (`None` if they overflowed the buffer).
-    pub fn bytes(&self) -> Option<&[u8]> {
-        (!self.overflow).then_some(&self.bytes[..self.len])
+    pub fn bytes(&mut self) -> Option<&[u8]> {
+        let len = self.len;
+        (!self.overflow).then_some(&self.bytes.as_mut()[..len])
     }
 
-    /// A message started by [`Self::data`]: its size written into its header, its bytes.
-    pub fn message(&mut self) -> Option<&[u8]> {
+    /// A message started by [`Self::data_in`] or [`Self::logged_string_in`]: its size written
+    /// into its header; its length (`None` if it overflowed the buffer).
+    #[inline(always)]
+    pub fn finish(&mut self) -> Option<usize> {
         if self.overflow || self.len < 3 {
             return None;
         }
         let size = (self.len - 3) as u16;
-        self.bytes[..2].copy_from_slice(&size.to_le_bytes());
-        Some(&self.bytes[..self.len])
+        self.bytes.as_mut()[..2].copy_from_slice(&size.to_le_bytes());
+        Some(self.len)
+    }
+
+    /// A message started by [`Self::data_in`] or [`Self::logged_string_in`]: its size written
+    /// into its header, its bytes.
+    pub fn message(&mut self) -> Option<&[u8]> {
+        let len = self.finish()?;
+        Some(&self.bytes.as_mut()[..len])
     }
 }
 
 /// Writes text into a packer, whole characters while they fit, the rest dropped.
-struct Cut<'a, const N: usize>(&'a mut Packer<N>);
+struct Cut<'a, B>(&'a mut Packer<B>);
 
-impl<const N: usize> core::fmt::Write for Cut<'_, N> {
+impl<B: AsMut<[u8]>> core::fmt::Write for Cut<'_, B> {
     fn write_str(&mut self, s: &str) -> core::fmt::Result {
         let p = &mut *self.0;
-        let room = N - p.len;
+        let bytes = p.bytes.as_mut();
+        let room = bytes.len().saturating_sub(p.len);
         let mut n = s.len().min(room);
         while !s.is_char_boundary(n) {
             n -= 1;
         }
-        p.bytes[p.len..p.len + n].copy_from_slice(&s.as_bytes()[..n]);
+        bytes[p.len..p.len + n].copy_from_slice(&s.as_bytes()[..n]);
         p.len += n;
         Ok(())
     }
@@ -415,14 +462,15 @@ mod tests {
         assert_eq!(&a.as_bytes()[2..6], &[b'A', 0, 7, 0]);
         assert_eq!(&a.as_bytes()[6..], b"sensor_combined");
 
-        let mut d = Packer::<32>::data(7);
+        let mut d = Packer::<[u8; 32]>::data(7);
         d.u64(42).f32(1.5);
         let d = d.message().unwrap();
         assert_eq!(d[..5], [14, 0, b'D', 7, 0]);
         assert_eq!(u64::from_le_bytes(d[5..13].try_into().unwrap()), 42);
         assert_eq!(f32::from_le_bytes(d[13..].try_into().unwrap()), 1.5);
 
-        let mut l = Packer::<64>::logged_string(LogLevel::Warning, 99, format_args!("battery low"));
+        let mut l =
+            Packer::<[u8; 64]>::logged_string(LogLevel::Warning, 99, format_args!("battery low"));
         let b = l.message().unwrap();
         assert_eq!(u16::from_le_bytes([b[0], b[1]]) as usize, b.len() - 3);
         assert_eq!((b[2], b[3]), (b'L', b'4'));
@@ -442,10 +490,11 @@ mod tests {
             Message::add_subscription(0, 1, &text[..300]),
             Err(UlogError::BadName)
         );
-        assert!(Packer::<4>::new().u64(1).bytes().is_none());
+        assert!(Packer::<[u8; 4]>::new().u64(1).bytes().is_none());
         // A text is cut at a character boundary where the buffer ends.
-        let mut t = Packer::<16>::logged_string(LogLevel::Info, 5, format_args!("h\u{e9}llo"));
+        let mut t =
+            Packer::<[u8; 16]>::logged_string(LogLevel::Info, 5, format_args!("h\u{e9}llo"));
         assert_eq!(&t.message().unwrap()[12..], b"h\xc3\xa9l");
-        assert!(Packer::<6>::data(1).u64(1).message().is_none());
+        assert!(Packer::<[u8; 6]>::data(1).u64(1).message().is_none());
     }
 }

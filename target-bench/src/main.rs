@@ -259,7 +259,88 @@ fn main() -> ! {
         report("    mean", (total / u64::from(STEPS)) as u32);
         report_against("    worst", worst, *goal);
     }
+    flight_log_step(&mut timer, &rect);
     finish(true)
+}
+
+/// The flight log's share of a control step (the mission's records, packed into a ring that
+/// always has room), hovering with 8 rotors: the mean over a second of steps and the worst
+/// (the step that also writes the 10 Hz and 1 Hz topics).
+fn flight_log_step(timer: &mut Timer, scenario: &shared::scenario::Scenario) {
+    use link::flight_log::session::MissionLog;
+    use link::flight_log::session::STEP_BYTES;
+    use link::flight_log::stream::{LogRing, LogSpace};
+    use shared::control::trajectory::FlightPhase;
+    use shared::mission::{HardwareFaults, Mission, MissionConfig, Phase, Supervision, TickInput};
+
+    /// A ring that always has room and keeps only the count (the firmware's also copies a
+    /// step's bytes into its pipe: about a quarter of an instruction a byte).
+    struct Counting {
+        space: [u8; STEP_BYTES],
+        len: usize,
+        total: usize,
+    }
+    impl LogSpace for Counting {
+        fn space(&mut self) -> &mut [u8] {
+            &mut self.space[self.len..]
+        }
+        fn commit(&mut self, n: usize) {
+            self.len += n;
+        }
+    }
+    impl LogRing for Counting {
+        fn flush(&mut self) {
+            self.total += core::hint::black_box(&self.space[..self.len]).len();
+            self.len = 0;
+        }
+    }
+
+    let mut mission = Mission::new(scenario, MissionConfig::default());
+    let mut input = TickInput {
+        time_us: 0,
+        imu: ImuSample {
+            gyro: Vec3::new(0.01, -0.02, 0.003),
+            accel: Vec3::new(0.1, -0.05, -9.8),
+        },
+        mocap: None,
+        command: None,
+        faults: HardwareFaults::NONE,
+        supervision: Supervision::NONE,
+    };
+    let mut out = mission.step(&input);
+    out.phase = Phase::Flying(FlightPhase::Hover);
+    out.armed = true;
+    out.thrusts[..8].copy_from_slice(&[7.1; 8]);
+    let mut log = MissionLog::new();
+    let mut ring = Counting {
+        space: [0; STEP_BYTES],
+        len: 0,
+        total: 0,
+    };
+    const STEPS: u32 = 400;
+    let (mut total, mut worst) = (0u64, 0u32);
+    for k in 1..=STEPS + 1 {
+        input.time_us = u64::from(k) * 2500;
+        input.mocap = (k % 4 == 0).then_some(MocapFix {
+            position: Vec3::new(0.0, 0.0, -0.5),
+            attitude: Quat::IDENTITY,
+            stamp_us: input.time_us,
+        });
+        let (n, _) = timer.instructions(|| {
+            log.step(&input, &out, &mission, 14.2, &mut ring, |_| {});
+        });
+        // The first step opens the log (its start marker).
+        if k > 1 {
+            total += u64::from(n);
+            worst = worst.max(n);
+        }
+    }
+    hprintln!(
+        "flight log, hovering, 8 rotors ({} bytes a second):",
+        ring.total
+    );
+    report("  mean", (total / u64::from(STEPS)) as u32);
+    report_against("  worst", worst, 1_000);
 }
 
 /// Alternating spins of twelve robots.

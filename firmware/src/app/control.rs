@@ -47,6 +47,10 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
     let mut job_id: u32 = 0;
     // The cycle counter at the last busy-time report.
     let mut busy_since = <Selected as Board>::cycle_count();
+    // The flight log's end of the ring (this task is its only writer).
+    let Some(mut log_ring) = RingEnd::take() else {
+        panic!("the flight log's ring taken twice")
+    };
     loop {
         let sample: SensorSample = SENSOR.receive().await;
         let start = <Selected as Board>::cycle_count();
@@ -119,7 +123,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             },
         };
         let imu_failed = input.faults.imu;
-        let mut out = autonomy.tick_logged(&input, &mut RingEnd);
+        let mut out = autonomy.tick_logged(&input, &mut log_ring);
         if late {
             out.report
                 .text(Severity::Critical, format_args!("job late at its deadline"));

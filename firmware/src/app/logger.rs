@@ -10,7 +10,9 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use embassy_sync::pipe::Pipe;
 use link::flight_log::file::{LogInfo, SYS_NAME};
 use link::flight_log::keeper::{KeeperEvent, LogKeeper};
-use link::flight_log::stream::{LogRing, Splitter};
+use link::flight_log::session::STEP_BYTES;
+use link::flight_log::stream::{LogRing, LogSpace, Splitter};
+use static_cell::StaticCell;
 
 use super::autonomy::{Report, Severity};
 use super::comms::Outbound;
@@ -24,24 +26,62 @@ pub static LOG_RING: Pipe<Cs, { <Selected as Board>::LOG_RING_BYTES }> = Pipe::n
 /// has no room and the control step records nothing.
 pub static LOGGING: AtomicBool = AtomicBool::new(false);
 
-/// The control step's end of [`LOG_RING`].
-pub struct RingEnd;
+/// Bytes of the control step's space on a board that keeps logs (none on one that does not).
+const STEP_SPACE: usize = if <Selected as Board>::LOG_RING_BYTES > 0 {
+    STEP_BYTES
+} else {
+    0
+};
+
+/// The control step's end of [`LOG_RING`]: the step's messages are built in its space, kept
+/// between steps (nothing cleared), and go into the ring in one write when the step ends.
+pub struct RingEnd {
+    space: &'static mut [u8; STEP_SPACE],
+    len: usize,
+    /// The ring's free bytes when the step began (only the logger changes it, upwards).
+    room: Option<usize>,
+}
+
+impl RingEnd {
+    /// The control step's end; taken once, by the control task.
+    pub fn take() -> Option<Self> {
+        static SPACE: StaticCell<[u8; STEP_SPACE]> = StaticCell::new();
+        let space = SPACE.try_init([0; STEP_SPACE])?;
+        Some(Self {
+            space,
+            len: 0,
+            room: None,
+        })
+    }
+}
+
+impl LogSpace for RingEnd {
+    fn space(&mut self) -> &mut [u8] {
+        let room = *self.room.get_or_insert_with(|| {
+            if LOGGING.load(Ordering::Relaxed) {
+                LOG_RING.free_capacity()
+            } else {
+                0
+            }
+        });
+        let end = room.min(STEP_SPACE).max(self.len);
+        &mut self.space[self.len..end]
+    }
+    fn commit(&mut self, n: usize) {
+        self.len = (self.len + n).min(STEP_SPACE);
+    }
+}
 
 impl LogRing for RingEnd {
-    fn free(&self) -> usize {
-        if LOGGING.load(Ordering::Relaxed) {
-            LOG_RING.free_capacity()
-        } else {
-            0
-        }
-    }
-    fn put(&mut self, bytes: &[u8]) {
-        // The writer puts no more than `free`, so all of it goes in; a write stops at the end
-        // of the pipe's buffer, and the next one goes on from its start.
-        let mut rest = bytes;
+    fn flush(&mut self) {
+        // No more than the ring's free room was written, so all of it goes in; a write stops
+        // at the end of the pipe's buffer, and the next one goes on from its start.
+        let mut rest = &self.space[..self.len];
         while let Ok(n @ 1..) = LOG_RING.try_write(rest) {
             rest = &rest[n..];
         }
+        self.len = 0;
+        self.room = None;
     }
 }
 

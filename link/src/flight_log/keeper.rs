@@ -171,7 +171,7 @@ impl LogKeeper {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::flight_log::stream::{LogRing, LogWriter, Splitter};
+    use crate::flight_log::stream::{LogSpace, LogWriter, Splitter};
     use crate::flight_log::topics::Record;
     use std::vec::Vec as StdVec;
 
@@ -228,13 +228,14 @@ pub(crate) mod tests {
         }
     }
 
-    struct Bytes(StdVec<u8>);
-    impl LogRing for Bytes {
-        fn free(&self) -> usize {
-            usize::MAX
+    /// Every byte the writer commits, with a kilobyte of room each time.
+    struct Bytes(StdVec<u8>, [u8; 1024]);
+    impl LogSpace for Bytes {
+        fn space(&mut self) -> &mut [u8] {
+            &mut self.1
         }
-        fn put(&mut self, bytes: &[u8]) {
-            self.0.extend_from_slice(bytes);
+        fn commit(&mut self, n: usize) {
+            self.0.extend_from_slice(&self.1[..n]);
         }
     }
 
@@ -247,7 +248,7 @@ pub(crate) mod tests {
 
     /// A mission's ring bytes: `records` status records between the markers.
     fn mission(records: u64) -> StdVec<u8> {
-        let mut ring = Bytes(StdVec::new());
+        let mut ring = Bytes(StdVec::new(), [0; 1024]);
         let mut w = LogWriter::new();
         w.start(&mut ring, 100);
         for t in 0..records {

@@ -22,11 +22,11 @@ use shared::mission::{AbortReason, Mission, Notice, Phase, Reason, TickInput, Ti
 pub const TEXT_CAPACITY: usize = 160;
 
 /// Steps between two records of a 100 Hz topic.
-const EVERY_100_HZ: u64 = 4;
+const EVERY_100_HZ: u32 = 4;
 /// Steps between two records of a 10 Hz topic.
-const EVERY_10_HZ: u64 = 40;
+const EVERY_10_HZ: u32 = 40;
 /// Steps between two records of a topic written when it changes, at least.
-const EVERY_SECOND: u64 = 400;
+const EVERY_SECOND: u32 = 400;
 
 /// Where the recorder's records and texts go.
 pub trait RecordSink {
@@ -84,7 +84,9 @@ fn battery_warning(level: BatteryLevel) -> u8 {
 /// The state the recorder keeps between steps.
 #[derive(Clone, Debug, Default)]
 pub struct Recorder {
-    steps: u64,
+    /// Steps since the log started, modulo a second's (every rate divides it; a `u32` and a
+    /// constant modulus, so no 64-bit division on the target).
+    step_in_second: u32,
     /// The last `vehicle_status` written: armed, navigation state, phase.
     status: Option<(bool, u8, u8)>,
     /// The last `fault` written: its fields after the timestamp.
@@ -133,10 +135,14 @@ impl Recorder {
         sink: &mut impl RecordSink,
     ) {
         let t = input.time_us;
-        let every = |n: u64| self.steps.is_multiple_of(n);
-        let (at_100_hz, at_10_hz, at_1_hz) =
-            (every(EVERY_100_HZ), every(EVERY_10_HZ), every(EVERY_SECOND));
-        self.steps += 1;
+        // The slower topics take turns on different steps of their period, so no step
+        // writes more than the 400 Hz records, a fix and one slower record.
+        let s = self.step_in_second;
+        let turn = |period: u32, slot: u32| s % period == slot;
+        let at_100_hz = turn(EVERY_100_HZ, 0);
+        let (battery_turn, rail_turn) = (turn(EVERY_10_HZ, 1), turn(EVERY_10_HZ, 2));
+        let (status_turn, fault_turn) = (turn(EVERY_SECOND, 3), turn(EVERY_SECOND, 7));
+        self.step_in_second = (s + 1) % EVERY_SECOND;
         let mut put = |r: Record| sink.record(&r);
 
         let imu = input.imu;
@@ -187,12 +193,14 @@ impl Recorder {
             });
         }
         let warning = battery_warning(mission.battery_level());
-        if at_10_hz {
+        if battery_turn {
             put(Record::BatteryStatus {
                 timestamp: t,
                 voltage_v: mission.battery_volts(),
                 warning,
             });
+        }
+        if rail_turn {
             put(Record::RailPosition {
                 timestamp: t,
                 robots: n as u8,
@@ -200,7 +208,7 @@ impl Recorder {
             });
         }
         let status = (out.armed, nav_state(out.phase), phase_code(out.phase));
-        if at_1_hz || self.status != Some(status) {
+        if status_turn || self.status != Some(status) {
             put(Record::VehicleStatus {
                 timestamp: t,
                 armed: status.0,
@@ -218,7 +226,7 @@ impl Recorder {
             mission.link_up(),
             warning,
         );
-        if at_1_hz || self.fault != Some(fault) {
+        if fault_turn || self.fault != Some(fault) {
             put(Record::Fault {
                 timestamp: t,
                 rotors_out: fault.0,

@@ -4,7 +4,7 @@
 //! or aborted); the records of the steps between go to the ring.
 
 use super::recorder::{RecordSink, Recorder};
-use super::stream::{LogRing, LogWriter};
+use super::stream::{LogRing, LogSpace, LogWriter};
 use super::topics::Record;
 use crate::ulog::LogLevel;
 use shared::mission::{Mission, Phase, TickInput, TickOutput};
@@ -49,24 +49,17 @@ impl MissionLog {
         also: impl FnOnce(&mut dyn RecordSink),
     ) {
         let running = !matches!(out.phase, Phase::Idle | Phase::Disarmed | Phase::Aborted);
-        if !self.writer.is_open() && (!running || ring.free() == 0) {
+        if !self.writer.is_open() && (!running || ring.space().is_empty()) {
             return;
         }
-        // The step's messages go to the ring in one write (one lock, one wake-up of the
-        // storing task), gathered on the stack.
-        let mut step = StepBuffer {
-            bytes: [0; STEP_BYTES],
-            len: 0,
-            room: ring.free(),
-        };
-        if running && !self.writer.is_open() && self.writer.start(&mut step, input.time_us) {
+        if running && !self.writer.is_open() && self.writer.start(ring, input.time_us) {
             self.recorder.restart();
         }
         if self.writer.is_open() {
             let Self { recorder, writer } = self;
             let mut sink = Sink {
                 writer,
-                ring: &mut step,
+                ring: &mut *ring,
                 time_us: input.time_us,
             };
             recorder.step(input, out, mission, max_thrust, &mut sink);
@@ -74,48 +67,192 @@ impl MissionLog {
         }
         if !running {
             // Tried again at the next step when the ring has no room for the marker.
-            self.writer.end(&mut step);
+            self.writer.end(ring);
         }
-        if step.len > 0 {
-            ring.put(&step.bytes[..step.len]);
-        }
+        // The step's messages go to the ring in one write (one lock, one wake-up of the
+        // storing task).
+        ring.flush();
     }
 }
 
-/// The most bytes one step logs (a step's usual records take about 230).
-const STEP_BYTES: usize = 1024;
-
-/// A step's messages, gathered before they go to the ring: no more than the ring has room for.
-struct StepBuffer {
-    bytes: [u8; STEP_BYTES],
-    len: usize,
-    /// The ring's free bytes at the step's start (only the storing side changes it, upwards).
-    room: usize,
-}
-
-impl LogRing for StepBuffer {
-    fn free(&self) -> usize {
-        (STEP_BYTES - self.len).min(self.room.saturating_sub(self.len))
-    }
-    fn put(&mut self, bytes: &[u8]) {
-        let n = bytes.len().min(STEP_BYTES - self.len);
-        self.bytes[self.len..self.len + n].copy_from_slice(&bytes[..n]);
-        self.len += n;
-    }
-}
+/// The most bytes one step logs (a step's usual records take about 230, a step that also
+/// writes the slow topics about 430, each text at most 172 more): a ring's step space.
+pub const STEP_BYTES: usize = 1024;
 
 /// The recorder's sink: the writer into the step's buffer.
-struct Sink<'a, R: LogRing> {
+struct Sink<'a, R: LogSpace> {
     writer: &'a mut LogWriter,
     ring: &'a mut R,
     time_us: u64,
 }
 
-impl<R: LogRing> RecordSink for Sink<'_, R> {
+impl<R: LogSpace> RecordSink for Sink<'_, R> {
     fn record(&mut self, record: &Record) {
         self.writer.record(self.ring, record, self.time_us);
     }
     fn text(&mut self, level: LogLevel, timestamp_us: u64, text: core::fmt::Arguments<'_>) {
         self.writer.text(self.ring, level, timestamp_us, text);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flight_log::stream::{Piece, Splitter};
+    use crate::flight_log::topics::Topic;
+    use shared::control::navigator::{ImuSample, MocapFix};
+    use shared::control::trajectory::FlightPhase;
+    use shared::control::vector::{Quat, Vec3};
+    use shared::mission::{HardwareFaults, MissionConfig, Supervision};
+    use std::vec::Vec;
+
+    /// A ring of `capacity` bytes whose steps the test reads out.
+    struct TestRing {
+        space: [u8; STEP_BYTES],
+        len: usize,
+        capacity: usize,
+        steps: Vec<Vec<u8>>,
+    }
+
+    impl LogSpace for TestRing {
+        fn space(&mut self) -> &mut [u8] {
+            let end = self.capacity.min(STEP_BYTES).max(self.len);
+            &mut self.space[self.len..end]
+        }
+        fn commit(&mut self, n: usize) {
+            self.len += n;
+        }
+    }
+
+    impl LogRing for TestRing {
+        fn flush(&mut self) {
+            self.steps.push(self.space[..self.len].to_vec());
+            self.capacity -= self.len;
+            self.len = 0;
+        }
+    }
+
+    /// The data messages' topics and the dropouts of one step's bytes.
+    fn topics(bytes: &[u8]) -> Vec<Option<Topic>> {
+        let mut splitter = Splitter::new();
+        let mut out = Vec::new();
+        splitter.push(bytes, &mut |piece| {
+            if let Piece::Message(m) = piece {
+                match m[2] {
+                    b'D' => {
+                        let id = u16::from_le_bytes([m[3], m[4]]);
+                        out.push(Topic::ALL.into_iter().find(|t| t.msg_id() == id));
+                    }
+                    b'O' => out.push(None),
+                    _ => {}
+                }
+            }
+        });
+        out
+    }
+
+    /// Logs `steps` steps of a hover with a fix every fourth step into a ring of `capacity`.
+    fn hover(steps: u64, capacity: usize) -> (TestRing, MissionLog) {
+        let scenario = shared::paper::checked(shared::paper::rect_sim1());
+        let mut mission = Mission::new(&scenario, MissionConfig::default());
+        let mut input = TickInput {
+            time_us: 0,
+            imu: ImuSample {
+                gyro: Vec3::ZERO,
+                accel: Vec3::new(0.0, 0.0, -9.8),
+            },
+            mocap: None,
+            command: None,
+            faults: HardwareFaults::NONE,
+            supervision: Supervision::NONE,
+        };
+        let mut out = mission.step(&input);
+        out.phase = Phase::Flying(FlightPhase::Hover);
+        let mut ring = TestRing {
+            space: [0; STEP_BYTES],
+            len: 0,
+            capacity,
+            steps: Vec::new(),
+        };
+        let mut log = MissionLog::new();
+        for k in 0..steps {
+            input.time_us = 2_500 * (k + 1);
+            input.mocap = (k % 4 == 2).then_some(MocapFix {
+                position: Vec3::ZERO,
+                attitude: Quat::IDENTITY,
+                stamp_us: input.time_us,
+            });
+            log.step(&input, &out, &mission, 14.2, &mut ring, |_| {});
+        }
+        (ring, log)
+    }
+
+    #[test]
+    fn each_topic_keeps_its_rate_and_the_slow_ones_take_turns() {
+        let (ring, log) = hover(400, usize::MAX);
+        assert!(log.is_open());
+        let steps: Vec<Vec<Option<Topic>>> = ring.steps.iter().map(|s| topics(s)).collect();
+        let count = |topic| {
+            steps
+                .iter()
+                .flatten()
+                .filter(|t| **t == Some(topic))
+                .count()
+        };
+        assert_eq!(count(Topic::SensorCombined), 400);
+        assert_eq!(count(Topic::ActuatorOutputs), 400);
+        assert_eq!(count(Topic::VehicleLocalPosition), 100);
+        assert_eq!(count(Topic::VehicleMocapOdometry), 100);
+        assert_eq!(count(Topic::BatteryStatus), 10);
+        assert_eq!(count(Topic::RailPosition), 10);
+        // Written at the start (a change from nothing) and once in the second.
+        assert_eq!(count(Topic::VehicleStatus), 2);
+        assert_eq!(count(Topic::Fault), 2);
+        let slow = [
+            Topic::VehicleLocalPosition,
+            Topic::BatteryStatus,
+            Topic::RailPosition,
+            Topic::VehicleStatus,
+            Topic::Fault,
+        ];
+        for (k, step) in steps.iter().enumerate().skip(1) {
+            let n = step
+                .iter()
+                .filter(|t| t.is_some_and(|t| slow.contains(&t)))
+                .count();
+            assert!(n <= 1, "step {k} wrote {n} of the slower topics");
+        }
+    }
+
+    #[test]
+    fn a_full_ring_loses_whole_steps_records_and_says_so_with_a_dropout() {
+        // Room for about two steps and a half: later records are lost, none half written.
+        let (ring, log) = hover(4, 2 * 240 + 150);
+        assert!(log.writer.lost() > 0, "records were lost");
+        let all: Vec<u8> = ring.steps.concat();
+        let mut whole = 0;
+        Splitter::new().push(&all, &mut |_| whole += 1);
+        assert!(whole > 8, "the steps that fit are whole ({whole} pieces)");
+        // The ring is emptied: the next record comes after a dropout.
+        let (mut ring, mut log) = (ring, log);
+        ring.capacity = usize::MAX;
+        let scenario = shared::paper::checked(shared::paper::rect_sim1());
+        let mut mission = Mission::new(&scenario, MissionConfig::default());
+        let input = TickInput {
+            time_us: 20_000,
+            imu: ImuSample {
+                gyro: Vec3::ZERO,
+                accel: Vec3::new(0.0, 0.0, -9.8),
+            },
+            mocap: None,
+            command: None,
+            faults: HardwareFaults::NONE,
+            supervision: Supervision::NONE,
+        };
+        let mut out = mission.step(&input);
+        out.phase = Phase::Flying(FlightPhase::Hover);
+        log.step(&input, &out, &mission, 14.2, &mut ring, |_| {});
+        let last = topics(ring.steps.last().map_or(&[][..], |s| s));
+        assert_eq!(last.first(), Some(&None), "a dropout first: {last:?}");
     }
 }

@@ -1,12 +1,12 @@
 //! The log's bytes between the control step and the task that stores them: the control step
-//! turns each entry into its ULog message and hands it whole to a byte ring that never makes
-//! it wait ([`LogRing`]); a message that finds no room is dropped and counted, and the first
+//! builds each entry's ULog message in place in the ring's space and hands a step's messages
+//! together to a byte ring that never makes it wait ([`LogRing`]); a message that finds no room is dropped and counted, and the first
 //! message that fits after a loss is preceded by a ULog dropout saying how long the loss
 //! lasted. Two marker messages, never written to a file, tell the storing side where a
 //! mission's log starts and ends ([`Piece`], read back by [`Splitter`]).
 
 use super::recorder::TEXT_CAPACITY;
-use super::topics::Record;
+use super::topics::{MESSAGE_BYTES, Record};
 use crate::ulog::{LogLevel, MESSAGE_CAPACITY, Message, Packer};
 use heapless::Vec;
 
@@ -15,23 +15,36 @@ const START: u8 = 0x01;
 /// Message type of the end marker (no payload).
 const END: u8 = 0x02;
 
-/// The ring the control step writes to: whole messages or nothing, never waiting.
-pub trait LogRing {
-    /// Bytes that can be written now.
-    fn free(&self) -> usize;
-    /// Writes `bytes`, at most [`Self::free`] of them.
-    fn put(&mut self, bytes: &[u8]);
+/// Memory the writer builds messages in, in place: whole messages or nothing, never waiting.
+pub trait LogSpace {
+    /// The free bytes, contiguous, where the next message is built (no more than the ring
+    /// behind has room for).
+    fn space(&mut self) -> &mut [u8];
+    /// Keeps the first `n` bytes of [`Self::space`] as written.
+    fn commit(&mut self, n: usize);
+}
+
+/// The ring the control step writes to: a step's messages are built in its space (memory
+/// kept between steps, so nothing is cleared or copied message by message) and handed to
+/// the storing side together when the step ends.
+pub trait LogRing: LogSpace {
+    /// Hands what the step committed to the storing side (one write, one wake-up).
+    fn flush(&mut self);
 }
 
 /// No ring: nothing is ever logged (a build or a test that keeps no log).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NoRing;
 
-impl LogRing for NoRing {
-    fn free(&self) -> usize {
-        0
+impl LogSpace for NoRing {
+    fn space(&mut self) -> &mut [u8] {
+        &mut []
     }
-    fn put(&mut self, _: &[u8]) {}
+    fn commit(&mut self, _: usize) {}
+}
+
+impl LogRing for NoRing {
+    fn flush(&mut self) {}
 }
 
 /// The control step's side: what it wrote and lost.
@@ -67,14 +80,13 @@ impl LogWriter {
 
     /// Starts a mission's log at `time_us`. The start marker is a few bytes; when even they
     /// find no room the log does not start (the next step tries again): returns whether it did.
-    pub fn start(&mut self, ring: &mut impl LogRing, time_us: u64) -> bool {
-        let mut marker = [0u8; 11];
+    pub fn start(&mut self, out: &mut impl LogSpace, time_us: u64) -> bool {
+        let Some(marker) = out.space().get_mut(..11) else {
+            return false;
+        };
         marker[..3].copy_from_slice(&[8, 0, START]);
         marker[3..].copy_from_slice(&time_us.to_le_bytes());
-        if ring.free() < marker.len() {
-            return false;
-        }
-        ring.put(&marker);
+        out.commit(11);
         self.open = true;
         self.lost_since = None;
         self.lost = 0;
@@ -83,26 +95,34 @@ impl LogWriter {
 
     /// Ends the mission's log; returns whether the end marker went in (when it did not, the
     /// next step tries again and the log stays open until then).
-    pub fn end(&mut self, ring: &mut impl LogRing) -> bool {
+    pub fn end(&mut self, out: &mut impl LogSpace) -> bool {
         if !self.open {
             return true;
         }
-        if ring.free() < 3 {
+        let Some(marker) = out.space().get_mut(..3) else {
             return false;
-        }
-        ring.put(&[0, 0, END]);
+        };
+        marker.copy_from_slice(&[0, 0, END]);
+        out.commit(3);
         self.open = false;
         true
     }
 
-    /// Writes one record at `now_us` (nothing while no log is open).
-    pub fn record(&mut self, ring: &mut impl LogRing, record: &Record, now_us: u64) {
+    /// Writes one record at `now_us`, built in place (nothing while no log is open).
+    #[inline]
+    pub fn record(&mut self, out: &mut impl LogSpace, record: &Record, now_us: u64) {
         if !self.open {
             return;
         }
-        // Built in place and written as it is: the control step's usual case.
-        if let Some(bytes) = record.message().message() {
-            self.write(ring, bytes, now_us);
+        let Some((at, space)) = self.after_dropout(out, MESSAGE_BYTES, now_us) else {
+            return;
+        };
+        let window: Option<&mut [u8; MESSAGE_BYTES]> = space
+            .get_mut(at..at + MESSAGE_BYTES)
+            .and_then(|w| w.try_into().ok());
+        if let Some(window) = window {
+            let n = record.write_message(window);
+            out.commit(at + n);
         }
     }
 
@@ -110,38 +130,61 @@ impl LogWriter {
     /// log is open).
     pub fn text(
         &mut self,
-        ring: &mut impl LogRing,
+        out: &mut impl LogSpace,
         level: LogLevel,
         now_us: u64,
         text: core::fmt::Arguments<'_>,
     ) {
+        const MOST: usize = 12 + TEXT_CAPACITY;
         if !self.open {
             return;
         }
-        let mut m = Packer::<{ 12 + TEXT_CAPACITY }>::logged_string(level, now_us, text);
-        if let Some(bytes) = m.message() {
-            self.write(ring, bytes, now_us);
+        let Some((at, space)) = self.after_dropout(out, MOST, now_us) else {
+            return;
+        };
+        let Some(window) = space.get_mut(at..at + MOST) else {
+            return;
+        };
+        let mut m = Packer::logged_string_in(window, level, now_us, text);
+        if let Some(n) = m.finish() {
+            out.commit(at + n);
         }
     }
 
-    /// Writes one message's `bytes` at `now_us`, after a dropout message when messages were
-    /// lost.
-    fn write(&mut self, ring: &mut impl LogRing, bytes: &[u8], now_us: u64) {
-        let dropout = self.lost_since.map(|since| {
-            let ms = (now_us.saturating_sub(since) / 1000).clamp(1, u64::from(u16::MAX));
-            Message::dropout(ms as u16)
-        });
-        let needed = bytes.len() + dropout.as_ref().map_or(0, |d| d.as_bytes().len());
-        if ring.free() < needed {
-            self.lost += 1;
-            self.lost_since.get_or_insert(now_us);
-            return;
+    /// Room for a message of at most `most` bytes, after a dropout message when messages
+    /// were lost: the space and where the message goes in it. `None`, the message lost and
+    /// counted, when there is no room.
+    #[inline]
+    fn after_dropout<'a>(
+        &mut self,
+        out: &'a mut impl LogSpace,
+        most: usize,
+        now_us: u64,
+    ) -> Option<(usize, &'a mut [u8])> {
+        let space = out.space();
+        let Some(since) = self.lost_since else {
+            if space.len() < most {
+                self.lose(now_us);
+                return None;
+            }
+            return Some((0, space));
+        };
+        let ms = (now_us.saturating_sub(since) / 1000).clamp(1, u64::from(u16::MAX));
+        let dropout = Message::dropout(ms as u16);
+        let d = dropout.as_bytes();
+        if space.len() < d.len() + most {
+            self.lose(now_us);
+            return None;
         }
-        if let Some(d) = dropout {
-            ring.put(d.as_bytes());
-            self.lost_since = None;
-        }
-        ring.put(bytes);
+        space[..d.len()].copy_from_slice(d);
+        self.lost_since = None;
+        Some((d.len(), space))
+    }
+
+    /// Counts a lost message.
+    fn lose(&mut self, now_us: u64) {
+        self.lost += 1;
+        self.lost_since.get_or_insert(now_us);
     }
 }
 
@@ -224,15 +267,28 @@ mod tests {
     struct TestRing {
         bytes: StdVec<u8>,
         capacity: usize,
+        scratch: StdVec<u8>,
     }
 
-    impl LogRing for TestRing {
-        fn free(&self) -> usize {
-            self.capacity - self.bytes.len()
+    impl TestRing {
+        fn new(capacity: usize) -> Self {
+            Self {
+                bytes: StdVec::new(),
+                capacity,
+                scratch: StdVec::new(),
+            }
         }
-        fn put(&mut self, bytes: &[u8]) {
-            assert!(bytes.len() <= self.free(), "put past the free room");
-            self.bytes.extend_from_slice(bytes);
+    }
+
+    impl LogSpace for TestRing {
+        fn space(&mut self) -> &mut [u8] {
+            self.scratch.clear();
+            self.scratch.resize(self.capacity - self.bytes.len(), 0xA5);
+            &mut self.scratch
+        }
+        fn commit(&mut self, n: usize) {
+            assert!(n <= self.scratch.len(), "committed past the free room");
+            self.bytes.extend_from_slice(&self.scratch[..n]);
         }
     }
 
@@ -262,10 +318,7 @@ mod tests {
 
     #[test]
     fn entries_between_the_markers_come_back_whole_in_any_chunks() {
-        let mut ring = TestRing {
-            bytes: StdVec::new(),
-            capacity: 10_000,
-        };
+        let mut ring = TestRing::new(10_000);
         let mut w = LogWriter::new();
         w.record(&mut ring, &status(1), 1);
         assert!(ring.bytes.is_empty(), "nothing before the start");
@@ -291,14 +344,13 @@ mod tests {
 
     #[test]
     fn a_full_ring_drops_whole_messages_and_says_how_long_in_a_dropout() {
-        let mut ring = TestRing {
-            bytes: StdVec::new(),
-            capacity: 11 + 16 + 10,
-        };
+        // Room for the start marker and one record; a record is built in a window of the
+        // largest record's size, so after one there is no room for another.
+        let mut ring = TestRing::new(11 + 16 + MESSAGE_BYTES - 1);
         let mut w = LogWriter::new();
         assert!(w.start(&mut ring, 0));
         w.record(&mut ring, &status(1_000), 1_000);
-        // No room for another 16 bytes: lost, from 2 ms to 9 ms.
+        // No room for another: lost, from 2 ms to 9 ms.
         w.record(&mut ring, &status(2_000), 2_000);
         w.record(&mut ring, &status(9_000), 9_000);
         assert_eq!(w.lost(), 2);
@@ -315,10 +367,7 @@ mod tests {
 
     #[test]
     fn markers_wait_for_room_and_a_corrupt_length_is_skipped() {
-        let mut ring = TestRing {
-            bytes: StdVec::new(),
-            capacity: 5,
-        };
+        let mut ring = TestRing::new(5);
         let mut w = LogWriter::new();
         assert!(!w.start(&mut ring, 7));
         assert!(!w.is_open());

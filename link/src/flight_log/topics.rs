@@ -293,8 +293,11 @@ pub enum Record {
 /// Packed data of one record.
 pub type Packed = Vec<u8, RECORD_CAPACITY>;
 
-/// One record as its whole ULog data message (header, message id, fields).
-pub type DataMessage = Packer<{ RECORD_CAPACITY + 5 }>;
+/// Bytes of the largest record's whole ULog data message (header, message id, fields).
+pub const MESSAGE_BYTES: usize = RECORD_CAPACITY + 5;
+
+/// One record as its whole ULog data message, in a buffer of its own.
+pub type DataMessage = Packer<[u8; MESSAGE_BYTES]>;
 
 impl Record {
     /// The record's topic.
@@ -342,10 +345,26 @@ impl Record {
         Vec::from_slice(bytes.get(5..).unwrap_or_default()).unwrap_or_default()
     }
 
-    /// The record as its ULog data message, built in place (the control step writes it to
-    /// the log's ring as it is).
+    /// The record as its ULog data message, in a buffer of its own.
     pub fn message(&self) -> DataMessage {
         let mut m = DataMessage::data(self.topic().msg_id());
+        self.pack_fields(&mut m);
+        m
+    }
+
+    /// Builds the record's ULog data message in `window` (the control step's: where the
+    /// log's bytes are gathered): its length.
+    #[inline]
+    pub fn write_message(&self, window: &mut [u8; MESSAGE_BYTES]) -> usize {
+        let mut m = Packer::data_in(window, self.topic().msg_id());
+        self.pack_fields(&mut m);
+        // Every record fits MESSAGE_BYTES (a test packs each).
+        m.finish().unwrap_or(0)
+    }
+
+    /// Packs the record's fields after the message id.
+    #[inline(always)]
+    fn pack_fields<B: AsMut<[u8]>>(&self, m: &mut Packer<B>) {
         let p = m.u64(self.timestamp());
         match *self {
             Self::SensorCombined {
@@ -455,8 +474,6 @@ impl Record {
                 .u8(u8::from(gcs_link))
                 .u8(battery_warning),
         };
-        // Every record fits RECORD_CAPACITY (a test packs each).
-        m
     }
 }
 
