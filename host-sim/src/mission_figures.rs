@@ -13,7 +13,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::figures::canvas;
-use crate::figures::mission_summary::MissionSummary;
+use crate::figures::mission_summary::{LiftBar, MissionSummary, Span, SummarySample};
 use crate::mission_run::{FlightSample, MissionOutcome};
 use crate::report::file_stem;
 
@@ -42,13 +42,54 @@ pub fn write(
     written.extend(canvas::write(
         dir,
         &format!("{}-mission-summary", file_stem(name)),
-        &MissionSummary {
-            name,
-            outcome,
-            max_thrust,
-        },
+        &summary(name, outcome, max_thrust),
     ));
     Ok(written)
+}
+
+/// The one-page summary's data of a simulated mission: the scenario's `name`, what the
+/// mission did, the robots' maximum thrust, N.
+pub fn summary(name: &str, outcome: &MissionOutcome, max_thrust: f32) -> MissionSummary {
+    let o = outcome;
+    let verdict = if o.dropped {
+        "dropped"
+    } else if o.aborted.is_some() {
+        "aborted"
+    } else if o.delivered {
+        "delivered"
+    } else {
+        "not delivered"
+    };
+    MissionSummary {
+        title: format!(
+            "{name}: the mission, {verdict} ({:.1} s simulated)",
+            o.simulated_s
+        ),
+        end_s: o.simulated_s,
+        phases: Span::from_durations(&o.phases, o.simulated_s),
+        lifts: o
+            .lifts
+            .iter()
+            .map(|&(pair, reading, model)| LiftBar {
+                pair,
+                reading,
+                model: model.is_finite().then_some(model),
+            })
+            .collect(),
+        max_thrust: Some(max_thrust),
+        series: o
+            .series
+            .iter()
+            .map(|s| SummarySample {
+                t: s.t,
+                height: s.height,
+                roll_pitch_deg: s.roll_pitch_deg,
+                thrust: s.thrust.clone(),
+            })
+            .collect(),
+        thrust_in_newtons: true,
+        no_flight: "no flight: the mission never took off".to_string(),
+    }
 }
 
 fn write_csv(path: &Path, series: &[FlightSample]) -> Result<()> {

@@ -1,46 +1,85 @@
-//! The one-page summary of `mission --output`: the phases on a time line (one row per phase,
-//! a bar for each time it was entered), each lift's reading against the model's lift-off thrust
-//! for the truth, and from take-off on the height, roll and pitch, and each rotor's thrust, with
-//! the flight's phases marked. Beside [`crate::mission_figures`]' flight figure; the paper has
-//! no such page (its Figs. 6 and 8 show parts of it).
+//! The one-page summary of a mission (`mission --output`, and `plot` from a flight log): the
+//! phases on a time line (one row per phase, a bar for each time it was entered), each lift's
+//! reading against the model's lift-off thrust for the truth (where it is known), and from
+//! take-off on the height, roll and pitch, and each rotor's thrust, with the flight's phases
+//! marked. Beside [`crate::mission_figures`]' flight figure; the paper has no such page (its
+//! Figs. 6 and 8 show parts of it). What it draws is [`MissionSummary`]'s data, filled from a
+//! simulated mission ([`crate::mission_figures`]) or from a log ([`crate::log_summary`]).
 
-use anyhow::{Result, anyhow};
+use anyhow::Result;
 use plotters::coord::ranged1d::SegmentValue;
 use plotters::prelude::*;
 
 use super::canvas::{
     self, Area, Figure, Swatch, colour, draw_error, legend, titled, with_legend_column,
 };
-use crate::mission_run::MissionOutcome;
 
 /// The page's size, pixels.
 const SIZE: (u32, u32) = (1300, 1500);
 
-/// The summary page.
-pub struct MissionSummary<'a> {
-    /// The scenario's name.
-    pub name: &'a str,
-    /// What the mission did.
-    pub outcome: &'a MissionOutcome,
-    /// The robots' maximum thrust, N (a reading at it could not lift).
-    pub max_thrust: f32,
+/// The summary page's data.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MissionSummary {
+    /// The page's title.
+    pub title: String,
+    /// When the run ends, s (the time line's end).
+    pub end_s: f32,
+    /// Each phase as it was entered, in order.
+    pub phases: Vec<Span>,
+    /// Each lift, in order.
+    pub lifts: Vec<LiftBar>,
+    /// The robots' maximum thrust, N (a reading at it could not lift), if known.
+    pub max_thrust: Option<f32>,
+    /// The flight from take-off, about 100 Hz (the thrusts are smoothed over a quarter
+    /// second, 12 samples each side).
+    pub series: Vec<SummarySample>,
+    /// The thrusts are in newtons; otherwise percent of the rotors' maximum.
+    pub thrust_in_newtons: bool,
+    /// What the flight panels say when there is no flight.
+    pub no_flight: String,
 }
 
 /// A phase as drawn: name, start and end, s.
-struct Span {
-    name: String,
-    start: f32,
-    end: f32,
+#[derive(Clone, Debug, PartialEq)]
+pub struct Span {
+    /// The phase's short name (`takeoff`).
+    pub name: String,
+    /// When it was entered, s.
+    pub start: f32,
+    /// When it was left, s.
+    pub end: f32,
 }
 
-impl MissionSummary<'_> {
-    /// Each phase with its start and end: the phases follow one another and the last ends
-    /// with the run.
-    fn spans(&self) -> Vec<Span> {
-        let o = self.outcome;
-        let total: f32 = o.phases.iter().map(|(_, d)| d).sum();
-        let mut t = (o.simulated_s - total).max(0.0);
-        o.phases
+/// One lift: its pair, its reading and the model's lift-off thrust for the truth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LiftBar {
+    /// The lifting pair's group.
+    pub pair: usize,
+    /// The reading, N per robot (`None`: could not lift).
+    pub reading: Option<f32>,
+    /// The model's lift-off thrust for the truth, N (`None` where the truth is not known).
+    pub model: Option<f32>,
+}
+
+/// One sample of the flight.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SummarySample {
+    /// Time, s.
+    pub t: f32,
+    /// Height above the start, m.
+    pub height: f32,
+    /// Roll and pitch, degrees.
+    pub roll_pitch_deg: [f32; 2],
+    /// Each rotor's thrust (N, or percent of its maximum).
+    pub thrust: Vec<f32>,
+}
+
+impl Span {
+    /// Phases as a run lists them, `(name, duration)` in order, the last ending at `end`.
+    pub fn from_durations(phases: &[(String, f32)], end: f32) -> Vec<Span> {
+        let total: f32 = phases.iter().map(|(_, d)| d).sum();
+        let mut t = (end - total).max(0.0);
+        phases
             .iter()
             .map(|(name, d)| {
                 let span = Span {
@@ -53,60 +92,33 @@ impl MissionSummary<'_> {
             })
             .collect()
     }
-
-    fn verdict(&self) -> &'static str {
-        let o = self.outcome;
-        if o.dropped {
-            "dropped"
-        } else if o.aborted.is_some() {
-            "aborted"
-        } else if o.delivered {
-            "delivered"
-        } else {
-            "not delivered"
-        }
-    }
 }
 
-impl Figure for MissionSummary<'_> {
+impl Figure for MissionSummary {
     fn size(&self) -> (u32, u32) {
         SIZE
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &Area<DB>) -> Result<()> {
-        let o = self.outcome;
-        let body = titled(
-            root,
-            &format!(
-                "{}: the mission, {} ({:.1} s simulated)",
-                self.name,
-                self.verdict(),
-                o.simulated_s
-            ),
-        )?;
-        let spans = self.spans();
+        let body = titled(root, &self.title)?;
+        let spans = &self.phases;
         let rows = body.split_by_breakpoints([] as [u32; 0], [300, 560, 860, 1160]);
-        self.timeline(&rows[0], &spans)?;
+        self.timeline(&rows[0], spans)?;
         self.lifts(&rows[1])?;
         let flight: Vec<&Span> = spans.iter().skip_while(|s| s.name != "takeoff").collect();
-        let Some(first) = o.series.first() else {
+        let series = &self.series;
+        let Some(first) = series.first() else {
             for row in &rows[2..] {
-                let (w, h) = row.dim_in_pixel();
-                row.draw(&Text::new(
-                    "no flight: the mission never took off",
-                    (w as i32 / 2, h as i32 / 2),
-                    canvas::centred(18),
-                ))
-                .map_err(draw_error)?;
+                note(row, &self.no_flight)?;
             }
             return Ok(());
         };
-        let t = (first.t, o.series.last().map_or(first.t + 1.0, |s| s.t));
+        let t = (first.t, series.last().map_or(first.t + 1.0, |s| s.t));
         let t = (t.0, t.1.max(t.0 + 1.0));
         let height = vec![(
             "height".to_string(),
             colour(0),
-            o.series.iter().map(|s| (s.t, s.height)).collect(),
+            series.iter().map(|s| (s.t, s.height)).collect(),
         )];
         curves(
             &rows[2],
@@ -120,18 +132,12 @@ impl Figure for MissionSummary<'_> {
             (
                 "roll".to_string(),
                 colour(0),
-                o.series
-                    .iter()
-                    .map(|s| (s.t, s.roll_pitch_deg[0]))
-                    .collect(),
+                series.iter().map(|s| (s.t, s.roll_pitch_deg[0])).collect(),
             ),
             (
                 "pitch".to_string(),
                 colour(3),
-                o.series
-                    .iter()
-                    .map(|s| (s.t, s.roll_pitch_deg[1]))
-                    .collect(),
+                series.iter().map(|s| (s.t, s.roll_pitch_deg[1])).collect(),
             ),
         ];
         curves(
@@ -145,8 +151,7 @@ impl Figure for MissionSummary<'_> {
         let n = first.thrust.len();
         let thrusts: Vec<Curve> = (0..n)
             .map(|j| {
-                let points: Vec<(f32, f32)> = o
-                    .series
+                let points: Vec<(f32, f32)> = series
                     .iter()
                     .map(|s| (s.t, s.thrust.get(j).copied().unwrap_or(0.0)))
                     .collect();
@@ -155,18 +160,31 @@ impl Figure for MissionSummary<'_> {
                 (format!("robot {}", j + 1), colour(j), smoothed(&points, 12))
             })
             .collect();
-        curves(
-            &rows[4],
-            "rotor thrusts (quarter-second means)",
-            "thrust (N)",
-            t,
-            &thrusts,
-            &flight,
-        )
+        let (title, unit) = if self.thrust_in_newtons {
+            ("rotor thrusts (quarter-second means)", "thrust (N)")
+        } else {
+            (
+                "rotor commands (quarter-second means)",
+                "command (% of maximum)",
+            )
+        };
+        curves(&rows[4], title, unit, t, &thrusts, &flight)
     }
 }
 
-impl MissionSummary<'_> {
+/// `text` in the middle of `area` (a panel with nothing to draw).
+fn note<DB: DrawingBackend>(area: &Area<DB>, text: &str) -> Result<()> {
+    let (w, h) = area.dim_in_pixel();
+    area.draw(&Text::new(
+        text.to_string(),
+        (w as i32 / 2, h as i32 / 2),
+        canvas::centred(18),
+    ))
+    .map_err(draw_error)?;
+    Ok(())
+}
+
+impl MissionSummary {
     /// One row per phase (in the order first entered), a bar for each time it ran.
     fn timeline<DB: DrawingBackend>(&self, area: &Area<DB>, spans: &[Span]) -> Result<()> {
         let (plot, _) = with_legend_column(area);
@@ -177,9 +195,9 @@ impl MissionSummary<'_> {
             }
         }
         if names.is_empty() {
-            return Err(anyhow!("the mission entered no phase"));
+            return note(area, "no phase recorded");
         }
-        let end = self.outcome.simulated_s.max(1.0);
+        let end = self.end_s.max(1.0);
         let rows = names.len() as i32;
         let mut chart = ChartBuilder::on(&plot)
             .caption("phases", ("sans-serif", 18))
@@ -226,27 +244,38 @@ impl MissionSummary<'_> {
         Ok(())
     }
 
-    /// Each lift's reading beside the model's lift-off thrust for the truth.
+    /// Each lift's reading beside the model's lift-off thrust for the truth (where known).
     fn lifts<DB: DrawingBackend>(&self, area: &Area<DB>) -> Result<()> {
+        let lifts = &self.lifts;
+        if lifts.is_empty() {
+            return note(area, "no lifts");
+        }
         let (plot, key) = with_legend_column(area);
-        let lifts = &self.outcome.lifts;
-        let count = lifts.len().max(1);
-        let top = lifts
+        let count = lifts.len();
+        // A lift that could not lift is drawn up to the maximum thrust, or without it to the
+        // largest value drawn.
+        let largest = lifts
             .iter()
-            .flat_map(|(_, r, m)| [r.unwrap_or(self.max_thrust), *m])
+            .flat_map(|l| [l.reading, l.model])
+            .flatten()
+            .chain(self.max_thrust)
             .filter(|v| v.is_finite())
-            .fold(self.max_thrust, f32::max)
-            * 1.12;
+            .fold(0.0f32, f32::max);
+        let ceiling = self.max_thrust.unwrap_or(largest.max(1.0));
+        let top = largest.max(ceiling) * 1.12;
         let names: Vec<String> = lifts
             .iter()
             .enumerate()
-            .map(|(k, (g, _, _))| format!("lift {}: pair {g}", k + 1))
+            .map(|(k, l)| format!("lift {}: pair {}", k + 1, l.pair))
             .collect();
+        let with_model = lifts.iter().any(|l| l.model.is_some());
+        let caption = if with_model {
+            "lifts: reading against the model for the truth"
+        } else {
+            "lifts: reading (no truth to compare with)"
+        };
         let mut chart = ChartBuilder::on(&plot)
-            .caption(
-                "lifts: reading against the model for the truth",
-                ("sans-serif", 18),
-            )
+            .caption(caption, ("sans-serif", 18))
             .margin(10)
             .x_label_area_size(35)
             .y_label_area_size(70)
@@ -269,67 +298,64 @@ impl MissionSummary<'_> {
             .y_desc("thrust per robot (N)")
             .draw()
             .map_err(draw_error)?;
-        chart
-            .draw_series(DashedLineSeries::new(
-                [
-                    (-0.5, self.max_thrust),
-                    (count as f32 - 0.5, self.max_thrust),
-                ],
-                6,
-                4,
-                colour(3).stroke_width(2),
-            ))
-            .map_err(draw_error)?;
+        if let Some(max) = self.max_thrust {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(-0.5, max), (count as f32 - 0.5, max)],
+                    6,
+                    4,
+                    colour(3).stroke_width(2),
+                ))
+                .map_err(draw_error)?;
+        }
         let value = |x: f32, v: f32, text: String| {
             EmptyElement::at((x, v)) + Text::new(text, (0, -10), canvas::centred(13))
         };
-        for (k, (_, reading, model)) in lifts.iter().enumerate() {
+        for (k, lift) in lifts.iter().enumerate() {
             let x = k as f32;
-            let shown = match reading {
-                Some(r) => (*r, format!("{r:.2}")),
-                None => (self.max_thrust, "could not lift".to_string()),
+            let shown = match lift.reading {
+                Some(r) => (r, format!("{r:.2}")),
+                None => (ceiling, "could not lift".to_string()),
             };
             chart
                 .draw_series([value(x - 0.15, shown.0, shown.1)])
                 .map_err(draw_error)?;
-            if model.is_finite() {
+            if let Some(model) = lift.model {
                 chart
-                    .draw_series([value(x + 0.15, *model, format!("{model:.2}"))])
+                    .draw_series([value(x + 0.15, model, format!("{model:.2}"))])
                     .map_err(draw_error)?;
             }
-            match reading {
+            match lift.reading {
                 Some(r) => chart
-                    .draw_series([Rectangle::new(
-                        [(x - 0.3, 0.0), (x, *r)],
-                        colour(0).filled(),
-                    )])
+                    .draw_series([Rectangle::new([(x - 0.3, 0.0), (x, r)], colour(0).filled())])
                     .map_err(draw_error)?,
                 None => chart
                     .draw_series([Rectangle::new(
-                        [(x - 0.3, 0.0), (x, self.max_thrust)],
+                        [(x - 0.3, 0.0), (x, ceiling)],
                         colour(0).stroke_width(2),
                     )])
                     .map_err(draw_error)?,
             };
-            if model.is_finite() {
+            if let Some(model) = lift.model {
                 chart
                     .draw_series([Rectangle::new(
-                        [(x, 0.0), (x + 0.3, *model)],
+                        [(x, 0.0), (x + 0.3, model)],
                         canvas::GREY.filled(),
                     )])
                     .map_err(draw_error)?;
             }
         }
-        legend(
-            &key,
-            50,
-            &[
-                ("reading".to_string(), Swatch::Bar(colour(0))),
-                ("could not lift".to_string(), Swatch::Ring(colour(0))),
-                ("model, truth".to_string(), Swatch::Bar(canvas::GREY)),
-                ("max. thrust".to_string(), Swatch::Dashed(colour(3))),
-            ],
-        )
+        let mut entries = vec![
+            ("reading".to_string(), Swatch::Bar(colour(0))),
+            ("could not lift".to_string(), Swatch::Ring(colour(0))),
+        ];
+        if with_model {
+            entries.push(("model, truth".to_string(), Swatch::Bar(canvas::GREY)));
+        }
+        if self.max_thrust.is_some() {
+            entries.push(("max. thrust".to_string(), Swatch::Dashed(colour(3))));
+        }
+        legend(&key, 50, &entries)
     }
 }
 
