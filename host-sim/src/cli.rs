@@ -44,6 +44,8 @@ pub enum Command {
     Hil(commands::hil::HilArgs),
     /// The vehicle's parameters (MAVLink parameter protocol): name, unit, range, default.
     Params(commands::params::ParamsArgs),
+    /// The one-page mission summary drawn from a flight log (ULog), saying what it lacks.
+    Plot(commands::plot::PlotArgs),
 }
 
 /// Options every command takes.
@@ -134,6 +136,7 @@ where
         Command::Mission(args) => commands::mission::run(&args),
         Command::Hil(args) => commands::hil::run(&args),
         Command::Params(args) => commands::params::run(&args),
+        Command::Plot(args) => commands::plot::run(&args),
     }
     .map_err(CliError::Failed)
 }

@@ -509,17 +509,7 @@ pub fn fly(
                 }
                 Event::PairChosen(g) => group = *g,
                 Event::LiftRead(reading) => {
-                    let model = shared::estimation::groups::lift_group(scenario, group)
-                        .and_then(|g| {
-                            shared::liftoff_thrust::lift_off_thrust(
-                                &scenario.payload.hull,
-                                truth.com,
-                                truth.mass,
-                                &g.rotor_points,
-                                robots.mass,
-                            )
-                        })
-                        .unwrap_or(f32::NAN);
+                    let model = model_lift(scenario, group).unwrap_or(f32::NAN);
                     record.lifts.push((group, *reading, model));
                 }
                 Event::Adapted(AdaptEvent::Shifted { com, mass }) => {
@@ -626,6 +616,20 @@ pub fn fly(
     });
     record.simulated_s = end;
     Ok(record)
+}
+
+/// The model's lift-off thrust per robot of lift group `group` for `scenario`'s truth, N
+/// (`None` without a truth, or for a group the scenario does not have).
+pub fn model_lift(scenario: &Scenario, group: usize) -> Option<f32> {
+    let truth = scenario.truth?;
+    let g = shared::estimation::groups::lift_group(scenario, group)?;
+    shared::liftoff_thrust::lift_off_thrust(
+        &scenario.payload.hull,
+        truth.com,
+        truth.mass,
+        &g.rotor_points,
+        scenario.robots.mass,
+    )
 }
 
 /// An injected stepper stall: the robot stops once it has covered half of its move to the

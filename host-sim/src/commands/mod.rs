@@ -7,4 +7,5 @@ pub mod hil;
 pub mod lift;
 pub mod mission;
 pub mod params;
+pub mod plot;
 pub mod validate;
