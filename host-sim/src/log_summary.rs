@@ -116,10 +116,30 @@ fn wanted<'a>(
         ));
         return None;
     }
-    Some(Wanted {
-        records: topic.records,
+    let mut w = Wanted {
+        records: Vec::new(),
         fields: found,
-    })
+    };
+    let times: Vec<Option<u64>> = topic.records.iter().map(|r| w.timestamp(r)).collect();
+    // A record out of time order with its neighbours (a corrupt timestamp) is left out: one
+    // would stop the walk through the records at it.
+    let in_order = |k: usize| {
+        let t = times[k];
+        let before = k.checked_sub(1).and_then(|j| times[j]);
+        let after = times.get(k + 1).copied().flatten();
+        t.is_some_and(|t| before.is_none_or(|b| b <= t) && after.is_none_or(|a| t <= a))
+    };
+    w.records = (0..topic.records.len())
+        .filter(|&k| in_order(k))
+        .map(|k| topic.records[k])
+        .collect();
+    let dropped = topic.records.len() - w.records.len();
+    if dropped > 0 {
+        notes.push(format!(
+            "{dropped} {name} records out of time order were left out"
+        ));
+    }
+    Some(w)
 }
 
 /// The summary of `log`, named `name`; with `scenario`, the thrusts in newtons and each
