@@ -538,6 +538,11 @@ impl Ulog {
         }
         let mut at = offset;
         for def in defs {
+            // No record is longer than a message: a format that is (nested arrays of arrays)
+            // is not placed, nor its fields counted.
+            if at > usize::from(u16::MAX) {
+                return None;
+            }
             let full = format!("{prefix}{}", def.name);
             match Base::of(&def.kind) {
                 Some(base) => {
@@ -643,6 +648,24 @@ mod tests {
         let b = t.field("inner.b").expect("nested");
         assert_eq!((b.offset, b.get(t.records[0], 0)), (17, Some(0.0)));
         assert!(log.topic("other").is_none());
+    }
+
+    #[test]
+    fn a_format_nested_without_end_or_past_any_record_is_not_placed() {
+        let mut sub = vec![0, 1, 0];
+        sub.extend_from_slice(b"t");
+        let log = parse(log_with(&[
+            message(b'F', b"d:uint8_t[65535] z"),
+            message(b'F', b"c:d[65535] y"),
+            message(b'F', b"t:uint64_t timestamp;c[65535] x;uint8_t after"),
+            message(b'F', b"s:uint64_t timestamp;s[2] again"),
+            message(b'A', &sub),
+        ]))
+        .expect("reads");
+        let t = log.topic("t").expect("subscribed");
+        assert!(t.field("timestamp").is_some() && t.field("after").is_none());
+        let mut fields = Vec::new();
+        assert_eq!(log.flatten("s", "", 0, 0, &mut fields), None);
     }
 
     #[test]
