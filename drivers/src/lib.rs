@@ -15,6 +15,7 @@
 //! | [`stepper`] | a robot's rail axis on a TMC2209: velocity commands, arc length, stalls |
 //! | [`reset`] | why the STM32H7 last reset (RCC_RSR), for the start-up report |
 //! | [`battery`] | the power module's pack voltage from ADC counts (divider, reference) |
+//! | [`sd_logs`] | the flight logs as numbered files on the microSD card's FAT volume |
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -29,6 +30,7 @@ pub mod icm42688;
 pub mod imu;
 pub mod pulse;
 pub mod reset;
+pub mod sd_logs;
 pub mod stepper;
 pub mod thrust_map;
 pub mod tmc2209;
