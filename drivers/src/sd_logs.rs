@@ -18,9 +18,12 @@ use core::fmt;
 use core::ops::ControlFlow;
 
 use embedded_sdmmc::{
-    Block, BlockCount, BlockDevice, BlockIdx, Error as FsError, Mode, RawDirectory, RawFile,
+    Error as FsError, Mode, RawDirectory, RawFile,
     ShortFileName, TimeSource, Timestamp, VolumeIdx, VolumeManager,
 };
+
+/// The block device's interface, for the glue that implements it over a card's driver.
+pub use embedded_sdmmc::{Block, BlockCount, BlockDevice, BlockIdx};
 
 /// The directory the logs are kept in (in the card's root).
 pub const DIRECTORY: &str = "LOGS";

@@ -34,6 +34,8 @@ pub mod imu_spi;
 #[cfg(feature = "qemu")]
 pub mod qemu;
 #[cfg(feature = "pixhawk6c")]
+pub mod sdcard;
+#[cfg(feature = "pixhawk6c")]
 pub mod steppers;
 #[cfg(feature = "pixhawk6c")]
 pub mod usb_link;
@@ -156,6 +158,34 @@ pub fn check_flash_access(
         return Err(NorFlashErrorKind::OutOfBounds);
     }
     Ok(())
+}
+
+/// A static for the flight log's buffers, placed by the board in its log memory (the
+/// Pixhawk 6C's `.log_ram` section, memory.x): memory the start-up code neither zeroes nor
+/// initialises, so the static holds nothing until [`LogRam::init`] writes it. (On QEMU's board
+/// it is an ordinary static.)
+pub struct LogRam<T>(core::cell::UnsafeCell<core::mem::MaybeUninit<T>>);
+
+// SAFETY: the value is reached only through the one `&'static mut` that `init` returns.
+unsafe impl<T: Send> Sync for LogRam<T> {}
+
+impl<T> LogRam<T> {
+    /// Nothing written yet.
+    #[allow(clippy::new_without_default)]
+    pub const fn new() -> Self {
+        Self(core::cell::UnsafeCell::new(core::mem::MaybeUninit::uninit()))
+    }
+
+    /// Writes `value` and returns the only reference to it.
+    ///
+    /// # Safety
+    ///
+    /// At most one call per static: a second would alias the reference the first returned.
+    #[allow(clippy::mut_from_ref)]
+    pub unsafe fn init(&'static self, value: T) -> &'static mut T {
+        // SAFETY: the caller calls once, so no other reference to the value exists.
+        unsafe { (*self.0.get()).write(value) }
+    }
 }
 
 /// The log storage of a board that has no driver for one yet: every operation fails, saying

@@ -26,6 +26,9 @@
 //!   first control step and fed by every one after it ([`Outputs::apply`]); the reset reason
 //!   (RCC_RSR) goes to the ground at start, a watchdog reset as an error.
 //!
+//! - Flight logs: the microSD card on SDMMC2, 4 bits (CK PD6, CMD PD7, D0-D3 PB14, PB15,
+//!   PB3, PB4; `board.h`), kernel clock PLL1Q 240 MHz, 24 MHz on the bus; no card-detect
+//!   line (`board_config.h` has none). See [`super::sdcard`].
 //! - Steppers: TMC2209s on TELEM2 (UART5, TX PC12) and TELEM3 (USART2, TX PD5), half duplex,
 //!   see [`super::steppers`] and docs/hardware.md#the-pixhawk-6cs-wiring.
 
@@ -139,9 +142,10 @@ impl Board for Pixhawk6c {
     type Outputs = Outputs;
     type Irq = Interrupt;
     type ParamFlash = super::fram::Fram;
-    // The microSD card (SDMMC, FAT) has no driver yet: the board keeps no flight log.
-    type LogStorage = super::NoLogStorage;
-    const LOG_RING_BYTES: usize = 0;
+    type LogStorage = super::sdcard::SdStorage;
+    /// 32 KiB, 0.35 s of the mission's log, in the log memory (memory.x) with the rest of the
+    /// log's buffers.
+    const LOG_RING_BYTES: usize = 32 * 1024;
     /// The first 8 KiB of the FRAM: eight pages, room for every parameter many times over
     /// (the rest stays free for the payload description).
     const PARAM_RANGE: core::ops::Range<u32> = 0..(8 * super::fram::PAGE) as u32;
@@ -207,6 +211,8 @@ pub fn clock_config() -> Config {
     rcc.mux.usbsel = embassy_stm32::rcc::mux::Usbsel::HSI48;
     // The ADC's kernel clock from per_ck (HSI, 64 MHz; the driver divides it to its limit).
     rcc.mux.adcsel = embassy_stm32::rcc::mux::Adcsel::PER;
+    // The microSD card's kernel clock: PLL1Q, 240 MHz (PX4's too).
+    rcc.mux.sdmmcsel = embassy_stm32::rcc::mux::Sdmmcsel::PLL1_Q;
     config
 }
 
@@ -264,6 +270,7 @@ bind_interrupts!(
     UART5 => usart::InterruptHandler<peripherals::UART5>;
     USART2 => usart::InterruptHandler<peripherals::USART2>;
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
+    SDMMC2 => embassy_stm32::sdmmc::InterruptHandler<peripherals::SDMMC2>;
 });
 
 /// SPI clock of the IMU: 10 MHz (the ICM-42688-P takes up to 24 MHz).
@@ -505,6 +512,22 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
         settings: HardwareConfig::DEFAULT,
     };
 
+    // The microSD card on SDMMC2, for the flight logs; its transfers are polled by the logger
+    // task, so its interrupt (which only wakes) runs at the lowest priority but one.
+    let sdmmc = embassy_stm32::sdmmc::Sdmmc::new_4bit(
+        p.SDMMC2,
+        Irqs,
+        p.PD6,
+        p.PD7,
+        p.PB14,
+        p.PB15,
+        p.PB3,
+        p.PB4,
+        Default::default(),
+    );
+    interrupt::SDMMC2.set_priority(Priority::P14);
+    let log_storage = super::sdcard::open(sdmmc);
+
     interrupt::SPDIF_RX.set_priority(Priority::P2);
     interrupt::CEC.set_priority(Priority::P3);
     interrupt::JPEG.set_priority(Priority::P15);
@@ -515,7 +538,7 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
         link_tx,
         outputs,
         param_flash: fram,
-        log_storage: super::NoLogStorage,
+        log_storage,
         irqs: ExecutorIrqs {
             control: Interrupt::SPDIF_RX,
             link: Interrupt::CEC,
