@@ -18,8 +18,8 @@ use core::fmt;
 use core::ops::ControlFlow;
 
 use embedded_sdmmc::{
-    Error as FsError, Mode, RawDirectory, RawFile,
-    ShortFileName, TimeSource, Timestamp, VolumeIdx, VolumeManager,
+    Error as FsError, Mode, RawDirectory, RawFile, ShortFileName, TimeSource, Timestamp, VolumeIdx,
+    VolumeManager,
 };
 
 /// The block device's interface, for the glue that implements it over a card's driver.
