@@ -7,7 +7,7 @@ use anyhow::{Context, Result, anyhow};
 use link::flight_log::file::{LogInfo, SYS_NAME};
 use link::flight_log::keeper::{LogKeeper, LogStorage};
 use link::flight_log::session::{MissionLog, STEP_BYTES};
-use link::flight_log::stream::{LogRing, LogSpace, Splitter};
+use link::flight_log::stream::{LogRing, Splitter};
 use shared::mission::{Mission, MissionConfig, TickInput, TickOutput};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -30,18 +30,14 @@ impl StepBytes {
     }
 }
 
-impl LogSpace for StepBytes {
-    fn space(&mut self) -> &mut [u8] {
+impl LogRing for StepBytes {
+    fn step_space(&mut self) -> &mut [u8] {
         self.bytes.resize(self.len + STEP_BYTES, 0);
         &mut self.bytes[self.len..]
     }
-    fn commit(&mut self, n: usize) {
+    fn commit_step(&mut self, n: usize, _: bool) {
         self.len += n;
     }
-}
-
-impl LogRing for StepBytes {
-    fn flush(&mut self) {}
 }
 
 /// The keeper's storage: the one file of `--log`.

@@ -299,6 +299,27 @@ impl<B: AsMut<[u8]>> Packer<B> {
         p
     }
 
+    /// A logged string of `level` at `timestamp_us` saying `text` (already formatted: copied,
+    /// with no formatting machinery) in `bytes`, cut at a character boundary where they end.
+    pub fn logged_str_in(bytes: B, level: LogLevel, timestamp_us: u64, text: &str) -> Self {
+        let mut p = Self::over(bytes);
+        p.put([0, 0, b'L', level.byte()]).u64(timestamp_us);
+        p.str_cut(text);
+        p
+    }
+
+    /// Appends whole characters of `s` while they fit; the rest is dropped.
+    fn str_cut(&mut self, s: &str) {
+        let bytes = self.bytes.as_mut();
+        let room = bytes.len().saturating_sub(self.len);
+        let mut n = s.len().min(room);
+        while !s.is_char_boundary(n) {
+            n -= 1;
+        }
+        bytes[self.len..self.len + n].copy_from_slice(&s.as_bytes()[..n]);
+        self.len += n;
+    }
+
     /// Appends `b`, whose length the compiler knows (so a field is a plain store).
     #[inline(always)]
     fn put<const K: usize>(&mut self, b: [u8; K]) -> &mut Self {
@@ -388,15 +409,7 @@ struct Cut<'a, B>(&'a mut Packer<B>);
 
 impl<B: AsMut<[u8]>> core::fmt::Write for Cut<'_, B> {
     fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        let p = &mut *self.0;
-        let bytes = p.bytes.as_mut();
-        let room = bytes.len().saturating_sub(p.len);
-        let mut n = s.len().min(room);
-        while !s.is_char_boundary(n) {
-            n -= 1;
-        }
-        bytes[p.len..p.len + n].copy_from_slice(&s.as_bytes()[..n]);
-        p.len += n;
+        self.0.str_cut(s);
         Ok(())
     }
 }

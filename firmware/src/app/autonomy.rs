@@ -360,7 +360,7 @@ impl Autonomy {
             |log| {
                 for line in texts {
                     let level = level(line.severity);
-                    log.text(level, input.time_us, format_args!("{}", line.text));
+                    log.text_str(level, input.time_us, &line.text);
                 }
             },
         );

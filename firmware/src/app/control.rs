@@ -48,8 +48,8 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
     // The cycle counter at the last busy-time report.
     let mut busy_since = <Selected as Board>::cycle_count();
     // The flight log's end of the ring (this task is its only writer).
-    // SAFETY: the task is spawned once and never ends (a pool of one): the only call.
-    let mut log_ring = unsafe { RingEnd::take() };
+    // The flight log's end of the ring (this task is its only writer).
+    let mut log_ring = RingEnd::new();
     loop {
         let sample: SensorSample = SENSOR.receive().await;
         let start = <Selected as Board>::cycle_count();

@@ -186,6 +186,23 @@ impl<T> LogRam<T> {
         // SAFETY: the caller calls once, so no other reference to the value exists.
         unsafe { (*self.0.get()).write(value) }
     }
+
+    /// Writes zeros over the value (in place: no copy of it on the stack) and returns the
+    /// only reference to it.
+    ///
+    /// # Safety
+    ///
+    /// At most one call per static, and all-zero bytes must be a valid `T` (integers and
+    /// arrays of them).
+    #[allow(clippy::mut_from_ref)]
+    pub unsafe fn init_zeroed(&'static self) -> &'static mut T {
+        // SAFETY: the caller calls once (no other reference exists) and zeros are a valid `T`.
+        unsafe {
+            let value = (*self.0.get()).as_mut_ptr();
+            core::ptr::write_bytes(value, 0, 1);
+            &mut *value
+        }
+    }
 }
 
 /// The log storage of a board that has no driver for one yet: every operation fails, saying

@@ -34,6 +34,11 @@ pub trait RecordSink {
     fn record(&mut self, record: &Record);
     /// A logged string of `level` at `timestamp_us` (cut to [`TEXT_CAPACITY`] bytes).
     fn text(&mut self, level: LogLevel, timestamp_us: u64, text: core::fmt::Arguments<'_>);
+    /// A logged string already formatted (the firmware's texts for the ground): copied as it
+    /// is.
+    fn text_str(&mut self, level: LogLevel, timestamp_us: u64, text: &str) {
+        self.text(level, timestamp_us, format_args!("{text}"));
+    }
 }
 
 /// The mission's phase as the log's `mission_phase` number: 0 idle, 1 pre-flight checks,
@@ -262,6 +267,11 @@ impl Recorder {
                 });
             }
         }
+        self.texts(t, out, sink);
+    }
+
+    /// Records what the step at `t` (us) says to people (unless its caller logs that itself).
+    pub fn texts(&self, t: u64, out: &TickOutput, sink: &mut impl RecordSink) {
         if !self.texts_elsewhere {
             step_texts(out, &mut |level, text| sink.text(level, t, text));
         }

@@ -4,7 +4,7 @@
 //! or aborted); the records of the steps between go to the ring.
 
 use super::recorder::{RecordSink, Recorder};
-use super::stream::{LogRing, LogSpace, LogWriter};
+use super::stream::{LogRing, LogSpace, LogWriter, StepWindow};
 use super::topics::Record;
 use crate::ulog::LogLevel;
 use shared::mission::{Mission, Phase, TickInput, TickOutput};
@@ -49,29 +49,38 @@ impl MissionLog {
         also: impl FnOnce(&mut dyn RecordSink),
     ) {
         let running = !matches!(out.phase, Phase::Idle | Phase::Disarmed | Phase::Aborted);
-        if !self.writer.is_open() && (!running || ring.space().is_empty()) {
+        if !self.writer.is_open() && !running {
             return;
         }
-        if running && !self.writer.is_open() && self.writer.start(ring, input.time_us) {
+        let mut window = StepWindow::new(ring.step_space());
+        // The step that opens the log writes its start and the step's texts; the records
+        // begin with the next step (the mission's start is already the firmware's costliest
+        // step).
+        let opening = running && !self.writer.is_open();
+        if opening {
+            if !self.writer.start(&mut window, input.time_us) {
+                return;
+            }
             self.recorder.restart();
         }
-        if self.writer.is_open() {
-            let Self { recorder, writer } = self;
-            let mut sink = Sink {
-                writer,
-                ring: &mut *ring,
-                time_us: input.time_us,
-            };
+        let Self { recorder, writer } = self;
+        let mut sink = Sink {
+            writer,
+            ring: &mut window,
+            time_us: input.time_us,
+        };
+        if opening {
+            recorder.texts(input.time_us, out, &mut sink);
+        } else {
             recorder.step(input, out, mission, max_thrust, &mut sink);
-            also(&mut sink);
         }
+        also(&mut sink);
         if !running {
             // Tried again at the next step when the ring has no room for the marker.
-            self.writer.end(ring);
+            self.writer.end(&mut window);
         }
-        // The step's messages go to the ring in one write (one lock, one wake-up of the
-        // storing task).
-        ring.flush();
+        let written = window.len();
+        ring.commit_step(written, !self.writer.is_open());
     }
 }
 
@@ -93,6 +102,9 @@ impl<R: LogSpace> RecordSink for Sink<'_, R> {
     fn text(&mut self, level: LogLevel, timestamp_us: u64, text: core::fmt::Arguments<'_>) {
         self.writer.text(self.ring, level, timestamp_us, text);
     }
+    fn text_str(&mut self, level: LogLevel, timestamp_us: u64, text: &str) {
+        self.writer.text_str(self.ring, level, timestamp_us, text);
+    }
 }
 
 #[cfg(test)]
@@ -109,26 +121,18 @@ mod tests {
     /// A ring of `capacity` bytes whose steps the test reads out.
     struct TestRing {
         space: [u8; STEP_BYTES],
-        len: usize,
         capacity: usize,
         steps: Vec<Vec<u8>>,
     }
 
-    impl LogSpace for TestRing {
-        fn space(&mut self) -> &mut [u8] {
-            let end = self.capacity.min(STEP_BYTES).max(self.len);
-            &mut self.space[self.len..end]
-        }
-        fn commit(&mut self, n: usize) {
-            self.len += n;
-        }
-    }
-
     impl LogRing for TestRing {
-        fn flush(&mut self) {
-            self.steps.push(self.space[..self.len].to_vec());
-            self.capacity -= self.len;
-            self.len = 0;
+        fn step_space(&mut self) -> &mut [u8] {
+            let end = self.capacity.min(STEP_BYTES);
+            &mut self.space[..end]
+        }
+        fn commit_step(&mut self, n: usize, _: bool) {
+            self.steps.push(self.space[..n].to_vec());
+            self.capacity -= n;
         }
     }
 
@@ -170,7 +174,6 @@ mod tests {
         out.phase = Phase::Flying(FlightPhase::Hover);
         let mut ring = TestRing {
             space: [0; STEP_BYTES],
-            len: 0,
             capacity,
             steps: Vec::new(),
         };
@@ -189,9 +192,14 @@ mod tests {
 
     #[test]
     fn each_topic_keeps_its_rate_and_the_slow_ones_take_turns() {
-        let (ring, log) = hover(400, usize::MAX);
+        let (ring, log) = hover(401, usize::MAX);
         assert!(log.is_open());
         let steps: Vec<Vec<Option<Topic>>> = ring.steps.iter().map(|s| topics(s)).collect();
+        assert!(
+            steps[0].is_empty(),
+            "the opening step holds the start alone"
+        );
+        let steps = &steps[1..];
         let count = |topic| {
             steps
                 .iter()
@@ -215,6 +223,8 @@ mod tests {
             Topic::VehicleStatus,
             Topic::Fault,
         ];
+        // The first step with records writes the status and the fault as they change from
+        // nothing; from then on the slower topics take turns.
         for (k, step) in steps.iter().enumerate().skip(1) {
             let n = step
                 .iter()

@@ -1,6 +1,6 @@
 //! The log's bytes between the control step and the task that stores them: the control step
-//! builds each entry's ULog message in place in the ring's space and hands a step's messages
-//! together to a byte ring that never makes it wait ([`LogRing`]); a message that finds no room is dropped and counted, and the first
+//! builds each entry's ULog message in place in a window of a byte ring that never makes it
+//! wait ([`LogRing`], [`StepWindow`]) and hands over a step's messages together; a message that finds no room is dropped and counted, and the first
 //! message that fits after a loss is preceded by a ULog dropout saying how long the loss
 //! lasted. Two marker messages, never written to a file, tell the storing side where a
 //! mission's log starts and ends ([`Piece`], read back by [`Splitter`]).
@@ -24,27 +24,63 @@ pub trait LogSpace {
     fn commit(&mut self, n: usize);
 }
 
-/// The ring the control step writes to: a step's messages are built in its space (memory
-/// kept between steps, so nothing is cleared or copied message by message) and handed to
-/// the storing side together when the step ends.
-pub trait LogRing: LogSpace {
-    /// Hands what the step committed to the storing side (one write, one wake-up).
-    fn flush(&mut self);
+/// The ring the control step writes to, never waiting: each step gets a window of the ring's
+/// own memory, its messages are built there in place (nothing cleared or copied) and the
+/// step hands over what it wrote when it ends.
+pub trait LogRing {
+    /// The step's window: free bytes, contiguous, at most [`super::session::STEP_BYTES`]
+    /// (empty when the ring is full, or keeps no log).
+    fn step_space(&mut self) -> &mut [u8];
+    /// Hands the first `n` bytes of the step's window to the storing side; `ended`: the
+    /// mission's log ended in this step (so what is held goes to storage now).
+    fn commit_step(&mut self, n: usize, ended: bool);
+}
+
+/// A step's window of the ring, as the writer fills it.
+#[derive(Debug)]
+pub struct StepWindow<'a> {
+    bytes: &'a mut [u8],
+    len: usize,
+}
+
+impl<'a> StepWindow<'a> {
+    /// An empty window over `bytes`.
+    pub fn new(bytes: &'a mut [u8]) -> Self {
+        Self { bytes, len: 0 }
+    }
+
+    /// Bytes written so far.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether nothing was written.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+impl LogSpace for StepWindow<'_> {
+    #[inline]
+    fn space(&mut self) -> &mut [u8] {
+        let len = self.len.min(self.bytes.len());
+        &mut self.bytes[len..]
+    }
+    #[inline]
+    fn commit(&mut self, n: usize) {
+        self.len = (self.len + n).min(self.bytes.len());
+    }
 }
 
 /// No ring: nothing is ever logged (a build or a test that keeps no log).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NoRing;
 
-impl LogSpace for NoRing {
-    fn space(&mut self) -> &mut [u8] {
+impl LogRing for NoRing {
+    fn step_space(&mut self) -> &mut [u8] {
         &mut []
     }
-    fn commit(&mut self, _: usize) {}
-}
-
-impl LogRing for NoRing {
-    fn flush(&mut self) {}
+    fn commit_step(&mut self, _: usize, _: bool) {}
 }
 
 /// The control step's side: what it wrote and lost.
@@ -135,6 +171,29 @@ impl LogWriter {
         now_us: u64,
         text: core::fmt::Arguments<'_>,
     ) {
+        match text.as_str() {
+            Some(s) => self.text_str(out, level, now_us, s),
+            None => self.logged(out, now_us, |window| {
+                Packer::logged_string_in(window, level, now_us, text).finish()
+            }),
+        }
+    }
+
+    /// Writes one logged string already formatted (copied as it is, cut to [`TEXT_CAPACITY`]
+    /// bytes; nothing while no log is open).
+    pub fn text_str(&mut self, out: &mut impl LogSpace, level: LogLevel, now_us: u64, text: &str) {
+        self.logged(out, now_us, |window| {
+            Packer::logged_str_in(window, level, now_us, text).finish()
+        });
+    }
+
+    /// Writes the logged string `build` makes in its window (its length).
+    fn logged(
+        &mut self,
+        out: &mut impl LogSpace,
+        now_us: u64,
+        build: impl FnOnce(&mut [u8]) -> Option<usize>,
+    ) {
         const MOST: usize = 12 + TEXT_CAPACITY;
         if !self.open {
             return;
@@ -145,8 +204,7 @@ impl LogWriter {
         let Some(window) = space.get_mut(at..at + MOST) else {
             return;
         };
-        let mut m = Packer::logged_string_in(window, level, now_us, text);
-        if let Some(n) = m.finish() {
+        if let Some(n) = build(window) {
             out.commit(at + n);
         }
     }
