@@ -14,7 +14,7 @@ use crate::estimation::information::{InformationScratch, mutual_information};
 use crate::estimation::likelihood::{LiftLikelihood, Measurement};
 use crate::estimation::posterior::{CellModel, Concentration, Posterior, concentration};
 use crate::geometry::{ConvexHull, Vec2};
-use crate::liftoff_thrust::lift_fraction;
+use crate::liftoff_thrust::{lift_fraction, thrust_from_fraction};
 use crate::math;
 use crate::numbers::Fixed;
 use crate::scenario::{MAX_CANDIDATES, MAX_GRID_POINTS, Scenario};
@@ -167,6 +167,13 @@ pub struct Estimate {
     pub map: [f32; 3],
     /// Posterior mass of `Theta_N`.
     pub confidence: f32,
+    /// Posterior standard deviation of each axis, [COM x, COM y, mass]
+    /// ([`Concentration::spread`]).
+    pub spread: [f32; 3],
+    /// The lift-off thrust per robot the model predicts at `theta` for the group of the last
+    /// update, N (the truth's counterpart of the reading before any thrust scale); `None`
+    /// before any update or with `theta`'s COM outside the hull.
+    pub model_lift: Option<f32>,
     /// Posterior mean of the thrust-scale factor (1 when the bias term is off).
     pub thrust_scale: f32,
     /// Mass the payload exceeds with at most 5 % posterior probability (upper edge of the cell
@@ -219,6 +226,8 @@ pub struct Estimator {
     /// The posterior is piled up against an edge of the grid (see [`Self::status`]).
     piled_up: bool,
     mass_upper_95: f32,
+    /// The model's lift-off thrust at the estimate for the last update's group, N.
+    model_lift: Option<f32>,
     probabilities: Vec<f32, MAX_GRID_POINTS>,
     fractions: Vec<f32, MAX_GRID_POINTS>,
     scratch: InformationScratch,
@@ -256,9 +265,11 @@ impl Estimator {
             map: [0.0; 3],
             mass_near_map: 0.0,
             local_mean: [0.0; 3],
+            spread: [0.0; 3],
         },
         piled_up: false,
         mass_upper_95: 0.0,
+        model_lift: None,
         probabilities: Vec::new(),
         fractions: Vec::new(),
         scratch: InformationScratch::EMPTY,
@@ -320,6 +331,7 @@ impl Estimator {
         self.measurements = 0;
         self.lifted = 0;
         self.outside = GridVerdict::Inside;
+        self.model_lift = None;
         self.summarise();
         Ok(())
     }
@@ -446,6 +458,14 @@ impl Estimator {
             });
         }
         self.summarise();
+        let theta = self.summary.local_mean;
+        self.model_lift = lift_fraction(
+            &self.hull,
+            Vec2::new(theta[0], theta[1]),
+            g.centroid,
+            g.size,
+        )
+        .map(|f| thrust_from_fraction(f, theta[2], self.robot_mass));
         Ok(self.status())
     }
 
@@ -516,6 +536,8 @@ impl Estimator {
             theta: self.summary.local_mean,
             map: self.summary.map,
             confidence: self.summary.mass_near_map,
+            spread: self.summary.spread,
+            model_lift: self.model_lift,
             thrust_scale: self.posterior.mean_scale(&self.grid),
             mass_upper_95: self.mass_upper_95,
             measurements: self.measurements,
@@ -573,6 +595,54 @@ mod tests {
                 assert!(err <= 1.0, "axis {a}: {est:?} vs {truth:?}");
             }
             assert!(est.measurements <= 8, "{est:?}");
+        }
+    }
+
+    #[test]
+    fn the_estimate_carries_its_spread_and_the_models_lift_for_the_last_pair() {
+        let scenario = checked(rect_sim1());
+        let mut e = Estimator::new(&scenario, EstimatorOptions::default()).unwrap();
+        let prior = e.estimate();
+        assert_eq!(prior.model_lift, None, "no update yet");
+        let mut last = None;
+        let mut spread = prior.spread;
+        while e.status() == Status::Measuring {
+            let g = e.select_group().unwrap().group;
+            let reading = true_reading(&scenario, g, 1.0);
+            e.update(g, reading).unwrap();
+            let est = e.estimate();
+            // The spread narrows as lifts come in (never below a cell's own width).
+            for a in 0..3 {
+                let cell = scenario.estimation.resolution[a] / 12f32.sqrt();
+                assert!(est.spread[a] >= cell * 0.999, "axis {a}: {est:?}");
+            }
+            spread = est.spread;
+            last = Some((g, reading, est));
+        }
+        let (g, reading, est) = last.expect("at least one lift");
+        for a in 0..3 {
+            assert!(
+                spread[a] < prior.spread[a],
+                "axis {a}: {prior:?} -> {est:?}"
+            );
+            assert!(
+                spread[a] <= 1.5 * scenario.estimation.resolution[a],
+                "{est:?}"
+            );
+        }
+        // The model at the estimate explains the noiseless reading of its pair within about
+        // a resolution's change of prediction.
+        let group = lift_group(&scenario, g).unwrap();
+        let model = lift_off_thrust(
+            &scenario.payload.hull,
+            Vec2::new(est.theta[0], est.theta[1]),
+            est.theta[2],
+            &group.rotor_points,
+            scenario.robots.mass,
+        );
+        assert_eq!(est.model_lift, model);
+        if let (Measurement::Lifted { thrust }, Some(m)) = (reading, est.model_lift) {
+            assert!((thrust - m).abs() < 0.5, "reading {thrust} N, model {m} N");
         }
     }
 

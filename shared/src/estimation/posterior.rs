@@ -352,9 +352,13 @@ pub struct Concentration {
     pub mass_near_map: f32,
     /// Posterior mean of theta over `Theta_N`: the estimate, finer than the grid.
     pub local_mean: [f32; 3],
+    /// Posterior standard deviation of each theta axis over the whole marginal, each point
+    /// standing for its cell (the cell's own `res / sqrt(12)` counted): [COM x, COM y, mass].
+    pub spread: [f32; 3],
 }
 
-/// Finds the MAP of the normalised theta marginal `marginal` and the mass around it.
+/// Finds the MAP of the normalised theta marginal `marginal`, the mass around it and the
+/// marginal's spread.
 pub fn concentration(grid: &Grid, marginal: &[f32]) -> Concentration {
     let best = marginal.iter().enumerate().take(grid.theta_len()).fold(
         (0, f32::NEG_INFINITY),
@@ -389,5 +393,92 @@ pub fn concentration(grid: &Grid, marginal: &[f32]) -> Concentration {
         map,
         mass_near_map: mass,
         local_mean,
+        spread: spread(grid, marginal, map_indices),
+    }
+}
+
+/// The standard deviation of each theta axis of the normalised marginal `marginal`, each point
+/// standing for its cell: the points' variance about the mean plus a cell's `res^2 / 12`. The
+/// moments are taken in index steps from the MAP `centre` (no cancellation in `f32`), in one
+/// pass of the grid's layout (no index division).
+pub fn spread(grid: &Grid, marginal: &[f32], centre: [usize; 3]) -> [f32; 3] {
+    let shape = grid.shape();
+    let res = grid.resolution();
+    // Sums of p d and p d^2 per axis, d the index step from the centre.
+    let (mut first, mut second) = ([0.0f32; 3], [0.0f32; 3]);
+    let mut total = 0.0f32;
+    let mut points = marginal.iter().take(grid.theta_len());
+    for ix in 0..shape[0] {
+        let dx = ix as f32 - centre[0] as f32;
+        for iy in 0..shape[1] {
+            let dy = iy as f32 - centre[1] as f32;
+            // The mass axis summed first: its row's mass and moments.
+            let (mut row, mut m1, mut m2) = (0.0f32, 0.0f32, 0.0f32);
+            for im in 0..shape[2] {
+                let Some(&p) = points.next() else {
+                    break;
+                };
+                let dm = im as f32 - centre[2] as f32;
+                row += p;
+                m1 += p * dm;
+                m2 += p * dm * dm;
+            }
+            total += row;
+            first[0] += row * dx;
+            second[0] += row * dx * dx;
+            first[1] += row * dy;
+            second[1] += row * dy * dy;
+            first[2] += m1;
+            second[2] += m2;
+        }
+    }
+    if total <= 0.0 {
+        return [f32::NAN; 3];
+    }
+    [0, 1, 2].map(|a| {
+        let mean = first[a] / total;
+        let variance = math::max(second[a] / total - mean * mean, 0.0) + 1.0 / 12.0;
+        res[a] * math::sqrt(variance)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::paper::{checked, rect_sim1};
+
+    #[test]
+    fn spread_is_a_cells_width_on_one_point_and_grows_with_the_points_it_covers() {
+        let scenario = checked(rect_sim1());
+        let grid = Grid::new(&scenario.estimation, None).unwrap();
+        let res = grid.resolution();
+        let mut marginal = std::vec![0.0f32; grid.theta_len()];
+        let centre = [1, 1, 1];
+        marginal[grid.theta_index(centre)] = 1.0;
+        let one = concentration(&grid, &marginal);
+        for a in 0..3 {
+            let cell = res[a] / 12f32.sqrt();
+            assert!((one.spread[a] - cell).abs() < 1e-5, "axis {a}: {one:?}");
+        }
+        // Half on the next mass: the mass's variance grows by a quarter of a step squared.
+        marginal[grid.theta_index(centre)] = 0.5;
+        marginal[grid.theta_index([1, 1, 2])] = 0.5;
+        let two = concentration(&grid, &marginal);
+        let mass = res[2] * (0.25f32 + 1.0 / 12.0).sqrt();
+        assert!((two.spread[2] - mass).abs() < 1e-5, "{two:?}");
+        assert!((two.spread[0] - one.spread[0]).abs() < 1e-6, "{two:?}");
+        // Uniform over the grid: an axis's standard deviation is its length's over sqrt(12).
+        marginal
+            .iter_mut()
+            .for_each(|p| *p = 1.0 / grid.theta_len() as f32);
+        let flat = concentration(&grid, &marginal);
+        for a in 0..3 {
+            let n = grid.shape()[a] as f32;
+            let expect = res[a] * n / 12f32.sqrt();
+            assert!(
+                (flat.spread[a] - expect).abs() < 1e-3 * expect,
+                "axis {a}: {flat:?}"
+            );
+        }
     }
 }
