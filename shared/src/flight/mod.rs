@@ -20,6 +20,6 @@ pub use adapt::{AdaptConfig, AdaptEvent, Adapter};
 pub use model::FlightModel;
 pub use rotor_monitor::{RotorMonitor, RotorMonitorConfig};
 pub use stack::{
-    FlightCommand, FlightConfig, FlightEvent, FlightOutput, FlightStack, FlightStop, LandingCause,
-    RotorOut,
+    CascadeSetpoints, FlightCommand, FlightConfig, FlightEvent, FlightOutput, FlightStack,
+    FlightStop, LandingCause, RotorOut,
 };

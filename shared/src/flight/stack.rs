@@ -34,7 +34,7 @@ use crate::control::land_detector::{Contact, LandDetector};
 use crate::control::navigator::NavState;
 use crate::control::params::ControlParams;
 use crate::control::trajectory::{FlightPhase, FlightPlan, PlanLimits, Setpoint};
-use crate::control::vector::Vec3;
+use crate::control::vector::{Quat, Vec3};
 use crate::control::vehicle::VehicleModel;
 use crate::flight::model::FlightModel;
 use crate::flight::rotor_monitor::{MonitorInput, RotorMonitor, RotorMonitorConfig};
@@ -158,6 +158,19 @@ pub enum FlightEvent {
     Stopped(FlightStop),
 }
 
+/// What the cascade asked of the vehicle in one tick: the attitude and body-rate setpoints
+/// beside the estimate, and the collective (docs/formats.md#flight-logs logs them as PX4's
+/// `vehicle_attitude_setpoint` and `vehicle_rates_setpoint`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CascadeSetpoints {
+    /// Attitude the vehicle should have, body to NED.
+    pub attitude: Quat,
+    /// Body rate the vehicle should have, rad/s (FRD).
+    pub rate: Vec3,
+    /// Collective thrust commanded, N.
+    pub collective: f32,
+}
+
 /// What one tick of the flight commands.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FlightOutput {
@@ -169,6 +182,8 @@ pub struct FlightOutput {
     pub saturation: Saturation,
     /// The setpoint followed.
     pub setpoint: Setpoint,
+    /// The cascade's setpoints this tick (`None` once the rotors are stopped).
+    pub cascade: Option<CascadeSetpoints>,
     /// The plan's phase after this tick.
     pub phase: FlightPhase,
     /// What happened this tick, if anything.
@@ -445,6 +460,7 @@ impl FlightStack {
             collective: 0.0,
             saturation: Saturation::default(),
             setpoint,
+            cascade: None,
             phase: self.phase,
             event,
         };
@@ -467,6 +483,11 @@ impl FlightStack {
         out.thrusts[..n].copy_from_slice(&allocation.thrusts[..n]);
         out.collective = self.collective;
         out.saturation = allocation.saturation;
+        out.cascade = Some(CascadeSetpoints {
+            attitude: command.attitude_setpoint,
+            rate: command.rate_setpoint,
+            collective: self.collective,
+        });
         out
     }
 

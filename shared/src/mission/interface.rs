@@ -4,7 +4,7 @@
 
 use crate::control::imu_monitor::ImuFailure;
 use crate::control::navigator::{ImuSample, MocapFix, NavState};
-use crate::flight::AdaptEvent;
+use crate::flight::{AdaptEvent, CascadeSetpoints};
 use crate::mission::jobs::JobRequest;
 use crate::mission::phases::{AbortReason, Phase, Transition};
 use crate::mission::supervision::{Notice, Supervision};
@@ -169,6 +169,9 @@ pub struct TickOutput {
     pub notice: Option<Notice>,
     /// The state estimate after this tick.
     pub nav: NavState,
+    /// What the flight's cascade asked of the vehicle this tick: while flying with the rotors
+    /// turning, `None` otherwise.
+    pub cascade: Option<CascadeSetpoints>,
 }
 
 /// An IMU failure the monitor found and the mission acted on.

@@ -23,8 +23,8 @@ use crate::control::trajectory::FlightPhase;
 use crate::control::vector::Vec3;
 use crate::estimation::{Estimate, Status};
 use crate::flight::{
-    AdaptEvent, Adapter, FlightCommand, FlightEvent, FlightModel, FlightStack, FlightStop,
-    LandingCause,
+    AdaptEvent, Adapter, CascadeSetpoints, FlightCommand, FlightEvent, FlightModel, FlightStack,
+    FlightStop, LandingCause,
 };
 use crate::geometry::Vec2;
 use crate::liftoff_detector::{LiftState, LiftoffDetector};
@@ -333,6 +333,7 @@ impl Mission {
         }
         let nav = self.navigator.state();
         let mut thrusts = [0.0f32; MAX_ROBOTS];
+        let mut cascade = None;
         // The supervision first: a heartbeat in the start's own tick counts for it.
         let sup = self.config.supervision;
         let link_change = self.link.update(
@@ -395,7 +396,7 @@ impl Mission {
                 _ if fault_landing || supervision_landing => Some(FlightCommand::LandNow),
                 _ => None,
             };
-            transition = self.advance(&nav, dt, flight_command, &mut thrusts);
+            transition = self.advance(&nav, dt, flight_command, &mut thrusts, &mut cascade);
         }
         if matches!(self.phase, Phase::Flying(_)) {
             self.watch_rotors(input, &nav, &thrusts, dt);
@@ -406,6 +407,9 @@ impl Mission {
         );
         if !matches!(self.phase, Phase::Lifting | Phase::Flying(_)) {
             thrusts = [0.0; MAX_ROBOTS];
+        }
+        if !matches!(self.phase, Phase::Flying(_)) {
+            cascade = None;
         }
         TickOutput {
             thrusts,
@@ -418,6 +422,7 @@ impl Mission {
             reply,
             notice,
             nav,
+            cascade,
         }
     }
 
@@ -593,6 +598,7 @@ impl Mission {
         dt: f32,
         command: Option<FlightCommand>,
         thrusts: &mut [f32; MAX_ROBOTS],
+        cascade: &mut Option<CascadeSetpoints>,
     ) -> Option<Transition> {
         let step = match self.phase {
             Phase::Idle | Phase::Disarmed | Phase::Aborted => Ok(None),
@@ -605,7 +611,7 @@ impl Mission {
             Phase::Rearranging => self.rearranging(nav),
             Phase::Arming => Ok((self.phase_time >= self.config.arm_time)
                 .then(|| self.enter(Phase::Flying(FlightPhase::Takeoff), Reason::Armed))),
-            Phase::Flying(_) => Ok(self.fly(nav, dt, command, thrusts)),
+            Phase::Flying(_) => Ok(self.fly(nav, dt, command, thrusts, cascade)),
         };
         step.unwrap_or_else(|why| Some(self.abort(why)))
     }
@@ -792,9 +798,11 @@ impl Mission {
         dt: f32,
         command: Option<FlightCommand>,
         thrusts: &mut [f32; MAX_ROBOTS],
+        cascade: &mut Option<CascadeSetpoints>,
     ) -> Option<Transition> {
         let flight = self.flight.as_mut()?;
         let out = flight.step(nav, command, dt);
+        *cascade = out.cascade;
         let n = self.scenario.robots.count();
         thrusts[..n].copy_from_slice(&out.thrusts[..n]);
         if self.navigator.imu_dropped() {

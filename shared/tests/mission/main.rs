@@ -381,6 +381,40 @@ fn kill_in_flight_stops_the_rotors_on_the_same_tick() {
 }
 
 #[test]
+fn the_cascades_setpoints_come_out_while_flying_and_only_then() {
+    let s = straight_up_scenario(3.5);
+    let mut world = World::new(&s);
+    let (mut flying, mut with_setpoints) = (0u32, 0u32);
+    run_with(
+        &s,
+        MissionConfig::default(),
+        &mut world,
+        Jobs::OnTime,
+        &[(1, OperatorCommand::Start)],
+        |_, out, _| {
+            let in_flight = matches!(out.phase, Phase::Flying(_));
+            flying += u32::from(in_flight);
+            let Some(c) = out.cascade else {
+                return;
+            };
+            with_setpoints += 1;
+            assert!(in_flight && out.armed, "{:?}", out.phase);
+            let q = c.attitude;
+            let norm = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+            assert!((norm - 1.0).abs() < 1e-3, "{c:?}");
+            assert!(c.rate.x.is_finite() && c.rate.y.is_finite() && c.rate.z.is_finite());
+            // The collective is what the rotors share (within what the mixer cut).
+            let total: f32 = out.thrusts.iter().sum();
+            assert!(c.collective >= 0.0 && c.collective <= total * 1.5 + 1.0, "{c:?}");
+        },
+        200_000,
+    );
+    assert!(flying > 1000, "flew {flying} ticks");
+    // Every tick in flight but the one that enters it (the arming tick's transition).
+    assert!(with_setpoints + 2 >= flying, "{with_setpoints} of {flying}");
+}
+
+#[test]
 fn land_now_lands_where_the_vehicle_is() {
     let s = straight_up_scenario(3.5);
     let at = takeoff_tick(&s) + 1200;
