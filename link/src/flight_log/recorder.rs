@@ -4,7 +4,8 @@
 //! hold the same records at the same times.
 //!
 //! Rates: at every step (400 Hz) `sensor_combined`, `vehicle_attitude`,
-//! `vehicle_angular_velocity` and `actuator_outputs`; `vehicle_local_position` at 100 Hz;
+//! `vehicle_angular_velocity` and `actuator_outputs`; `vehicle_local_position` at 100 Hz, and
+//! while flying `vehicle_attitude_setpoint` and `vehicle_rates_setpoint` at 100 Hz each;
 //! `vehicle_mocap_odometry` with each fix; `battery_status` and `rail_position` at 10 Hz;
 //! `vehicle_status` and `fault` when they change and once a second; `lift`, `formation` and
 //! `adaptation` when they happen. What the step says to people ([`step_texts`], the
@@ -141,12 +142,16 @@ impl Recorder {
     ) {
         let t = input.time_us;
         // The slower topics take turns on different steps of their period, so no step
-        // writes more than the 400 Hz records, a fix and one slower record.
+        // writes more than the 400 Hz records, a fix and one slower record: of every four
+        // steps the first writes the local position, the second the attitude setpoint, the
+        // fourth the rates setpoint, and the third is shared by the 10 Hz and 1 Hz topics,
+        // each on a step of its own.
         let s = self.step_in_second;
         let turn = |period: u32, slot: u32| s % period == slot;
         let at_100_hz = turn(EVERY_100_HZ, 0);
-        let (battery_turn, rail_turn) = (turn(EVERY_10_HZ, 1), turn(EVERY_10_HZ, 2));
-        let (status_turn, fault_turn) = (turn(EVERY_SECOND, 3), turn(EVERY_SECOND, 7));
+        let (attitude_sp_turn, rates_sp_turn) = (turn(EVERY_100_HZ, 1), turn(EVERY_100_HZ, 3));
+        let (battery_turn, rail_turn) = (turn(EVERY_10_HZ, 2), turn(EVERY_10_HZ, 6));
+        let (status_turn, fault_turn) = (turn(EVERY_SECOND, 10), turn(EVERY_SECOND, 14));
         self.step_in_second = (s + 1) % EVERY_SECOND;
         let mut put = |r: Record| sink.record(&r);
 
@@ -187,6 +192,33 @@ impl Recorder {
                 position: [pos.position.x, pos.position.y, pos.position.z],
                 velocity: [pos.velocity.x, pos.velocity.y, pos.velocity.z],
             });
+        }
+        if let Some(c) = out.cascade
+            && (attitude_sp_turn || rates_sp_turn)
+        {
+            // PX4's normalised body thrust: the collective over the rotors' total maximum,
+            // on body z, negative up.
+            let total = max_thrust * n as f32;
+            let up = if total > 0.0 {
+                -c.collective / total
+            } else {
+                f32::NAN
+            };
+            let thrust_body = [0.0, 0.0, up];
+            if attitude_sp_turn {
+                let q = c.attitude;
+                put(Record::VehicleAttitudeSetpoint {
+                    timestamp: t,
+                    q_d: [q.w, q.x, q.y, q.z],
+                    thrust_body,
+                });
+            } else {
+                put(Record::VehicleRatesSetpoint {
+                    timestamp: t,
+                    rate: [c.rate.x, c.rate.y, c.rate.z],
+                    thrust_body,
+                });
+            }
         }
         if let Some(fix) = input.mocap {
             let q = fix.attitude;
@@ -328,6 +360,8 @@ impl Recorder {
                 lifts,
                 theta: estimate.map_or([f32::NAN; 3], |e| e.theta),
                 confidence: estimate.map_or(f32::NAN, |e| e.confidence),
+                spread: estimate.map_or([f32::NAN; 3], |e| e.spread),
+                model_n: estimate.and_then(|e| e.model_lift).unwrap_or(f32::NAN),
             });
             self.lifts = lifts;
             self.reading = None;

@@ -115,6 +115,7 @@ mod tests {
     use shared::control::navigator::{ImuSample, MocapFix};
     use shared::control::trajectory::FlightPhase;
     use shared::control::vector::{Quat, Vec3};
+    use shared::flight::CascadeSetpoints;
     use shared::mission::{HardwareFaults, MissionConfig, Supervision};
     use std::vec::Vec;
 
@@ -157,6 +158,11 @@ mod tests {
 
     /// Logs `steps` steps of a hover with a fix every fourth step into a ring of `capacity`.
     fn hover(steps: u64, capacity: usize) -> (TestRing, MissionLog) {
+        hover_with(steps, capacity, true)
+    }
+
+    /// [`hover`], with the cascade's setpoints or without them (the rotors stopped).
+    fn hover_with(steps: u64, capacity: usize, setpoints: bool) -> (TestRing, MissionLog) {
         let scenario = shared::paper::checked(shared::paper::rect_sim1());
         let mut mission = Mission::new(&scenario, MissionConfig::default());
         let mut input = TickInput {
@@ -172,6 +178,11 @@ mod tests {
         };
         let mut out = mission.step(&input);
         out.phase = Phase::Flying(FlightPhase::Hover);
+        out.cascade = setpoints.then_some(CascadeSetpoints {
+            attitude: Quat::IDENTITY,
+            rate: Vec3::new(0.1, -0.2, 0.0),
+            collective: 50.0,
+        });
         let mut ring = TestRing {
             space: [0; STEP_BYTES],
             capacity,
@@ -210,6 +221,8 @@ mod tests {
         assert_eq!(count(Topic::SensorCombined), 400);
         assert_eq!(count(Topic::ActuatorOutputs), 400);
         assert_eq!(count(Topic::VehicleLocalPosition), 100);
+        assert_eq!(count(Topic::VehicleAttitudeSetpoint), 100);
+        assert_eq!(count(Topic::VehicleRatesSetpoint), 100);
         assert_eq!(count(Topic::VehicleMocapOdometry), 100);
         assert_eq!(count(Topic::BatteryStatus), 10);
         assert_eq!(count(Topic::RailPosition), 10);
@@ -218,6 +231,8 @@ mod tests {
         assert_eq!(count(Topic::Fault), 2);
         let slow = [
             Topic::VehicleLocalPosition,
+            Topic::VehicleAttitudeSetpoint,
+            Topic::VehicleRatesSetpoint,
             Topic::BatteryStatus,
             Topic::RailPosition,
             Topic::VehicleStatus,
@@ -232,6 +247,55 @@ mod tests {
                 .count();
             assert!(n <= 1, "step {k} wrote {n} of the slower topics");
         }
+        // Each 100 Hz topic on its own step of every four.
+        for (slot, topic) in [
+            (0, Topic::VehicleLocalPosition),
+            (1, Topic::VehicleAttitudeSetpoint),
+            (3, Topic::VehicleRatesSetpoint),
+        ] {
+            for (k, step) in steps.iter().enumerate() {
+                assert_eq!(
+                    step.contains(&Some(topic)),
+                    k % 4 == slot,
+                    "{topic:?} step {k}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn without_the_cascades_setpoints_no_setpoint_is_written() {
+        let (ring, _) = hover_with(401, usize::MAX, false);
+        let all: Vec<Option<Topic>> = ring.steps.iter().flat_map(|s| topics(s)).collect();
+        assert!(all.contains(&Some(Topic::VehicleLocalPosition)));
+        assert!(!all.contains(&Some(Topic::VehicleAttitudeSetpoint)));
+        assert!(!all.contains(&Some(Topic::VehicleRatesSetpoint)));
+    }
+
+    #[test]
+    fn the_setpoints_thrust_is_the_collective_over_the_rotors_total_maximum_negative_up() {
+        let (ring, _) = hover(8, usize::MAX);
+        let all: Vec<u8> = ring.steps.concat();
+        let mut seen = 0;
+        Splitter::new().push(&all, &mut |piece| {
+            if let Piece::Message(m) = piece
+                && m[2] == b'D'
+            {
+                let id = u16::from_le_bytes([m[3], m[4]]);
+                let at = match id {
+                    id if id == Topic::VehicleAttitudeSetpoint.msg_id() => 5 + 8 + 16,
+                    id if id == Topic::VehicleRatesSetpoint.msg_id() => 5 + 8 + 12,
+                    _ => return,
+                };
+                let f = |i: usize| f32::from_le_bytes([m[i], m[i + 1], m[i + 2], m[i + 3]]);
+                // rect-sim1's 8 robots of 14.2 N, a collective of 50 N.
+                let expect = -50.0 / (8.0 * 14.2);
+                assert_eq!([f(at), f(at + 4)], [0.0, 0.0]);
+                assert!((f(at + 8) - expect).abs() < 1e-6, "{}", f(at + 8));
+                seen += 1;
+            }
+        });
+        assert!(seen >= 3, "{seen} setpoints");
     }
 
     #[test]

@@ -1,8 +1,9 @@
 //! The logged topics and their records. Topics whose meaning is PX4's carry PX4's name and
 //! field names (so Flight Review and PlotJuggler's PX4 layouts find them): `sensor_combined`,
 //! `vehicle_attitude`, `vehicle_angular_velocity`, `vehicle_local_position`,
-//! `vehicle_mocap_odometry`, `actuator_outputs`, `vehicle_status`, `battery_status`. The
-//! rest are this vehicle's own: `rail_position`, `lift`, `formation`, `adaptation`, `fault`.
+//! `vehicle_mocap_odometry`, `actuator_outputs`, `vehicle_status`, `battery_status`,
+//! `vehicle_attitude_setpoint`, `vehicle_rates_setpoint` (each the subset of PX4's fields this
+//! vehicle has, with PX4's names and types). The rest are this vehicle's own: `rail_position`, `lift`, `formation`, `adaptation`, `fault`.
 //! Each format lists the fields in the order [`Record::pack`] writes them, packed, the
 //! timestamp (us, the flight controller's clock) first.
 
@@ -42,11 +43,15 @@ pub enum Topic {
     Adaptation,
     /// The failures the mission watches.
     Fault,
+    /// The cascade's attitude setpoint and normalised thrust.
+    VehicleAttitudeSetpoint,
+    /// The cascade's body-rate setpoint and normalised thrust.
+    VehicleRatesSetpoint,
 }
 
 impl Topic {
     /// Every topic, in message-id order.
-    pub const ALL: [Topic; 13] = [
+    pub const ALL: [Topic; 15] = [
         Topic::SensorCombined,
         Topic::VehicleAttitude,
         Topic::VehicleAngularVelocity,
@@ -60,6 +65,8 @@ impl Topic {
         Topic::Formation,
         Topic::Adaptation,
         Topic::Fault,
+        Topic::VehicleAttitudeSetpoint,
+        Topic::VehicleRatesSetpoint,
     ];
 
     /// The subscription's message id.
@@ -114,7 +121,7 @@ impl Topic {
             Self::Lift => {
                 "lift:uint64_t timestamp;uint8_t pair;float information_nats;bool lifted;\
                  float thrust_n;uint32_t lifts;float com_x;float com_y;float mass;\
-                 float confidence"
+                 float confidence;float com_x_std;float com_y_std;float mass_std;float model_n"
             }
             Self::Formation => {
                 "formation:uint64_t timestamp;uint8_t robots;float[16] position_m;float det_bbt;\
@@ -127,6 +134,13 @@ impl Topic {
             Self::Fault => {
                 "fault:uint64_t timestamp;uint8_t rotors_out;uint8_t stalled_robots;bool imu;\
                  bool imu_dropped;bool gcs_link;uint8_t battery_warning"
+            }
+            Self::VehicleAttitudeSetpoint => {
+                "vehicle_attitude_setpoint:uint64_t timestamp;float[4] q_d;float[3] thrust_body"
+            }
+            Self::VehicleRatesSetpoint => {
+                "vehicle_rates_setpoint:uint64_t timestamp;float roll;float pitch;float yaw;\
+                 float[3] thrust_body"
             }
         }
     }
@@ -245,6 +259,11 @@ pub enum Record {
         theta: [f32; 3],
         /// The posterior mass of the MAP's neighbourhood (NaN before any update).
         confidence: f32,
+        /// The posterior's standard deviation of COM x, y (m) and mass (kg); NaN before any.
+        spread: [f32; 3],
+        /// The lift-off thrust per robot the model predicts for the pair at the estimate after
+        /// the lift, N (NaN when none).
+        model_n: f32,
     },
     /// `formation`.
     Formation {
@@ -288,6 +307,25 @@ pub enum Record {
         /// 0 none, 1 low, 2 critical.
         battery_warning: u8,
     },
+    /// `vehicle_attitude_setpoint`.
+    VehicleAttitudeSetpoint {
+        /// Time, us.
+        timestamp: u64,
+        /// The attitude setpoint, body to NED, (w, x, y, z).
+        q_d: [f32; 4],
+        /// PX4's normalised body thrust: the collective over the rotors' total maximum, on
+        /// body z, negative up.
+        thrust_body: [f32; 3],
+    },
+    /// `vehicle_rates_setpoint`.
+    VehicleRatesSetpoint {
+        /// Time, us.
+        timestamp: u64,
+        /// Body-rate setpoint, rad/s (FRD): roll, pitch, yaw.
+        rate: [f32; 3],
+        /// PX4's normalised body thrust, as in `VehicleAttitudeSetpoint`.
+        thrust_body: [f32; 3],
+    },
 }
 
 /// Packed data of one record.
@@ -316,6 +354,8 @@ impl Record {
             Self::Formation { .. } => Topic::Formation,
             Self::Adaptation { .. } => Topic::Adaptation,
             Self::Fault { .. } => Topic::Fault,
+            Self::VehicleAttitudeSetpoint { .. } => Topic::VehicleAttitudeSetpoint,
+            Self::VehicleRatesSetpoint { .. } => Topic::VehicleRatesSetpoint,
         }
     }
 
@@ -334,7 +374,9 @@ impl Record {
             | Self::Lift { timestamp, .. }
             | Self::Formation { timestamp, .. }
             | Self::Adaptation { timestamp, .. }
-            | Self::Fault { timestamp, .. } => timestamp,
+            | Self::Fault { timestamp, .. }
+            | Self::VehicleAttitudeSetpoint { timestamp, .. }
+            | Self::VehicleRatesSetpoint { timestamp, .. } => timestamp,
         }
     }
 
@@ -432,6 +474,8 @@ impl Record {
                 lifts,
                 theta,
                 confidence,
+                spread,
+                model_n,
                 ..
             } => p
                 .u8(pair)
@@ -440,7 +484,9 @@ impl Record {
                 .f32(thrust_n.unwrap_or(f32::NAN))
                 .u32(lifts)
                 .f32s(&theta)
-                .f32(confidence),
+                .f32(confidence)
+                .f32s(&spread)
+                .f32(model_n),
             Self::Formation {
                 robots,
                 position_m,
@@ -473,6 +519,12 @@ impl Record {
                 .u8(u8::from(imu_dropped))
                 .u8(u8::from(gcs_link))
                 .u8(battery_warning),
+            Self::VehicleAttitudeSetpoint {
+                q_d, thrust_body, ..
+            } => p.f32s(&q_d).f32s(&thrust_body),
+            Self::VehicleRatesSetpoint {
+                rate, thrust_body, ..
+            } => p.f32s(&rate).f32s(&thrust_body),
         };
     }
 }
@@ -504,7 +556,7 @@ mod tests {
             .sum()
     }
 
-    fn one_of_each() -> [Record; 13] {
+    fn one_of_each() -> [Record; 15] {
         let t = 1_000;
         [
             Record::SensorCombined {
@@ -562,6 +614,8 @@ mod tests {
                 lifts: 1,
                 theta: [0.2, 0.0, 3.3],
                 confidence: 0.5,
+                spread: [0.02, 0.01, 0.05],
+                model_n: 6.6,
             },
             Record::Formation {
                 timestamp: t,
@@ -584,6 +638,16 @@ mod tests {
                 imu_dropped: false,
                 gcs_link: true,
                 battery_warning: 1,
+            },
+            Record::VehicleAttitudeSetpoint {
+                timestamp: t,
+                q_d: [1.0, 0.0, 0.0, 0.0],
+                thrust_body: [0.0, 0.0, -0.45],
+            },
+            Record::VehicleRatesSetpoint {
+                timestamp: t,
+                rate: [0.1, -0.1, 0.0],
+                thrust_body: [0.0, 0.0, -0.45],
             },
         ]
     }
