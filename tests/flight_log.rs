@@ -1,8 +1,9 @@
 //! The flight log (docs/formats.md#flight-logs). The simulator's (`mission --log`) is ULog as
 //! PX4 writes it, read here message by message (header, definitions before data, a
 //! subscription for every data message, each topic's timestamps in order, a `lift` record for
-//! every lift, a logged string for every phase), and opened by pyulog, the reference reader
-//! (`tests/ulog_check.py`). The firmware's, flown under QEMU with `hil --storage`, is the
+//! every lift with the posterior's spread and the model at the estimate, the cascade's
+//! setpoints at 100 Hz in flight, a logged string for every phase), and opened by pyulog, the
+//! reference reader (`tests/ulog_check.py`, which also checks PX4's field names). The firmware's, flown under QEMU with `hil --storage`, is the
 //! simulator's message for message (but the pack voltage, which the plant sends at 10 Hz in
 //! millivolts), and pyulog opens it too. Without python3 and pyulog, or QEMU, a test says it
 //! was skipped and why; with `HIL_REQUIRED=1` (CI, which installs them) it fails instead.
@@ -119,6 +120,7 @@ fn the_mission_log_is_ulog_with_every_topic_parameter_lift_and_phase() {
     let mut last: HashMap<u16, u64> = HashMap::new();
     let mut count: HashMap<String, usize> = HashMap::new();
     let mut strings = Vec::new();
+    let mut lifts: Vec<Vec<u8>> = Vec::new();
     for m in &all {
         match m.kind {
             b'A' => {
@@ -133,6 +135,9 @@ fn the_mission_log_is_ulog_with_every_topic_parameter_lift_and_phase() {
                 let before = last.insert(id, t).unwrap_or(0);
                 assert!(t >= before, "{name}: time {t} after {before}");
                 *count.entry(name.clone()).or_default() += 1;
+                if name == "lift" {
+                    lifts.push(m.payload[2..].to_vec());
+                }
             }
             b'L' => strings.push(String::from_utf8(m.payload[9..].to_vec()).expect("text")),
             _ => {}
@@ -148,6 +153,38 @@ fn the_mission_log_is_ulog_with_every_topic_parameter_lift_and_phase() {
     assert_eq!(count["actuator_outputs"], ticks);
     assert_eq!(count["lift"], outcome.lifts.len(), "a lift record a lift");
     assert_eq!(count["formation"], 1);
+    // The setpoints at 100 Hz each while flying: a few seconds' worth, as many of each.
+    let (attitude_sp, rates_sp) = (
+        count["vehicle_attitude_setpoint"],
+        count["vehicle_rates_setpoint"],
+    );
+    assert!(
+        attitude_sp > 500 && attitude_sp <= ticks / 4 + 1,
+        "{attitude_sp}"
+    );
+    assert!(
+        attitude_sp.abs_diff(rates_sp) <= 1,
+        "{attitude_sp} {rates_sp}"
+    );
+    // lift: timestamp, pair, information, lifted, thrust, lifts, com_x, com_y, mass,
+    // confidence, then the spread per axis and the model's lift-off thrust.
+    let f32_at = |b: &[u8], at: usize| f32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+    for (k, lift) in lifts.iter().enumerate() {
+        let spread = [38, 42, 46].map(|at| f32_at(lift, at));
+        assert!(
+            spread.iter().all(|s| *s > 0.0),
+            "lift {k}: spread {spread:?}"
+        );
+    }
+    // After the last lift the estimate has converged: the model at it is the model at the
+    // truth, within the grid's resolution's worth.
+    let last = lifts.last().expect("lifts");
+    let truth_model = outcome.lifts.last().expect("a lift").2;
+    let model_n = f32_at(last, 50);
+    assert!(
+        (model_n - truth_model).abs() < 0.5,
+        "{model_n} N vs {truth_model} N"
+    );
     for (phase, _) in &outcome.phases {
         assert!(
             strings
