@@ -405,7 +405,10 @@ fn the_cascades_setpoints_come_out_while_flying_and_only_then() {
             assert!(c.rate.x.is_finite() && c.rate.y.is_finite() && c.rate.z.is_finite());
             // The collective is what the rotors share (within what the mixer cut).
             let total: f32 = out.thrusts.iter().sum();
-            assert!(c.collective >= 0.0 && c.collective <= total * 1.5 + 1.0, "{c:?}");
+            assert!(
+                c.collective >= 0.0 && c.collective <= total * 1.5 + 1.0,
+                "{c:?}"
+            );
         },
         200_000,
     );
