@@ -264,8 +264,8 @@ fn main() -> ! {
 }
 
 /// The flight log's share of a control step (the mission's records, packed into a ring that
-/// always has room), hovering with 8 rotors: the mean over a second of steps and the worst
-/// (the step that also writes the 10 Hz and 1 Hz topics).
+/// always has room), hovering with 8 rotors and the cascade's setpoints: the mean over a
+/// second of steps and the worst (the step that also writes a slower topic).
 fn flight_log_step(timer: &mut Timer, scenario: &shared::scenario::Scenario) {
     use link::flight_log::session::MissionLog;
     use link::flight_log::session::STEP_BYTES;
@@ -303,6 +303,11 @@ fn flight_log_step(timer: &mut Timer, scenario: &shared::scenario::Scenario) {
     out.phase = Phase::Flying(FlightPhase::Hover);
     out.armed = true;
     out.thrusts[..8].copy_from_slice(&[7.1; 8]);
+    out.cascade = Some(shared::flight::CascadeSetpoints {
+        attitude: Quat::IDENTITY,
+        rate: Vec3::new(0.01, -0.02, 0.0),
+        collective: 56.8,
+    });
     let mut log = MissionLog::new();
     let mut ring = Counting {
         space: [0; STEP_BYTES],

@@ -193,8 +193,8 @@ impl Recorder {
                 velocity: [pos.velocity.x, pos.velocity.y, pos.velocity.z],
             });
         }
-        if let Some(c) = out.cascade
-            && (attitude_sp_turn || rates_sp_turn)
+        if (attitude_sp_turn || rates_sp_turn)
+            && let Some(c) = &out.cascade
         {
             // PX4's normalised body thrust: the collective over the rotors' total maximum,
             // on body z, negative up.
@@ -345,12 +345,13 @@ impl Recorder {
             }
         }
         // The update of a reading comes back some steps after it (a job): the lift is
-        // recorded with the estimate after it.
-        let estimate = mission.latest_estimate();
+        // recorded with the estimate after it (nothing of it read while no reading waits).
+        let Some((_, thrust)) = self.reading else {
+            return;
+        };
         let lifts = mission.measurements();
-        if let Some((_, thrust)) = self.reading
-            && lifts > self.lifts
-        {
+        if lifts > self.lifts {
+            let estimate = mission.latest_estimate();
             let (pair, information) = self.pair.unwrap_or((u8::MAX, f32::NAN));
             put(Record::Lift {
                 timestamp: t,
