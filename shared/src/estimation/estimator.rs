@@ -620,15 +620,10 @@ mod tests {
             last = Some((g, reading, est));
         }
         let (g, reading, est) = last.expect("at least one lift");
-        for a in 0..3 {
-            assert!(
-                spread[a] < prior.spread[a],
-                "axis {a}: {prior:?} -> {est:?}"
-            );
-            assert!(
-                spread[a] <= 1.5 * scenario.estimation.resolution[a],
-                "{est:?}"
-            );
+        let res = scenario.estimation.resolution;
+        for (a, ((now, before), res)) in spread.iter().zip(prior.spread).zip(res).enumerate() {
+            assert!(*now < before, "axis {a}: {prior:?} -> {est:?}");
+            assert!(*now <= 1.5 * res, "{est:?}");
         }
         // The model at the estimate explains the noiseless reading of its pair within about
         // a resolution's change of prediction.

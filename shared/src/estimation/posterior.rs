@@ -456,9 +456,9 @@ mod tests {
         let centre = [1, 1, 1];
         marginal[grid.theta_index(centre)] = 1.0;
         let one = concentration(&grid, &marginal);
-        for a in 0..3 {
-            let cell = res[a] / 12f32.sqrt();
-            assert!((one.spread[a] - cell).abs() < 1e-5, "axis {a}: {one:?}");
+        for (a, (spread, res)) in one.spread.iter().zip(res).enumerate() {
+            let cell = res / 12f32.sqrt();
+            assert!((spread - cell).abs() < 1e-5, "axis {a}: {one:?}");
         }
         // Half on the next mass: the mass's variance grows by a quarter of a step squared.
         marginal[grid.theta_index(centre)] = 0.5;
@@ -472,11 +472,15 @@ mod tests {
             .iter_mut()
             .for_each(|p| *p = 1.0 / grid.theta_len() as f32);
         let flat = concentration(&grid, &marginal);
-        for a in 0..3 {
-            let n = grid.shape()[a] as f32;
-            let expect = res[a] * n / 12f32.sqrt();
+        for (a, (spread, (res, n))) in flat
+            .spread
+            .iter()
+            .zip(res.iter().zip(grid.shape()))
+            .enumerate()
+        {
+            let expect = res * n as f32 / 12f32.sqrt();
             assert!(
-                (flat.spread[a] - expect).abs() < 1e-3 * expect,
+                (spread - expect).abs() < 1e-3 * expect,
                 "axis {a}: {flat:?}"
             );
         }
