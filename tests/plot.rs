@@ -20,6 +20,10 @@ use host_sim::ulog_read;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+/// One control step (400 Hz) and a little, s: how far a phase's time in the log may be from
+/// the mission's.
+const STEP_S: f32 = 2.6e-3;
+
 /// A fresh folder for one test's files.
 fn temp_dir(tag: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("host-sim-plot-{}-{tag}", std::process::id()));
@@ -161,14 +165,19 @@ fn plot_draws_the_missions_summary_from_its_log_and_the_two_agree() {
     assert_eq!(v["sys_name"], "rail-transport");
     assert_eq!(v["notes"].as_array().map(Vec::len), Some(0), "{v}");
 
-    // The phases read back are the mission's, entered at the same times.
+    // The phases read back are the mission's, entered at the same times within a control
+    // step (the log's records begin with the step after the one that opens it, so the first
+    // phase is seen a step late).
     let phases = v["phases"].as_array().expect("phases");
     assert_eq!(phases.len(), outcome.phases.len());
     let mut t = 0.0f32;
     for (read, (name, duration)) in phases.iter().zip(&outcome.phases) {
         assert_eq!(read["name"], name.as_str());
         let start = read["start_s"].as_f64().expect("a time") as f32;
-        assert!((start - t).abs() < 1e-3, "{name}: {start} s against {t} s");
+        assert!(
+            (start - t).abs() <= STEP_S,
+            "{name}: {start} s against {t} s"
+        );
         t += duration;
     }
     // The lifts: the same pairs and readings, the model beside each.
@@ -204,7 +213,12 @@ fn the_page_from_the_log_holds_the_data_of_the_page_from_the_mission() {
     assert_eq!(from_log.phases.len(), from_mission.phases.len());
     for (a, b) in from_log.phases.iter().zip(&from_mission.phases) {
         assert_eq!(a.name, b.name);
-        assert!((a.start - b.start).abs() < 1e-3 && (a.end - b.end).abs() < 1e-3);
+        let (start, end) = ((a.start - b.start).abs(), (a.end - b.end).abs());
+        assert!(
+            start <= STEP_S && end <= STEP_S,
+            "{}: {start} s, {end} s",
+            a.name
+        );
     }
     assert!((from_log.end_s - from_mission.end_s).abs() < 1e-3);
     // The flight: the log's estimate against the plant's truth.
