@@ -13,6 +13,7 @@
 //! - [`command_wire`]: those two messages with the command as its number.
 //! - [`ftp`]: MAVLink FTP: the vehicle's minimal server (one writable file, the payload
 //!   description) and the ground side's upload.
+//! - [`log_transfer`]: MAVLink's log protocol: the flight logs listed, downloaded, erased.
 //! - [`param`]: MAVLink's parameter protocol over the mission's parameter table.
 //! - [`slots`]: the payload description's two power-cut-safe slots.
 //! - [`store`]: the parameters' storage (`sequential-storage` on NOR flash), power-cut safe.
@@ -44,6 +45,7 @@ pub mod frame;
 pub mod ftp;
 pub mod hil;
 pub mod hil_ethernet;
+pub mod log_transfer;
 pub mod odometry;
 pub mod param;
 pub mod signing;
