@@ -37,6 +37,7 @@ use link::command_wire::CommandId;
 use link::frame::{Encoder, Frame, Integrity, Parser};
 use link::ftp::{FileEvent, FtpMessage, Server};
 use link::hil::{ImuSample, JobDeadline, MAX_ROBOTS, MocapFix, VehicleClock};
+use link::log_transfer::LogRequest;
 use link::msg::{
     AUTOPILOT_VERSION_DATA, MISSION_COUNT_DATA, MavCmd, MavResult, MavSeverity, TIMESYNC_DATA,
 };
@@ -586,6 +587,18 @@ impl Vehicle {
                 let on = self.signing.enabled();
                 assert_eq!(on, key != [0; KEY_LEN], "signing on with an all-zero key");
             }
+            // As comms.rs's `handle_log` on a board that keeps no logs (the Pixhawk 6C's
+            // storage, the one fuzzed here): a list of none, the rest refused with a text.
+            Inbound::Log { request, .. } => match request {
+                LogRequest::Erase if !verdict.trusted() => {
+                    self.report_text(Severity::Warning, "log erase refused");
+                }
+                LogRequest::List { .. } => self.send(&link::log_transfer::no_logs_entry()),
+                LogRequest::End => {}
+                LogRequest::Data { .. } | LogRequest::Erase => {
+                    self.report_text(Severity::Warning, "flight logs: this board keeps none");
+                }
+            },
             Inbound::MissionList(to) => {
                 self.send(&MISSION_COUNT_DATA {
                     count: 0,

@@ -22,6 +22,18 @@ pub const DATA_LEN: usize = 90;
 /// A `LOG_REQUEST_DATA` count meaning "to the end of the log" (MAVProxy asks so).
 pub const TO_THE_END: u32 = u32::MAX;
 
+/// The one `LOG_ENTRY` that answers a list when no logs are kept (`num_logs` 0, id 0), as
+/// QGroundControl and MAVProxy expect.
+pub fn no_logs_entry() -> LOG_ENTRY_DATA {
+    LOG_ENTRY_DATA {
+        time_utc: 0,
+        size: 0,
+        id: 0,
+        num_logs: 0,
+        last_log_num: 0,
+    }
+}
+
 /// A log-protocol request addressed to the vehicle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LogRequest {
@@ -222,11 +234,10 @@ impl LogService {
                 } else {
                     Sending::Nothing
                 };
-                let size = if count == 0 {
-                    0
-                } else {
-                    storage.size(next).inspect_err(|_| self.stop())?
-                };
+                if count == 0 {
+                    return Ok(Some(LogReply::Entry(no_logs_entry())));
+                }
+                let size = storage.size(next).inspect_err(|_| self.stop())?;
                 LogReply::Entry(LOG_ENTRY_DATA {
                     time_utc: 0,
                     size,

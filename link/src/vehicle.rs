@@ -9,15 +9,17 @@ use crate::command_wire::{CommandId, CommandLong};
 use crate::frame::{Frame, Integrity};
 use crate::ftp::{FtpMessage, PAYLOAD_LEN};
 use crate::hil::{HilError, ImuSample, MocapFix};
+use crate::log_transfer::LogRequest;
 use crate::msg::{
     ACTUATOR_OUTPUT_STATUS_DATA, ATT_POS_MOCAP_DATA, ATTITUDE_QUATERNION_DATA,
     AUTOPILOT_VERSION_DATA, BATTERY_STATUS_DATA, COMMAND_ACK_DATA, COMMAND_LONG_DATA,
     DEBUG_FLOAT_ARRAY_DATA, FILE_TRANSFER_PROTOCOL_DATA, HEARTBEAT_DATA,
-    HIL_ACTUATOR_CONTROLS_DATA, HIL_SENSOR_DATA, LOCAL_POSITION_NED_DATA, MISSION_COUNT_DATA,
-    MISSION_REQUEST_LIST_DATA, MavAutopilot, MavBatteryFunction, MavType, NAMED_VALUE_FLOAT_DATA,
-    NAMED_VALUE_INT_DATA, ODOMETRY_DATA, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA,
-    PARAM_SET_DATA, PARAM_VALUE_DATA, SETUP_SIGNING_DATA, STATUSTEXT_DATA, SYS_STATUS_DATA,
-    TIMESYNC_DATA,
+    HIL_ACTUATOR_CONTROLS_DATA, HIL_SENSOR_DATA, LOCAL_POSITION_NED_DATA, LOG_DATA_DATA,
+    LOG_ENTRY_DATA, LOG_ERASE_DATA, LOG_REQUEST_DATA_DATA, LOG_REQUEST_END_DATA,
+    LOG_REQUEST_LIST_DATA, MISSION_COUNT_DATA, MISSION_REQUEST_LIST_DATA, MavAutopilot,
+    MavBatteryFunction, MavType, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA, ODOMETRY_DATA,
+    PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA, PARAM_VALUE_DATA,
+    SETUP_SIGNING_DATA, STATUSTEXT_DATA, SYS_STATUS_DATA, TIMESYNC_DATA,
 };
 use crate::param::ParamRequest;
 
@@ -60,6 +62,12 @@ crc_extras!(
     SETUP_SIGNING_DATA,
     DEBUG_FLOAT_ARRAY_DATA,
     BATTERY_STATUS_DATA,
+    LOG_REQUEST_LIST_DATA,
+    LOG_ENTRY_DATA,
+    LOG_REQUEST_DATA_DATA,
+    LOG_DATA_DATA,
+    LOG_ERASE_DATA,
+    LOG_REQUEST_END_DATA,
 );
 
 /// Who sent a frame.
@@ -120,6 +128,14 @@ pub enum Inbound {
         key: [u8; crate::signing::KEY_LEN],
         /// The initial timestamp, 10 us units since 2015-01-01.
         timestamp: u64,
+        /// Its sender.
+        from: Sender,
+    },
+    /// A log-protocol request (`LOG_REQUEST_LIST`, `LOG_REQUEST_DATA`, `LOG_REQUEST_END`,
+    /// `LOG_ERASE`) addressed to the vehicle.
+    Log {
+        /// What it asks.
+        request: LogRequest,
         /// Its sender.
         from: Sender,
     },
@@ -253,6 +269,34 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
         },
         MISSION_REQUEST_LIST_DATA::ID => match frame.decode::<MISSION_REQUEST_LIST_DATA>() {
             Some(m) if for_us(m.target_system, m.target_component) => Inbound::MissionList(from),
+            _ => ignored,
+        },
+        LOG_REQUEST_LIST_DATA::ID => match frame.decode::<LOG_REQUEST_LIST_DATA>() {
+            Some(m) if for_us(m.target_system, m.target_component) => Inbound::Log {
+                request: LogRequest::from_list(&m),
+                from,
+            },
+            _ => ignored,
+        },
+        LOG_REQUEST_DATA_DATA::ID => match frame.decode::<LOG_REQUEST_DATA_DATA>() {
+            Some(m) if for_us(m.target_system, m.target_component) => Inbound::Log {
+                request: LogRequest::from_data(&m),
+                from,
+            },
+            _ => ignored,
+        },
+        LOG_REQUEST_END_DATA::ID => match frame.decode::<LOG_REQUEST_END_DATA>() {
+            Some(m) if for_us(m.target_system, m.target_component) => Inbound::Log {
+                request: LogRequest::End,
+                from,
+            },
+            _ => ignored,
+        },
+        LOG_ERASE_DATA::ID => match frame.decode::<LOG_ERASE_DATA>() {
+            Some(m) if for_us(m.target_system, m.target_component) => Inbound::Log {
+                request: LogRequest::Erase,
+                from,
+            },
             _ => ignored,
         },
         HEARTBEAT_DATA::ID => {
@@ -493,6 +537,76 @@ mod tests {
             through_the_wire(&missions),
             Inbound::MissionList(_)
         ));
+    }
+
+    #[test]
+    fn log_requests_reach_the_log_service() {
+        let from = Sender {
+            system: crate::PLANT_SYSTEM_ID,
+            component: crate::PLANT_COMPONENT_ID,
+        };
+        let list = LOG_REQUEST_LIST_DATA {
+            start: 0,
+            end: 0xFFFF,
+            target_system: 1,
+            target_component: 1,
+        };
+        assert_eq!(
+            through_the_wire(&list),
+            Inbound::Log {
+                request: LogRequest::List {
+                    start: 0,
+                    end: 0xFFFF
+                },
+                from
+            }
+        );
+        let data = LOG_REQUEST_DATA_DATA {
+            ofs: 900,
+            count: u32::MAX,
+            id: 3,
+            target_system: 1,
+            target_component: 0,
+        };
+        assert_eq!(
+            through_the_wire(&data),
+            Inbound::Log {
+                request: LogRequest::Data {
+                    id: 3,
+                    ofs: 900,
+                    count: u32::MAX
+                },
+                from
+            }
+        );
+        let end = LOG_REQUEST_END_DATA {
+            target_system: 1,
+            target_component: 1,
+        };
+        assert!(matches!(
+            through_the_wire(&end),
+            Inbound::Log {
+                request: LogRequest::End,
+                ..
+            }
+        ));
+        let erase = LOG_ERASE_DATA {
+            target_system: 1,
+            target_component: 1,
+        };
+        assert!(matches!(
+            through_the_wire(&erase),
+            Inbound::Log {
+                request: LogRequest::Erase,
+                ..
+            }
+        ));
+        // Another vehicle's erase is not this one's.
+        let other = LOG_ERASE_DATA {
+            target_system: 2,
+            target_component: 1,
+        };
+        assert!(matches!(through_the_wire(&other), Inbound::Ignored { .. }));
     }
 
     #[test]

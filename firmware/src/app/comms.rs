@@ -1,6 +1,6 @@
 //! The MAVLink link's two tasks, on the link executor: receiving
 //! (framing, dispatch to the services, the FTP server, the payload's checks, the parameter
-//! service and its store) and sending (each
+//! service and its store, the log requests handed to the logger task) and sending (each
 //! control step's messages in order, replies, heartbeat). The protocol logic is the `link`
 //! crate's, host-tested; this is the glue to the board's byte stream and the other tasks.
 //!
@@ -20,6 +20,7 @@ use link::command_wire::CommandId;
 use link::frame::{Encoder, Frame, Parser};
 use link::ftp::{FileEvent, FtpMessage, Server};
 use link::hil::{Actuators, ImuSample};
+use link::log_transfer::{LogReply, LogRequest};
 use link::msg::{
     AUTOPILOT_VERSION_DATA, MISSION_COUNT_DATA, MavCmd, MavProtocolCapability, MavResult,
     MavSeverity, TIMESYNC_DATA,
@@ -126,6 +127,8 @@ pub enum Outbound {
         /// To whom.
         to: Sender,
     },
+    /// A log-protocol answer (`LOG_ENTRY`, `LOG_DATA`), from the logger task.
+    Log(LogReply),
 }
 
 /// The parameters' store on this board.
@@ -371,6 +374,41 @@ async fn handle_param(
     }
 }
 
+/// Hands a log request to the logger task, which owns the storage; a board that keeps no
+/// logs lists none, and an erase must be signed once signing is on.
+async fn handle_log(request: LogRequest, verdict: Verdict) {
+    if request == LogRequest::Erase && !verdict.trusted() {
+        OUTBOX
+            .send(report(
+                Severity::Warning,
+                format_args!("log erase refused: {}", verdict.reason()),
+            ))
+            .await;
+        return;
+    }
+    if !super::logger::request(request) {
+        match request {
+            LogRequest::List { .. } => {
+                OUTBOX
+                    .send(Outbound::Log(LogReply::Entry(
+                        link::log_transfer::no_logs_entry(),
+                    )))
+                    .await;
+            }
+            LogRequest::End => {}
+            LogRequest::Data { .. } | LogRequest::Erase => {
+                OUTBOX
+                    .send(report(
+                        Severity::Warning,
+                        format_args!("flight logs: this board keeps none"),
+                    ))
+                    .await;
+            }
+        }
+        return;
+    }
+}
+
 async fn refuse(command: CommandId, result: MavResult, why: &str) {
     OUTBOX.send(Outbound::Ack { command, result }).await;
     OUTBOX
@@ -495,6 +533,7 @@ async fn handle(
             setup_signing(key, timestamp, store).await;
         }
         Inbound::MissionList(to) => OUTBOX.send(Outbound::MissionCount { to }).await,
+        Inbound::Log { request, .. } => handle_log(request, verdict).await,
         Inbound::Ftp { message, from } if !verdict.trusted() => {
             OUTBOX
                 .send(Outbound::Ftp {
@@ -780,6 +819,14 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
                 }
                 Outbound::TimeSync { tc1, ts1 } => {
                     out.encode(&TIMESYNC_DATA { tc1, ts1 });
+                    out.flush().await;
+                }
+                Outbound::Log(LogReply::Entry(entry)) => {
+                    out.encode(&entry);
+                    out.flush().await;
+                }
+                Outbound::Log(LogReply::Data(data)) => {
+                    out.encode(&data);
                     out.flush().await;
                 }
                 Outbound::MissionCount { to } => {

@@ -4,22 +4,32 @@
 //! (`link::flight_log::keeper`: a numbered log per mission, written in blocks). What the
 //! keeper reports (a log opened or closed, the storage failing) goes to the ground as a
 //! `STATUSTEXT`; the flight never waits on the storage.
+//!
+//! The same task serves the logs to the ground (docs/formats.md#downloading-the-logs,
+//! `link::log_transfer`): the link's receive task hands it the log requests ([`request`])
+//! and it answers between its writes, the ring first: a turn sends at most
+//! [`TURN_MESSAGES`] messages, each only into an empty [`OUTBOX`], then waits [`TURN_PAUSE`],
+//! so a download never holds up the control step's messages, the heartbeat or the telemetry.
 
 use core::sync::atomic::{AtomicBool, Ordering};
 
 use core::cell::Cell;
-use embassy_sync::channel::TrySendError;
 
+use embassy_futures::select::{Either, select};
 use embassy_sync::blocking_mutex::Mutex;
-use embassy_sync::zerocopy_channel::{Channel, Sender};
+use embassy_sync::channel::{self, TrySendError};
+use embassy_sync::once_lock::OnceLock;
+use embassy_sync::zerocopy_channel::{Channel, Receiver, Sender};
+use embassy_time::{Duration, Timer};
 use link::flight_log::file::{LogInfo, SYS_NAME};
-use link::flight_log::keeper::{KeeperEvent, LogKeeper};
+use link::flight_log::keeper::{KeeperEvent, LogKeeper, LogStorage};
 use link::flight_log::session::STEP_BYTES;
 use link::flight_log::stream::{LogRing, Splitter};
+use link::log_transfer::{LogNotice, LogRequest, LogService};
 
 use super::autonomy::{Report, Severity};
-use super::comms::Outbound;
-use super::{Cs, MISSION_CONFIG, OUTBOX};
+use super::comms::{Outbound, report};
+use super::{ARMED, Cs, MISSION_CONFIG, OUTBOX};
 use crate::board::{Board, LogRam, Selected};
 
 /// Bytes of one slot of the ring.
@@ -61,12 +71,40 @@ static LOGGER_MEMORY: LogRam<LoggerMemory> = LogRam::new();
 /// and on a board that keeps no logs, the control step records nothing).
 static RING_SENDER: Mutex<Cs, Cell<Option<RingSender>>> = Mutex::new(Cell::new(None));
 
-/// What the logger task works in: the keeper (with its 4 KiB block), the splitter and the
-/// texts for the ground.
+/// What the logger task works in: the keeper (with its 4 KiB block), the splitter, the texts
+/// for the ground and the log protocol's state.
 struct LoggerMemory {
     keeper: LogKeeper,
     splitter: Splitter,
     report: Report,
+    service: LogService,
+    requests: Requests,
+}
+
+/// Log-protocol requests from the link, for the logger task.
+type Requests = channel::Channel<Cs, LogRequest, 2>;
+
+/// The logger task's requests, once it runs (in the log's memory with the rest of it; on a
+/// board that keeps no logs, never).
+static REQUESTS: OnceLock<&'static Requests> = OnceLock::new();
+
+/// Most log-protocol messages sent in one turn of the logger task.
+pub const TURN_MESSAGES: usize = 8;
+/// The logger task's pause between two turns of a download.
+pub const TURN_PAUSE: Duration = Duration::from_millis(1);
+
+/// Hands a log-protocol request to the logger task (two waiting already means a ground station
+/// asking faster than it is answered: the newest counts). `false`: no logger task runs (the
+/// board keeps no logs this run).
+pub fn request(request: LogRequest) -> bool {
+    let Some(requests) = REQUESTS.try_get() else {
+        return false;
+    };
+    if let Err(TrySendError::Full(request)) = requests.try_send(request) {
+        let _ = requests.try_receive();
+        let _ = requests.try_send(request);
+    }
+    true
 }
 
 /// Hands `report` to the link, waiting for room without holding a copy of it across the
@@ -145,7 +183,7 @@ impl LogRing for RingEnd {
     }
 }
 
-/// Reads the ring into `storage`, forever.
+/// Reads the ring into `storage` and serves the logs to the ground, forever.
 #[embassy_executor::task]
 pub async fn logger(mut storage: <Selected as Board>::LogStorage) {
     // SAFETY: the task is spawned once and never ends (a pool of one): the only calls; a slot
@@ -155,6 +193,8 @@ pub async fn logger(mut storage: <Selected as Board>::LogStorage) {
             keeper: LogKeeper::new(),
             splitter: Splitter::new(),
             report: Report::default(),
+            service: LogService::new(),
+            requests: Requests::new(),
         });
         (
             RING_MEMORY.init(Channel::new(SLOT_MEMORY.init_zeroed())),
@@ -167,7 +207,11 @@ pub async fn logger(mut storage: <Selected as Board>::LogStorage) {
         keeper,
         splitter,
         report,
+        service,
+        requests,
     } = memory;
+    let requests: &'static Requests = requests;
+    let _ = REQUESTS.init(requests);
     let info = LogInfo {
         sys_name: SYS_NAME,
         ver_sw: env!("CARGO_PKG_VERSION"),
@@ -175,36 +219,126 @@ pub async fn logger(mut storage: <Selected as Board>::LogStorage) {
         start_us: 0,
     };
     loop {
-        let slot = receiver.receive().await;
-        // The mission's settings (for a new log's definitions) only until the next wait.
-        {
-            let config = MISSION_CONFIG.lock(|c| c.get());
-            splitter.push(&slot.bytes[..slot.len], &mut |piece| match keeper.take(
-                &mut storage,
-                piece,
-                &info,
-                &config,
-            ) {
-                Ok(Some(KeeperEvent::Opened(id))) => {
-                    report.text(Severity::Info, format_args!("flight log {id} started"));
+        // The flight log first: whatever the ring holds is stored before anything is served.
+        if receiver.try_receive().is_none() {
+            if service.sending() {
+                serve_turn(service, &mut storage).await;
+                Timer::after(TURN_PAUSE).await;
+                if let Ok(request) = requests.try_receive() {
+                    take_request(request, service, &mut storage, keeper).await;
                 }
-                Ok(Some(KeeperEvent::Closed(id, size))) => report.text(
-                    Severity::Info,
-                    format_args!("flight log {id} written: {size} bytes"),
-                ),
-                Ok(Some(KeeperEvent::Failed)) => report.text(
-                    Severity::Error,
-                    format_args!("flight log incomplete: the storage failed during the flight"),
-                ),
-                Ok(None) => {}
-                Err(e) => report.text(Severity::Error, format_args!("flight log stopped: {e}")),
-            });
+                continue;
+            }
+            match select(receiver.receive(), requests.receive()).await {
+                Either::First(_) => {}
+                Either::Second(request) => {
+                    take_request(request, service, &mut storage, keeper).await;
+                    continue;
+                }
+            }
         }
-        slot.len = 0;
-        slot.steps = 0;
-        receiver.receive_done();
+        store_slot(&mut receiver, splitter, keeper, &mut storage, &info, report);
         if !report.texts.is_empty() {
             send_report(report).await;
+        }
+    }
+}
+
+/// Stores the slot the ring holds through the keeper and hands it back; what people should
+/// hear of goes into `report`.
+fn store_slot(
+    receiver: &mut Receiver<'static, Cs, LogSlot>,
+    splitter: &mut Splitter,
+    keeper: &mut LogKeeper,
+    storage: &mut <Selected as Board>::LogStorage,
+    info: &LogInfo<'_>,
+    report: &mut Report,
+) {
+    let Some(slot) = receiver.try_receive() else {
+        return;
+    };
+    // The mission's settings (for a new log's definitions).
+    let config = MISSION_CONFIG.lock(|c| c.get());
+    splitter.push(
+        &slot.bytes[..slot.len.min(SLOT_BYTES)],
+        &mut |piece| match keeper.take(storage, piece, info, &config) {
+            Ok(Some(KeeperEvent::Opened(id))) => {
+                report.text(Severity::Info, format_args!("flight log {id} started"));
+            }
+            Ok(Some(KeeperEvent::Closed(id, size))) => report.text(
+                Severity::Info,
+                format_args!("flight log {id} written: {size} bytes"),
+            ),
+            Ok(Some(KeeperEvent::Failed)) => report.text(
+                Severity::Error,
+                format_args!("flight log incomplete: the storage failed during the flight"),
+            ),
+            Ok(None) => {}
+            Err(e) => report.text(Severity::Error, format_args!("flight log stopped: {e}")),
+        },
+    );
+    slot.len = 0;
+    slot.steps = 0;
+    receiver.receive_done();
+}
+
+/// Takes a log-protocol request; says what people should hear of it.
+async fn take_request<S: LogStorage>(
+    request: LogRequest,
+    service: &mut LogService,
+    storage: &mut S,
+    keeper: &LogKeeper,
+) {
+    let erase_refused = if ARMED.load(Ordering::Relaxed) {
+        Some("the vehicle is armed")
+    } else if keeper.writing().is_some() {
+        Some("a flight log is being written")
+    } else {
+        None
+    };
+    match service.handle(request, storage, erase_refused) {
+        Ok(None) => {}
+        Ok(Some(notice)) => {
+            let severity = match notice {
+                LogNotice::Erased(_) => Severity::Notice,
+                _ => Severity::Warning,
+            };
+            OUTBOX
+                .send(report(severity, format_args!("{notice}")))
+                .await;
+        }
+        Err(e) => {
+            OUTBOX
+                .send(report(Severity::Error, format_args!("flight logs: {e}")))
+                .await;
+        }
+    }
+}
+
+/// Sends up to [`TURN_MESSAGES`] of what the service has to send, each only when the outbox is
+/// empty (so the send task's heartbeat and telemetry, and the control step's messages, wait
+/// behind one at most).
+async fn serve_turn<S: LogStorage>(service: &mut LogService, storage: &mut S) {
+    for _ in 0..TURN_MESSAGES {
+        if !OUTBOX.is_empty() {
+            return;
+        }
+        match service.next(storage) {
+            Ok(Some(reply)) => {
+                // The outbox was empty and only this task fills it from thread mode; a control
+                // step that filled it meanwhile makes this wait, as any sender would.
+                OUTBOX.send(Outbound::Log(reply)).await;
+            }
+            Ok(None) => return,
+            Err(e) => {
+                OUTBOX
+                    .send(report(
+                        Severity::Error,
+                        format_args!("log download stopped: {e}"),
+                    ))
+                    .await;
+                return;
+            }
         }
     }
 }
