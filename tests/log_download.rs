@@ -1,0 +1,96 @@
+//! The flight logs served over MAVLink's log protocol (docs/formats.md#downloading-the-logs):
+//! flies rect-ex1 with the firmware under QEMU and `hil --storage DIR`, then restarts the
+//! firmware on that storage and runs `tests/log_download.py` (pymavlink, then MAVProxy)
+//! against it: the list, the log downloaded block by block byte for byte the file in DIR
+//! (and the speed, and the heartbeats that kept coming), a log that is not kept, requests past
+//! the end, MAVProxy's `log download`, and the erase. What it checks is listed at the top of
+//! the script.
+//!
+//! Needs `python3` with `pymavlink` (and MAVProxy) and `qemu-system-arm`; it builds the
+//! firmware's QEMU image itself. Without one of them the test says it was skipped and why,
+//! and passes; with `HIL_REQUIRED=1` (CI, which installs them) it fails instead.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use host_sim::hil::qemu;
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn skip(reason: &str) {
+    if std::env::var("HIL_REQUIRED").is_ok_and(|v| v == "1") {
+        panic!("log download: HIL_REQUIRED=1 but {reason}");
+    }
+    qemu::note_skipped(reason.starts_with("qemu-system-arm is not installed"));
+    // Straight to stderr: the harness hides what a passing test prints with `eprintln!`.
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "log download: SKIPPED: {reason}");
+}
+
+/// Exit status of the script when pymavlink is missing.
+const NO_PYMAVLINK: i32 = 2;
+
+#[test]
+fn a_ground_station_lists_downloads_and_erases_the_firmwares_flight_log() {
+    if !qemu::available() {
+        return skip("qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)");
+    }
+    let elf = match qemu::test_image(&workspace()) {
+        Ok(elf) => elf,
+        Err(why) => return skip(&why),
+    };
+    let storage = std::env::temp_dir().join(format!("log-download-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&storage);
+    std::fs::create_dir_all(&storage).expect("a temporary folder");
+    let scenario = workspace().join("tests/scenarios/rect-ex1.toml");
+    let flight = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .arg("hil")
+        .arg("--scenario")
+        .arg(&scenario)
+        .arg("--qemu")
+        .arg(&elf)
+        .arg("--storage")
+        .arg(&storage)
+        .output()
+        .expect("host-sim runs");
+    assert!(
+        flight.status.success(),
+        "the flight: {}",
+        String::from_utf8_lossy(&flight.stderr)
+    );
+    assert!(
+        storage.join("log-000.ulg").is_file(),
+        "the flight left no log in {}",
+        storage.display()
+    );
+    let output = match Command::new("python3")
+        .arg(workspace().join("tests/log_download.py"))
+        .arg("--host-sim")
+        .arg(env!("CARGO_BIN_EXE_host-sim"))
+        .arg("--elf")
+        .arg(&elf)
+        .arg("--scenario")
+        .arg(&scenario)
+        .arg("--storage")
+        .arg(&storage)
+        .output()
+    {
+        Ok(output) => output,
+        Err(e) => return skip(&format!("python3 cannot be run ({e})")),
+    };
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    if output.status.code() == Some(NO_PYMAVLINK) {
+        return skip(stderr.trim());
+    }
+    assert!(
+        output.status.success(),
+        "the log download failed ({}):\n{stdout}\n{stderr}",
+        output.status
+    );
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "{stdout}");
+    let _ = std::fs::remove_dir_all(&storage);
+}
