@@ -186,8 +186,9 @@ def mavproxy_download(args, log_path):
         return
     want = open(log_path, "rb").read()
     port = gs.free_udp_port()
-    # MAVProxy drops much of what comes at full speed and asks again (one to three minutes): the
-    # plant is paced to 4 times real time so that its 15 minutes of idle steps outlast that.
+    # On a busy machine MAVProxy falls behind, drops what it cannot read and asks again (up to
+    # three minutes): the plant is paced to 4 times real time so that its 15 minutes of idle
+    # steps outlast that.
     plant = start_hil(args, port, ["--speed", "4"])
     with tempfile.TemporaryDirectory(prefix="mavproxy-logs-") as state:
         out_file = os.path.join(state, "log0.ulg")
