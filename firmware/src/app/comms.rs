@@ -405,7 +405,6 @@ async fn handle_log(request: LogRequest, verdict: Verdict) {
                     .await;
             }
         }
-        return;
     }
 }
 

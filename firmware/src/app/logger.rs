@@ -25,10 +25,10 @@ use link::flight_log::file::{LogInfo, SYS_NAME};
 use link::flight_log::keeper::{KeeperEvent, LogKeeper, LogStorage};
 use link::flight_log::session::STEP_BYTES;
 use link::flight_log::stream::{LogRing, Splitter};
-use link::log_transfer::{LogNotice, LogRequest, LogService};
+use link::log_transfer::{LogNotice, LogReply, LogRequest, LogService};
 
 use super::autonomy::{Report, Severity};
-use super::comms::{Outbound, report};
+use super::comms::Outbound;
 use super::{ARMED, Cs, MISSION_CONFIG, OUTBOX};
 use crate::board::{Board, LogRam, Selected};
 
@@ -78,6 +78,8 @@ struct LoggerMemory {
     splitter: Splitter,
     report: Report,
     service: LogService,
+    /// A log-protocol message the outbox had no room for, sent first at the next turn.
+    pending: Option<LogReply>,
     requests: Requests,
 }
 
@@ -194,6 +196,7 @@ pub async fn logger(mut storage: <Selected as Board>::LogStorage) {
             splitter: Splitter::new(),
             report: Report::default(),
             service: LogService::new(),
+            pending: None,
             requests: Requests::new(),
         });
         (
@@ -208,6 +211,7 @@ pub async fn logger(mut storage: <Selected as Board>::LogStorage) {
         splitter,
         report,
         service,
+        pending,
         requests,
     } = memory;
     let requests: &'static Requests = requests;
@@ -221,20 +225,19 @@ pub async fn logger(mut storage: <Selected as Board>::LogStorage) {
     loop {
         // The flight log first: whatever the ring holds is stored before anything is served.
         if receiver.try_receive().is_none() {
-            if service.sending() {
-                serve_turn(service, &mut storage).await;
+            if service.sending() || pending.is_some() {
+                serve_turn(service, &mut storage, pending, report);
+                if !report.texts.is_empty() {
+                    send_report(report).await;
+                }
                 Timer::after(TURN_PAUSE).await;
                 if let Ok(request) = requests.try_receive() {
-                    take_request(request, service, &mut storage, keeper).await;
+                    take_request(request, service, &mut storage, keeper, report);
                 }
-                continue;
-            }
-            match select(receiver.receive(), requests.receive()).await {
-                Either::First(_) => {}
-                Either::Second(request) => {
-                    take_request(request, service, &mut storage, keeper).await;
-                    continue;
-                }
+            } else if let Either::Second(request) =
+                select(receiver.receive(), requests.receive()).await
+            {
+                take_request(request, service, &mut storage, keeper, report);
             }
         }
         store_slot(&mut receiver, splitter, keeper, &mut storage, &info, report);
@@ -282,12 +285,13 @@ fn store_slot(
     receiver.receive_done();
 }
 
-/// Takes a log-protocol request; says what people should hear of it.
-async fn take_request<S: LogStorage>(
+/// Takes a log-protocol request; what people should hear of it goes into `report`.
+fn take_request<S: LogStorage>(
     request: LogRequest,
     service: &mut LogService,
     storage: &mut S,
     keeper: &LogKeeper,
+    report: &mut Report,
 ) {
     let erase_refused = if ARMED.load(Ordering::Relaxed) {
         Some("the vehicle is armed")
@@ -303,42 +307,41 @@ async fn take_request<S: LogStorage>(
                 LogNotice::Erased(_) => Severity::Notice,
                 _ => Severity::Warning,
             };
-            OUTBOX
-                .send(report(severity, format_args!("{notice}")))
-                .await;
+            report.text(severity, format_args!("{notice}"));
         }
-        Err(e) => {
-            OUTBOX
-                .send(report(Severity::Error, format_args!("flight logs: {e}")))
-                .await;
-        }
+        Err(e) => report.text(Severity::Error, format_args!("flight logs: {e}")),
     }
 }
 
-/// Sends up to [`TURN_MESSAGES`] of what the service has to send, each only when the outbox is
-/// empty (so the send task's heartbeat and telemetry, and the control step's messages, wait
-/// behind one at most).
-async fn serve_turn<S: LogStorage>(service: &mut LogService, storage: &mut S) {
+/// Sends up to [`TURN_MESSAGES`] of what the service has to send, each only into an empty
+/// outbox (so the send task's heartbeat and telemetry, and the control step's messages, wait
+/// behind one at most), never waiting: a message the outbox had no room for after all waits in
+/// `pending` for the next turn. A storage error goes into `report`.
+fn serve_turn<S: LogStorage>(
+    service: &mut LogService,
+    storage: &mut S,
+    pending: &mut Option<LogReply>,
+    report: &mut Report,
+) {
     for _ in 0..TURN_MESSAGES {
         if !OUTBOX.is_empty() {
             return;
         }
-        match service.next(storage) {
-            Ok(Some(reply)) => {
-                // The outbox was empty and only this task fills it from thread mode; a control
-                // step that filled it meanwhile makes this wait, as any sender would.
-                OUTBOX.send(Outbound::Log(reply)).await;
-            }
-            Ok(None) => return,
-            Err(e) => {
-                OUTBOX
-                    .send(report(
-                        Severity::Error,
-                        format_args!("log download stopped: {e}"),
-                    ))
-                    .await;
-                return;
-            }
+        let reply = match pending.take() {
+            Some(reply) => reply,
+            None => match service.next(storage) {
+                Ok(Some(reply)) => reply,
+                Ok(None) => return,
+                Err(e) => {
+                    report.text(Severity::Error, format_args!("log download stopped: {e}"));
+                    return;
+                }
+            },
+        };
+        if let Err(TrySendError::Full(Outbound::Log(back))) = OUTBOX.try_send(Outbound::Log(reply))
+        {
+            *pending = Some(back);
+            return;
         }
     }
 }
