@@ -4,6 +4,7 @@
 //! - [`flight_log`]: what the vehicle records of a mission, as ULog.
 //! - [`frame`]: MAVLink 2 framing: a byte-at-a-time parser that survives any byte stream, and
 //!   the encoder (the `mavlink` crate's message types, CRCs and payload encoding).
+//! - [`geo`]: the map origin: the local position to a latitude, longitude and altitude.
 //! - [`hil_ethernet`]: the HIL link's Ethernet framing (QEMU's LAN9118 to the plant's UDP).
 //! - [`hil`]: PX4's simulator MAVLink API: `HIL_SENSOR` and `ATT_POS_MOCAP` in,
 //!   `HIL_ACTUATOR_CONTROLS` (and `ACTUATOR_OUTPUT_STATUS` past 8 robots) out, with the channel
@@ -43,6 +44,7 @@ pub mod command_wire;
 pub mod flight_log;
 pub mod frame;
 pub mod ftp;
+pub mod geo;
 pub mod hil;
 pub mod hil_ethernet;
 pub mod log_transfer;

@@ -74,6 +74,21 @@ macro_rules! param {
             set: |$c: &mut MissionConfig, v: f32| $field = v as _,
         }
     };
+    // A whole-number parameter of the ground link (the map origin): no field of the
+    // configuration; read with `ParamValues::get`.
+    (link $name:literal, $unit:literal, $min:expr, $max:expr, $default:expr, $doc:literal) => {
+        ParamSpec {
+            name: $name,
+            unit: $unit,
+            min: $min,
+            max: $max,
+            integer: true,
+            #[cfg(feature = "docs")]
+            doc: $doc,
+            get: |_: &MissionConfig| $default,
+            set: |_: &mut MissionConfig, _: f32| {},
+        }
+    };
     (@ $name:literal, $unit:literal, $min:expr, $max:expr, $int:expr, $doc:literal, |$c:ident| $field:expr) => {
         ParamSpec {
             name: $name,
@@ -90,7 +105,23 @@ macro_rules! param {
 }
 
 /// Number of parameters.
-pub const COUNT: usize = 89;
+pub const COUNT: usize = 94;
+
+/// Index of the first of the map origin's five parameters, in this order: `ORIG_LAT_DEG`,
+/// `ORIG_LAT_E7`, `ORIG_LON_DEG`, `ORIG_LON_E7`, `ORIG_ALT` (docs/ground-link.md#the-map-origin).
+/// They are the ground link's, not the mission's: no field of [`MissionConfig`].
+pub const ORIGIN: usize = 89;
+/// How many parameters the map origin has.
+pub const ORIGIN_LEN: usize = 5;
+/// `ORIG_ALT`'s default, m: PX4's simulation home (47.397742 N, 8.545594 E, 488 m), a
+/// clearly borrowed place a ground station can show until the origin is set.
+pub const ORIGIN_DEFAULT_ALT: f32 = 488.0;
+
+/// Whether parameter `index` is the map origin's (the ground link's, no field of
+/// [`MissionConfig`]).
+pub const fn is_origin(index: usize) -> bool {
+    index >= ORIGIN && index < ORIGIN + ORIGIN_LEN
+}
 
 mod table;
 #[cfg(test)]

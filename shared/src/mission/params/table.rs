@@ -743,4 +743,50 @@ pub static TABLE: [ParamSpec; COUNT] = [
         "filtered pack voltage below which the battery is critical: landing in place (stop on the ground); 0 off",
         |c| c.supervision.battery_critical
     ),
+    // The map origin: the ground link's (a ground station's map), no field of the
+    // configuration. Degrees split in a whole part and a part in 1e-7 degrees, each exact as a
+    // REAL32 (one float of degrees rounds to 1.7 m); docs/ground-link.md#the-map-origin.
+    param!(
+        link "ORIG_LAT_DEG",
+        "deg",
+        -90.0,
+        90.0,
+        47.0,
+        "map origin's latitude (the local frame's origin), whole degrees; plus ORIG_LAT_E7 (default: PX4's simulation home)"
+    ),
+    param!(
+        link "ORIG_LAT_E7",
+        "1e-7 deg",
+        -9_999_999.0,
+        9_999_999.0,
+        3_977_420.0,
+        "map origin's latitude past ORIG_LAT_DEG, 1e-7 degrees (the same sign)"
+    ),
+    param!(
+        link "ORIG_LON_DEG",
+        "deg",
+        -180.0,
+        180.0,
+        8.0,
+        "map origin's longitude, whole degrees (east positive); plus ORIG_LON_E7"
+    ),
+    param!(
+        link "ORIG_LON_E7",
+        "1e-7 deg",
+        -9_999_999.0,
+        9_999_999.0,
+        5_455_940.0,
+        "map origin's longitude past ORIG_LON_DEG, 1e-7 degrees (the same sign)"
+    ),
+    ParamSpec {
+        name: "ORIG_ALT",
+        unit: "m",
+        min: -1_000.0,
+        max: 10_000.0,
+        integer: false,
+        #[cfg(feature = "docs")]
+        doc: "map origin's altitude above mean sea level",
+        get: |_| ORIGIN_DEFAULT_ALT,
+        set: |_, _| {},
+    },
 ];

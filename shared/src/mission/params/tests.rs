@@ -56,6 +56,10 @@ fn the_defaults_are_in_range_and_make_the_default_configuration() {
 #[test]
 fn each_parameter_changes_its_own_field_and_no_other() {
     for (i, p) in TABLE.iter().enumerate() {
+        if is_origin(i) {
+            // The ground link's: no field of the configuration (below).
+            continue;
+        }
         let mut values = ParamValues::DEFAULT;
         // A value in range that differs from the default.
         let v = if p.default_value() == p.max {
@@ -106,4 +110,38 @@ fn names_are_found_with_and_without_padding() {
     assert_eq!(find(b"LIFT_RAMP"), Some(1));
     assert_eq!(find(b"LIFT_RAM"), None);
     assert_eq!(find(&[0xFF; 16]), None);
+}
+
+#[test]
+fn the_map_origin_is_five_parameters_of_the_link_alone() {
+    let names: [&str; ORIGIN_LEN] = [
+        "ORIG_LAT_DEG",
+        "ORIG_LAT_E7",
+        "ORIG_LON_DEG",
+        "ORIG_LON_E7",
+        "ORIG_ALT",
+    ];
+    for (k, name) in names.iter().enumerate() {
+        assert_eq!(find(name.as_bytes()), Some(ORIGIN + k));
+        assert!(is_origin(ORIGIN + k));
+    }
+    assert!(!is_origin(ORIGIN - 1) && !is_origin(ORIGIN + ORIGIN_LEN));
+    // Every value a 1e-7 degree part takes is exact as a float.
+    for i in [ORIGIN + 1, ORIGIN + 3] {
+        assert!(TABLE[i].max < 16_777_216.0 && TABLE[i].integer);
+    }
+    let mut values = ParamValues::DEFAULT;
+    for (k, v) in [-33.0, -8_688_000.0, 151.0, 2_093_000.0, 58.5]
+        .into_iter()
+        .enumerate()
+    {
+        values.set(ORIGIN + k, v).expect("in range");
+        assert_eq!(values.get(ORIGIN + k), Some(v));
+    }
+    assert_eq!(values.config(), MissionConfig::DEFAULT);
+    assert_eq!(
+        values.get(ORIGIN + 4).map(f32::to_bits),
+        Some(58.5f32.to_bits())
+    );
+    assert_eq!(TABLE[ORIGIN + 4].default_value(), ORIGIN_DEFAULT_ALT);
 }
