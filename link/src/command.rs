@@ -8,12 +8,19 @@
 //! | `MAV_CMD_COMPONENT_ARM_DISARM`, param1 = 0 | [`OperatorCommand::Abort`] (the mission stops in a safe way) |
 //! | the same with param2 = 21196 (forced), or `MAV_CMD_DO_FLIGHTTERMINATION` param1 > 0.5 | [`OperatorCommand::Kill`]: rotors off now |
 //! | `MAV_CMD_REQUEST_MESSAGE` | [`Request::Message`] (the link answers it) |
+//! | `MAV_CMD_GET_HOME_POSITION` (deprecated, MAVProxy's) | [`Request::Message`] of `HOME_POSITION` |
 //! | `MAV_CMD_SET_MESSAGE_INTERVAL` | [`Request::SetInterval`] (the link's telemetry schedule) |
 //!
 //! Arming by command is refused (the mission arms itself); any other command is unsupported.
 
+use crate::MessageData;
 use crate::command_wire::{CommandAck, CommandId, CommandLong};
-use crate::msg::{COMMAND_LONG_DATA, MavCmd, MavResult};
+use crate::msg::{COMMAND_LONG_DATA, HOME_POSITION_DATA, MavCmd, MavResult};
+
+/// `MAV_CMD_GET_HOME_POSITION`: superseded by `MAV_CMD_REQUEST_MESSAGE`, still what MAVProxy
+/// sends every few seconds; answered as a request of `HOME_POSITION`.
+#[allow(deprecated)]
+pub const GET_HOME_POSITION: MavCmd = MavCmd::MAV_CMD_GET_HOME_POSITION;
 
 /// Magic number of a forced disarm (MAVLink `MAV_CMD_COMPONENT_ARM_DISARM`, param2).
 pub const FORCE_DISARM_MAGIC: f32 = 21196.0;
@@ -99,6 +106,8 @@ pub fn classify(command: &CommandLong) -> Request {
         }
     } else if id.is(MavCmd::MAV_CMD_REQUEST_MESSAGE) && param1.is_finite() && param1 >= 0.0 {
         Request::Message(param1 as u32)
+    } else if id.is(GET_HOME_POSITION) {
+        Request::Message(HOME_POSITION_DATA::ID)
     } else if id.is(MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL) {
         Request::SetInterval {
             message_id: param1,
@@ -212,6 +221,8 @@ mod tests {
     fn message_requests_carry_the_message_id() {
         let req = command_long(MavCmd::MAV_CMD_REQUEST_MESSAGE, 148.0, 0.0);
         assert_eq!(classify(&req), Request::Message(148));
+        let home = command_long(GET_HOME_POSITION, 0.0, 0.0);
+        assert_eq!(classify(&home), Request::Message(242));
         let rate = command_long(MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL, 31.0, 20_000.0);
         assert_eq!(
             classify(&rate),

@@ -20,7 +20,8 @@
 //! - [`store`]: the parameters' storage (`sequential-storage` on NOR flash), power-cut safe.
 //! - [`signing`]: MAVLink 2 message signing (SHA-256), both ways.
 //! - [`status`]: `STATUSTEXT` (long texts in chunks, and their reassembly) and named values.
-//! - [`telemetry`]: `SYS_STATUS`, `ATTITUDE_QUATERNION`, `LOCAL_POSITION_NED` at set rates.
+//! - [`telemetry`]: `SYS_STATUS`, `ATTITUDE_QUATERNION`, `LOCAL_POSITION_NED`,
+//!   `GLOBAL_POSITION_INT` at set rates; `HOME_POSITION` and `GPS_GLOBAL_ORIGIN`.
 //! - [`timesync`]: `TIMESYNC`: the motion-capture computer's clock on the vehicle's.
 //! - [`ulog`]: PX4's ULog flight log format, each message's encoder.
 //! - [`vehicle`]: the vehicle's dispatch of received frames.

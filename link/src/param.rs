@@ -13,9 +13,12 @@
 
 use core::fmt::Write as _;
 
-use shared::mission::params::{COUNT, NAME_LEN, ParamValues, TABLE, find};
+use shared::mission::params::{
+    COUNT, NAME_LEN, ORIGIN, ORIGIN_LEN, ParamError, ParamValues, TABLE, check, find,
+};
 use shared::numbers::Num;
 
+use crate::geo::GeoOrigin;
 use crate::msg::{
     MavParamType, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA,
     PARAM_VALUE_DATA,
@@ -179,6 +182,34 @@ impl ParamService {
         answer
     }
 
+    /// Sets the map origin's parameters (`ORIG_*`) to `origin`, all of them or, when the
+    /// table refuses one, none (that one's error). The parameters whose value changed, to
+    /// store, in table order.
+    pub fn set_origin(
+        &mut self,
+        origin: &GeoOrigin,
+    ) -> Result<heapless::Vec<(usize, f32), ORIGIN_LEN>, ParamError> {
+        let values = origin.to_params();
+        for (k, &v) in values.iter().enumerate() {
+            check(ORIGIN + k, v)?;
+        }
+        let mut changed = heapless::Vec::new();
+        for (k, v) in values.into_iter().enumerate() {
+            let i = ORIGIN + k;
+            if self.values.get(i) != Some(v) {
+                self.values.set(i, v)?;
+                // At most ORIGIN_LEN: never full.
+                let _ = changed.push((i, v));
+            }
+        }
+        Ok(changed)
+    }
+
+    /// The map origin the parameters give now.
+    pub fn origin(&self) -> GeoOrigin {
+        GeoOrigin::from_params(&self.values)
+    }
+
     /// The `PARAM_VALUE` of parameter `index` (`None` past the table).
     pub fn value_message(&self, index: usize) -> Option<PARAM_VALUE_DATA> {
         value_message(&self.values, index)
@@ -298,5 +329,37 @@ mod tests {
             value: TABLE[find(b"PLN_HOVER_T").expect("exists")].default_value(),
         };
         assert_eq!(s.handle(&set, None).changed, None);
+    }
+
+    #[test]
+    fn an_origin_sets_its_five_parameters_together() {
+        let mut s = ParamService::default();
+        let sydney = GeoOrigin::from_message(-338_688_123, 1_512_093_456, 58_250).expect("ok");
+        let changed = s.set_origin(&sydney).expect("in range");
+        assert_eq!(changed.len(), ORIGIN_LEN);
+        assert_eq!(changed[0], (ORIGIN, -33.0));
+        assert_eq!(changed[1], (ORIGIN + 1, -8_688_123.0));
+        assert_eq!(s.origin(), sydney);
+        for (i, v) in &changed {
+            assert_eq!(s.value_message(*i).map(|m| m.param_value), Some(*v));
+        }
+        // The same again changes nothing; a new altitude, one parameter.
+        assert_eq!(s.set_origin(&sydney).map(|c| c.len()), Ok(0));
+        let higher = GeoOrigin {
+            alt_m: 60.0,
+            ..sydney
+        };
+        assert_eq!(
+            s.set_origin(&higher).map(|c| c.to_vec()),
+            Ok(std::vec![(ORIGIN + 4, 60.0)])
+        );
+        // A value the table refuses changes none of them.
+        let deep = GeoOrigin {
+            lat_e7: 0,
+            alt_m: -5_000.0,
+            ..sydney
+        };
+        assert!(s.set_origin(&deep).is_err());
+        assert_eq!(s.origin(), higher);
     }
 }

@@ -1,17 +1,21 @@
 //! Telemetry at set rates: `SYS_STATUS`, `ATTITUDE_QUATERNION`,
-//! `LOCAL_POSITION_NED` and each robot's rail position (`DEBUG_FLOAT_ARRAY` named `rail`: the
-//! formation once the robots have moved to it), each on its own interval that a ground station sets with
-//! `MAV_CMD_SET_MESSAGE_INTERVAL` (or asks for once with `MAV_CMD_REQUEST_MESSAGE`), as
-//! MAVLink's message interval protocol has it; and the three messages built from a
-//! [`VehicleSnapshot`], the vehicle's state after its last control step.
+//! `LOCAL_POSITION_NED`, each robot's rail position (`DEBUG_FLOAT_ARRAY` named `rail`: the
+//! formation once the robots have moved to it) and `GLOBAL_POSITION_INT` (through the map
+//! origin, docs/ground-link.md#the-map-origin), each on its own interval that a ground station
+//! sets with `MAV_CMD_SET_MESSAGE_INTERVAL` (or asks for once with `MAV_CMD_REQUEST_MESSAGE`),
+//! as MAVLink's message interval protocol has it; the messages built from a
+//! [`VehicleSnapshot`], the vehicle's state after its last control step; and the take-off
+//! point ([`Home`], `HOME_POSITION`) and the origin (`GPS_GLOBAL_ORIGIN`) on request.
 //!
 //! The schedule is plain logic over the vehicle's microsecond clock: the firmware's send task
 //! asks [`Schedule::next_due`] when to wake and [`Schedule::take_due`] what to send.
 
 use crate::MessageData;
+use crate::geo::GeoOrigin;
 use crate::hil::MAX_ROBOTS;
 use crate::msg::{
-    ATTITUDE_QUATERNION_DATA, DEBUG_FLOAT_ARRAY_DATA, LOCAL_POSITION_NED_DATA, MavResult,
+    ATTITUDE_QUATERNION_DATA, DEBUG_FLOAT_ARRAY_DATA, GLOBAL_POSITION_INT_DATA,
+    GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, MavResult,
     MavSysStatusSensor, SYS_STATUS_DATA,
 };
 
@@ -26,10 +30,12 @@ pub enum Stream {
     LocalPositionNed = 2,
     /// `DEBUG_FLOAT_ARRAY` `rail` ([`RAIL_ARRAY_ID`]): each robot's commanded arc length.
     RailPositions = 3,
+    /// `GLOBAL_POSITION_INT`: the local position through the map origin.
+    GlobalPositionInt = 4,
 }
 
 /// How many streams there are.
-pub const STREAMS: usize = 4;
+pub const STREAMS: usize = 5;
 /// `array_id` of the rail positions' `DEBUG_FLOAT_ARRAY`.
 pub const RAIL_ARRAY_ID: u16 = 1;
 /// `name` of the rail positions' `DEBUG_FLOAT_ARRAY`.
@@ -42,6 +48,7 @@ impl Stream {
         Stream::AttitudeQuaternion,
         Stream::LocalPositionNed,
         Stream::RailPositions,
+        Stream::GlobalPositionInt,
     ];
 
     /// The MAVLink message id.
@@ -51,6 +58,7 @@ impl Stream {
             Self::AttitudeQuaternion => ATTITUDE_QUATERNION_DATA::ID,
             Self::LocalPositionNed => LOCAL_POSITION_NED_DATA::ID,
             Self::RailPositions => DEBUG_FLOAT_ARRAY_DATA::ID,
+            Self::GlobalPositionInt => GLOBAL_POSITION_INT_DATA::ID,
         }
     }
 
@@ -60,11 +68,13 @@ impl Stream {
     }
 
     /// The interval at start and after a request for the default (interval 0), us: 1 Hz for
-    /// the status, 2 Hz for the rail positions, 10 Hz for attitude and position.
+    /// the status, 2 Hz for the rail positions, 5 Hz for the global position (a map's), 10 Hz
+    /// for attitude and local position.
     pub const fn default_interval_us(self) -> u32 {
         match self {
             Self::SysStatus => 1_000_000,
             Self::RailPositions => 500_000,
+            Self::GlobalPositionInt => 200_000,
             Self::AttitudeQuaternion | Self::LocalPositionNed => 100_000,
         }
     }
@@ -75,15 +85,16 @@ pub const MIN_INTERVAL_US: u32 = 5_000;
 /// Longest interval a ground station may set: 1 hour.
 pub const MAX_INTERVAL_US: u32 = 3_600_000_000;
 
-/// When each stream is next due.
+/// When each stream is next due. (Compact: it is one of the firmware's statics.)
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Schedule {
-    /// Interval of each stream, us; `None`: off.
-    interval_us: [Option<u32>; STREAMS],
+    /// Interval of each stream, us; 0: off (an interval is at least [`MIN_INTERVAL_US`]).
+    interval_us: [u32; STREAMS],
     /// When each stream is next due, us (vehicle time).
     next_us: [u64; STREAMS],
-    /// Sent once at the next chance, on or off (`MAV_CMD_REQUEST_MESSAGE`).
-    once: [bool; STREAMS],
+    /// Bit `i` set: stream `i` is sent once at the next chance, on or off
+    /// (`MAV_CMD_REQUEST_MESSAGE`).
+    once: u8,
 }
 
 impl Default for Schedule {
@@ -97,13 +108,14 @@ impl Schedule {
     pub const fn new() -> Self {
         Self {
             interval_us: [
-                Some(Stream::SysStatus.default_interval_us()),
-                Some(Stream::AttitudeQuaternion.default_interval_us()),
-                Some(Stream::LocalPositionNed.default_interval_us()),
-                Some(Stream::RailPositions.default_interval_us()),
+                Stream::SysStatus.default_interval_us(),
+                Stream::AttitudeQuaternion.default_interval_us(),
+                Stream::LocalPositionNed.default_interval_us(),
+                Stream::RailPositions.default_interval_us(),
+                Stream::GlobalPositionInt.default_interval_us(),
             ],
             next_us: [0; STREAMS],
-            once: [false; STREAMS],
+            once: 0,
         }
     }
 
@@ -117,11 +129,11 @@ impl Schedule {
             return MavResult::MAV_RESULT_UNSUPPORTED;
         };
         let interval = if interval_us == -1.0 {
-            None
+            0
         } else if interval_us == 0.0 {
-            Some(stream.default_interval_us())
+            stream.default_interval_us()
         } else if interval_us >= MIN_INTERVAL_US as f32 && interval_us <= MAX_INTERVAL_US as f32 {
-            Some(interval_us as u32)
+            interval_us as u32
         } else {
             return MavResult::MAV_RESULT_DENIED;
         };
@@ -136,7 +148,7 @@ impl Schedule {
     pub fn request_once(&mut self, message_id: u32) -> bool {
         match Stream::of_message(message_id) {
             Some(stream) => {
-                self.once[stream as usize] = true;
+                self.once |= 1 << stream as u8;
                 true
             }
             None => false,
@@ -145,17 +157,21 @@ impl Schedule {
 
     /// The interval of `stream` now, us (`None`: off).
     pub fn interval_us(&self, stream: Stream) -> Option<u32> {
-        self.interval_us[stream as usize]
+        Some(self.interval_us[stream as usize]).filter(|&i| i != 0)
+    }
+
+    fn once(&self, i: usize) -> bool {
+        self.once & (1 << i) != 0
     }
 
     /// When the next stream is due, us; `None` when every stream is off.
     pub fn next_due(&self) -> Option<u64> {
         (0..STREAMS)
             .filter_map(|i| {
-                if self.once[i] {
+                if self.once(i) {
                     Some(0)
                 } else {
-                    self.interval_us[i].map(|_| self.next_us[i])
+                    (self.interval_us[i] != 0).then_some(self.next_us[i])
                 }
             })
             .min()
@@ -165,14 +181,14 @@ impl Schedule {
     /// on. A vehicle that fell behind by more than one interval skips what it missed rather
     /// than sending a burst.
     pub fn take_due(&mut self, now_us: u64) -> Option<Stream> {
-        if let Some(i) = (0..STREAMS).find(|&i| self.once[i]) {
-            self.once[i] = false;
+        if let Some(i) = (0..STREAMS).find(|&i| self.once(i)) {
+            self.once &= !(1 << i);
             return Some(Stream::ALL[i]);
         }
         let i = (0..STREAMS)
-            .filter(|&i| self.interval_us[i].is_some() && self.next_us[i] <= now_us)
+            .filter(|&i| self.interval_us[i] != 0 && self.next_us[i] <= now_us)
             .min_by_key(|&i| self.next_us[i])?;
-        let interval = u64::from(self.interval_us[i].unwrap_or(MAX_INTERVAL_US));
+        let interval = u64::from(self.interval_us[i]);
         let next = self.next_us[i] + interval;
         self.next_us[i] = if next <= now_us {
             now_us + interval
@@ -333,6 +349,116 @@ impl VehicleSnapshot {
     }
 }
 
+/// A velocity, m/s, in MAVLink's cm/s, saturating (not a number: 0).
+fn centimetres(v: f32) -> i16 {
+    // `as` saturates and takes NaN to 0.
+    (v * 100.0) as i16
+}
+
+impl VehicleSnapshot {
+    /// `GLOBAL_POSITION_INT`: the position through the map `origin` (latitude, longitude,
+    /// altitude above mean sea level; `relative_alt` the height above the origin, `-z`), the
+    /// velocity in cm/s and the heading (yaw) in centidegrees. `None` when the origin is
+    /// unusable or the position not finite ([`GeoOrigin::to_global`]).
+    pub fn global_position_int(&self, origin: &GeoOrigin) -> Option<GLOBAL_POSITION_INT_DATA> {
+        let p = origin.to_global(self.position)?;
+        let [w, x, y, z] = self.attitude;
+        let yaw = shared::math::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+        let degrees = yaw.to_degrees();
+        let heading = if degrees < 0.0 {
+            degrees + 360.0
+        } else {
+            degrees
+        };
+        // Not a number, or a rounding to 360 degrees: unknown, as MAVLink marks it.
+        let hdg = match (heading * 100.0 + 0.5) as u16 {
+            h if h < 36_000 && heading.is_finite() => h,
+            36_000 => 0,
+            _ => u16::MAX,
+        };
+        Some(GLOBAL_POSITION_INT_DATA {
+            time_boot_ms: self.time_boot_ms(),
+            lat: p.lat_e7,
+            lon: p.lon_e7,
+            alt: p.alt_mm,
+            relative_alt: (-self.position[2] * 1000.0) as i32,
+            vx: centimetres(self.velocity[0]),
+            vy: centimetres(self.velocity[1]),
+            vz: centimetres(self.velocity[2]),
+            hdg,
+        })
+    }
+}
+
+/// The take-off point: the local position (NED) where the vehicle last armed; before any
+/// flight, the origin itself.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Home {
+    /// Where, m, NED from the origin.
+    position: [f32; 3],
+    /// The vehicle was armed at the last look.
+    armed: bool,
+}
+
+impl Default for Home {
+    fn default() -> Self {
+        Self::START
+    }
+}
+
+impl Home {
+    /// Before any flight: the origin.
+    pub const START: Self = Self {
+        position: [0.0; 3],
+        armed: false,
+    };
+
+    /// Looks at the vehicle's state: when it has armed since the last look, its position (if
+    /// finite) is the new home. `true` when the home moved.
+    pub fn observe(&mut self, vehicle: &VehicleSnapshot) -> bool {
+        let armed_now = vehicle.armed && !self.armed;
+        self.armed = vehicle.armed;
+        if armed_now && vehicle.position.iter().all(|v| v.is_finite()) {
+            let moved = self.position != vehicle.position;
+            self.position = vehicle.position;
+            return moved;
+        }
+        false
+    }
+
+    /// The home's local position, m, NED from the origin.
+    pub fn position(&self) -> [f32; 3] {
+        self.position
+    }
+
+    /// `HOME_POSITION` through the map `origin` (the local position too, the approach
+    /// vector zero, the attitude level); `None` when the origin is unusable.
+    pub fn home_position(&self, origin: &GeoOrigin) -> Option<HOME_POSITION_DATA> {
+        let p = origin.to_global(self.position)?;
+        let [x, y, z] = self.position;
+        Some(HOME_POSITION_DATA {
+            latitude: p.lat_e7,
+            longitude: p.lon_e7,
+            altitude: p.alt_mm,
+            x,
+            y,
+            z,
+            q: [1.0, 0.0, 0.0, 0.0],
+            ..Default::default()
+        })
+    }
+}
+
+/// `GPS_GLOBAL_ORIGIN`: the map origin (altitude above mean sea level, mm).
+pub fn gps_global_origin(origin: &GeoOrigin) -> GPS_GLOBAL_ORIGIN_DATA {
+    let p = origin.point();
+    GPS_GLOBAL_ORIGIN_DATA {
+        latitude: p.lat_e7,
+        longitude: p.lon_e7,
+        altitude: p.alt_mm,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -365,6 +491,7 @@ mod tests {
         assert_eq!(count(&log, Stream::RailPositions), 4);
         assert_eq!(count(&log, Stream::AttitudeQuaternion), 20);
         assert_eq!(count(&log, Stream::LocalPositionNed), 20);
+        assert_eq!(count(&log, Stream::GlobalPositionInt), 10);
     }
 
     #[test]
@@ -519,5 +646,107 @@ mod tests {
         .sys_status();
         assert!(low.onboard_control_sensors_enabled.contains(battery));
         assert!(!low.onboard_control_sensors_health.contains(battery));
+    }
+
+    /// PX4's simulation home, the parameters' default.
+    const ORIGIN: GeoOrigin = GeoOrigin {
+        lat_e7: 473_977_420,
+        lon_e7: 85_455_940,
+        alt_m: 488.0,
+    };
+
+    #[test]
+    fn the_global_position_is_the_local_one_through_the_origin() {
+        // Yawed 90 degrees (east), 2 m up, 10 m north and 5 m east of the origin.
+        let half = core::f32::consts::FRAC_1_SQRT_2;
+        let snap = VehicleSnapshot {
+            time_us: 3_000_000,
+            attitude: [half, 0.0, 0.0, half],
+            position: [10.0, 5.0, -2.0],
+            velocity: [1.5, -0.25, 400.0],
+            ..VehicleSnapshot::START
+        };
+        let g = snap.global_position_int(&ORIGIN).expect("a usable origin");
+        let p = ORIGIN.to_global(snap.position).expect("usable");
+        assert_eq!((g.lat, g.lon, g.alt), (p.lat_e7, p.lon_e7, p.alt_mm));
+        // 10 m north is 899 1e-7 degrees at 47 degrees; 5 m east 662.
+        assert_eq!((g.lat - ORIGIN.lat_e7, g.lon - ORIGIN.lon_e7), (899, 662));
+        assert_eq!((g.alt, g.relative_alt), (490_000, 2_000));
+        assert_eq!((g.vx, g.vy, g.vz), (150, -25, i16::MAX));
+        assert_eq!((g.hdg, g.time_boot_ms), (9_000, 3_000));
+        let west = VehicleSnapshot {
+            attitude: [half, 0.0, 0.0, -half],
+            ..snap
+        };
+        assert_eq!(
+            west.global_position_int(&ORIGIN).map(|g| g.hdg),
+            Some(27_000)
+        );
+        let broken = VehicleSnapshot {
+            attitude: [f32::NAN; 4],
+            velocity: [f32::NAN; 3],
+            ..snap
+        };
+        let g = broken
+            .global_position_int(&ORIGIN)
+            .expect("the position holds");
+        assert_eq!((g.hdg, g.vx), (u16::MAX, 0));
+        let lost = VehicleSnapshot {
+            position: [f32::NAN, 0.0, 0.0],
+            ..snap
+        };
+        assert_eq!(lost.global_position_int(&ORIGIN), None);
+        let polar = GeoOrigin {
+            lat_e7: 890_000_000,
+            ..ORIGIN
+        };
+        assert_eq!(snap.global_position_int(&polar), None);
+    }
+
+    #[test]
+    fn home_is_where_the_vehicle_armed_and_the_origin_before() {
+        let mut home = Home::START;
+        let h = home.home_position(&ORIGIN).expect("usable");
+        assert_eq!(
+            (h.latitude, h.longitude, h.altitude),
+            (473_977_420, 85_455_940, 488_000)
+        );
+        assert_eq!(h.q, [1.0, 0.0, 0.0, 0.0]);
+        let ground = VehicleSnapshot {
+            position: [1.0, -2.0, 0.0],
+            ..VehicleSnapshot::START
+        };
+        assert!(!home.observe(&ground), "not armed: no home");
+        let armed = VehicleSnapshot {
+            armed: true,
+            ..ground
+        };
+        assert!(home.observe(&armed));
+        let flying = VehicleSnapshot {
+            position: [5.0, 5.0, -3.0],
+            ..armed
+        };
+        assert!(!home.observe(&flying), "only at arming");
+        assert_eq!(home.position(), [1.0, -2.0, 0.0]);
+        let h = home.home_position(&ORIGIN).expect("usable");
+        assert_eq!((h.x, h.y, h.z), (1.0, -2.0, 0.0));
+        assert_eq!(
+            Some((h.latitude, h.longitude)),
+            ORIGIN
+                .to_global([1.0, -2.0, 0.0])
+                .map(|p| (p.lat_e7, p.lon_e7))
+        );
+        // Landed, disarmed, armed again elsewhere: the new take-off point.
+        assert!(!home.observe(&VehicleSnapshot {
+            armed: false,
+            ..flying
+        }));
+        assert!(home.observe(&flying));
+        assert_eq!(home.position(), [5.0, 5.0, -3.0]);
+        let o = gps_global_origin(&ORIGIN);
+        assert_eq!(
+            (o.latitude, o.longitude, o.altitude),
+            (473_977_420, 85_455_940, 488_000)
+        );
     }
 }

@@ -13,15 +13,22 @@ use crate::log_transfer::LogRequest;
 use crate::msg::{
     ACTUATOR_OUTPUT_STATUS_DATA, ATT_POS_MOCAP_DATA, ATTITUDE_QUATERNION_DATA,
     AUTOPILOT_VERSION_DATA, BATTERY_STATUS_DATA, COMMAND_ACK_DATA, COMMAND_LONG_DATA,
-    DEBUG_FLOAT_ARRAY_DATA, FILE_TRANSFER_PROTOCOL_DATA, HEARTBEAT_DATA,
-    HIL_ACTUATOR_CONTROLS_DATA, HIL_SENSOR_DATA, LOCAL_POSITION_NED_DATA, LOG_DATA_DATA,
-    LOG_ENTRY_DATA, LOG_ERASE_DATA, LOG_REQUEST_DATA_DATA, LOG_REQUEST_END_DATA,
-    LOG_REQUEST_LIST_DATA, MISSION_COUNT_DATA, MISSION_REQUEST_LIST_DATA, MavAutopilot,
-    MavBatteryFunction, MavType, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA, ODOMETRY_DATA,
-    PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA, PARAM_VALUE_DATA,
-    SETUP_SIGNING_DATA, STATUSTEXT_DATA, SYS_STATUS_DATA, TIMESYNC_DATA,
+    DEBUG_FLOAT_ARRAY_DATA, FILE_TRANSFER_PROTOCOL_DATA, GLOBAL_POSITION_INT_DATA,
+    GPS_GLOBAL_ORIGIN_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA, HIL_SENSOR_DATA,
+    HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, LOG_DATA_DATA, LOG_ENTRY_DATA, LOG_ERASE_DATA,
+    LOG_REQUEST_DATA_DATA, LOG_REQUEST_END_DATA, LOG_REQUEST_LIST_DATA, MISSION_COUNT_DATA,
+    MISSION_REQUEST_LIST_DATA, MavAutopilot, MavBatteryFunction, MavType, NAMED_VALUE_FLOAT_DATA,
+    NAMED_VALUE_INT_DATA, ODOMETRY_DATA, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA,
+    PARAM_SET_DATA, PARAM_VALUE_DATA, SETUP_SIGNING_DATA, STATUSTEXT_DATA, SYS_STATUS_DATA,
+    TIMESYNC_DATA,
 };
 use crate::param::ParamRequest;
+
+/// `SET_GPS_GLOBAL_ORIGIN`: superseded (2025) by `MAV_CMD_DO_SET_GLOBAL_ORIGIN`, which needs
+/// `COMMAND_INT`; still what pymavlink scripts and MAVROS send.
+/// Read from its payload's bytes ([`set_origin`]), its fields being deprecated.
+#[allow(deprecated, non_camel_case_types)]
+type SET_GPS_GLOBAL_ORIGIN_DATA = crate::msg::SET_GPS_GLOBAL_ORIGIN_DATA;
 
 macro_rules! crc_extras {
     ($($m:ty),* $(,)?) => {
@@ -68,6 +75,10 @@ crc_extras!(
     LOG_DATA_DATA,
     LOG_ERASE_DATA,
     LOG_REQUEST_END_DATA,
+    GLOBAL_POSITION_INT_DATA,
+    HOME_POSITION_DATA,
+    GPS_GLOBAL_ORIGIN_DATA,
+    SET_GPS_GLOBAL_ORIGIN_DATA,
 );
 
 /// Who sent a frame.
@@ -152,6 +163,18 @@ pub enum Inbound {
     Battery {
         /// The pack's voltage, V.
         volts: f32,
+        /// Its sender.
+        from: Sender,
+    },
+    /// `SET_GPS_GLOBAL_ORIGIN` addressed to the vehicle: the map origin
+    /// (docs/ground-link.md#the-map-origin), not yet checked.
+    SetOrigin {
+        /// Latitude, 1e-7 degrees.
+        lat_e7: i32,
+        /// Longitude, 1e-7 degrees.
+        lon_e7: i32,
+        /// Altitude above mean sea level, mm.
+        alt_mm: i32,
         /// Its sender.
         from: Sender,
     },
@@ -299,6 +322,19 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
             },
             _ => ignored,
         },
+        SET_GPS_GLOBAL_ORIGIN_DATA::ID => {
+            let [lat_e7, lon_e7, alt_mm, target] = set_origin(frame.payload());
+            if for_us(target as u8, 0) {
+                Inbound::SetOrigin {
+                    lat_e7,
+                    lon_e7,
+                    alt_mm,
+                    from,
+                }
+            } else {
+                ignored
+            }
+        }
         HEARTBEAT_DATA::ID => {
             // `type` follows `custom_mode` (MAVLink 2 drops trailing zero bytes: absent is 0).
             let kind = frame.payload().get(HEARTBEAT_TYPE_OFFSET).copied();
@@ -314,6 +350,14 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
         }
         _ => ignored,
     }
+}
+
+/// `SET_GPS_GLOBAL_ORIGIN`'s latitude, longitude, altitude and target system from its
+/// payload (MAVLink 2 drops trailing zero bytes: what is absent is 0).
+fn set_origin(payload: &[u8]) -> [i32; 4] {
+    let byte = |i: usize| payload.get(i).copied().unwrap_or(0);
+    let int = |at: usize| i32::from_le_bytes([byte(at), byte(at + 1), byte(at + 2), byte(at + 3)]);
+    [int(0), int(4), int(8), i32::from(byte(12))]
 }
 
 /// Offset of `HEARTBEAT`'s `type` in its payload.
@@ -465,6 +509,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(deprecated)] // SET_GPS_GLOBAL_ORIGIN's fields
     fn each_service_gets_its_messages() {
         let s = ImuSample {
             time_us: 2500,
@@ -536,6 +581,29 @@ mod tests {
         assert!(matches!(
             through_the_wire(&missions),
             Inbound::MissionList(_)
+        ));
+        let origin = SET_GPS_GLOBAL_ORIGIN_DATA {
+            latitude: -338_688_000,
+            longitude: 1_512_093_000,
+            altitude: 58_000,
+            target_system: 1,
+        };
+        assert!(matches!(
+            through_the_wire(&origin),
+            Inbound::SetOrigin {
+                lat_e7: -338_688_000,
+                lon_e7: 1_512_093_000,
+                alt_mm: 58_000,
+                ..
+            }
+        ));
+        let elsewhere = SET_GPS_GLOBAL_ORIGIN_DATA {
+            target_system: 7,
+            ..origin
+        };
+        assert!(matches!(
+            through_the_wire(&elsewhere),
+            Inbound::Ignored { .. }
         ));
     }
 
