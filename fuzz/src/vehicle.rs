@@ -38,17 +38,19 @@ use link::frame::{Encoder, Frame, Integrity, Parser};
 use link::ftp::{FileEvent, FtpMessage, Server};
 use link::hil::{ImuSample, JobDeadline, MAX_ROBOTS, MocapFix, VehicleClock};
 use link::log_transfer::LogRequest;
+use link::geo::{GeoOrigin, OriginError};
 use link::msg::{
-    AUTOPILOT_VERSION_DATA, MISSION_COUNT_DATA, MavCmd, MavResult, MavSeverity, TIMESYNC_DATA,
+    AUTOPILOT_VERSION_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, MISSION_COUNT_DATA, MavCmd,
+    MavResult, MavSeverity, TIMESYNC_DATA,
 };
 use link::param::{ParamService, Values, value_message};
 use link::signing::{KEY_LEN, Signing, Verdict};
 use link::status::{MissionState, PHASE_PREFIX, chunks, heartbeat, named_float, named_int};
 use link::store::ParamStore;
-use link::telemetry::Schedule;
+use link::telemetry::{Home, Schedule, gps_global_origin};
 use link::timesync::{Received as SyncReceived, TimeSync};
 use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
-use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, check};
+use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, check, is_origin};
 use shared::mission::{HardwareFaults, MissionConfig, MissionPlanner, Supervision};
 use shared::scenario::Scenario;
 use shared::scenario_wire::{MAX_ENCODED_LEN, decode_and_check};
@@ -482,6 +484,22 @@ impl Vehicle {
                     self.send(&ack(command, MavResult::MAV_RESULT_ACCEPTED));
                     self.send_identity();
                 }
+                Request::Message(id)
+                    if id == HOME_POSITION_DATA::ID || id == GPS_GLOBAL_ORIGIN_DATA::ID =>
+                {
+                    let origin = self.params.origin();
+                    if let Err(e) = origin.check() {
+                        self.refuse(command, MavResult::MAV_RESULT_DENIED, e.as_str());
+                    } else {
+                        self.send(&ack(command, MavResult::MAV_RESULT_ACCEPTED));
+                        if id == HOME_POSITION_DATA::ID {
+                            let home = Home::START.home_position(&origin);
+                            self.send(&home.expect("a usable origin places the home"));
+                        } else {
+                            self.send(&gps_global_origin(&origin));
+                        }
+                    }
+                }
                 Request::Message(id) => {
                     if self.telemetry.request_once(id) {
                         self.send(&ack(command, MavResult::MAV_RESULT_ACCEPTED));
@@ -548,8 +566,12 @@ impl Vehicle {
                             self.store_failed = true;
                             self.report_text(Severity::Error, &format!("param: {e}"));
                         }
-                        self.config = self.params.values().config();
-                        self.reload();
+                        if is_origin(index) {
+                            self.send(&gps_global_origin(&self.params.origin()));
+                        } else {
+                            self.config = self.params.values().config();
+                            self.reload();
+                        }
                     }
                     None => assert_eq!(
                         &before,
@@ -587,8 +609,8 @@ impl Vehicle {
                 let on = self.signing.enabled();
                 assert_eq!(on, key != [0; KEY_LEN], "signing on with an all-zero key");
             }
-            // As comms.rs's `handle_log` on a board that keeps no logs (the Pixhawk 6C's
-            // storage, the one fuzzed here): a list of none, the rest refused with a text.
+            // As comms.rs's `handle_log` when no logger task runs (the fuzzed vehicle keeps
+            // no logs): a list of none, the rest refused with a text.
             Inbound::Log { request, .. } => match request {
                 LogRequest::Erase if !verdict.trusted() => {
                     self.report_text(Severity::Warning, "log erase refused");
@@ -599,6 +621,43 @@ impl Vehicle {
                     self.report_text(Severity::Warning, "flight logs: this board keeps none");
                 }
             },
+            Inbound::SetOrigin {
+                lat_e7,
+                lon_e7,
+                alt_mm,
+                ..
+            } => {
+                // comms.rs `set_origin`.
+                let running = self.mission_state == MissionState::Running;
+                let checked = if !verdict.trusted() {
+                    Err(verdict.reason())
+                } else if running {
+                    Err("the mission is running")
+                } else {
+                    GeoOrigin::from_message(lat_e7, lon_e7, alt_mm).map_err(OriginError::as_str)
+                };
+                match checked {
+                    Ok(origin) => {
+                        let changed = self
+                            .params
+                            .set_origin(&origin)
+                            .expect("a checked origin fits its parameters");
+                        assert_eq!(self.params.origin(), origin);
+                        for &(index, value) in &changed {
+                            if let Some(store) = &mut self.store
+                                && block_on(store.save(index, value)).is_err()
+                            {
+                                self.store_failed = true;
+                            }
+                            let m = value_message(self.params.values(), index)
+                                .expect("an index in range");
+                            self.send(&m);
+                        }
+                        self.send(&gps_global_origin(&origin));
+                    }
+                    Err(why) => self.report_text(Severity::Warning, why),
+                }
+            }
             Inbound::MissionList(to) => {
                 self.send(&MISSION_COUNT_DATA {
                     count: 0,

@@ -76,13 +76,20 @@ pub enum OriginError {
     Altitude,
 }
 
+impl OriginError {
+    /// What is wrong, in a few words.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Latitude => "latitude beyond 85 degrees",
+            Self::Longitude => "longitude beyond 180 degrees",
+            Self::Altitude => "altitude outside -1000..10000 m",
+        }
+    }
+}
+
 impl core::fmt::Display for OriginError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::Latitude => write!(f, "latitude beyond 85 degrees"),
-            Self::Longitude => write!(f, "longitude beyond 180 degrees"),
-            Self::Altitude => write!(f, "altitude outside -1000..10000 m"),
-        }
+        f.write_str(self.as_str())
     }
 }
 

@@ -19,20 +19,21 @@ use link::command::{Request, ack};
 use link::command_wire::CommandId;
 use link::frame::{Encoder, Frame, Parser};
 use link::ftp::{FileEvent, FtpMessage, Server};
+use link::geo::{GeoOrigin, OriginError};
 use link::hil::{Actuators, ImuSample};
 use link::log_transfer::{LogReply, LogRequest};
 use link::msg::{
-    AUTOPILOT_VERSION_DATA, MISSION_COUNT_DATA, MavCmd, MavProtocolCapability, MavResult,
-    MavSeverity, TIMESYNC_DATA,
+    AUTOPILOT_VERSION_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, MISSION_COUNT_DATA, MavCmd,
+    MavProtocolCapability, MavResult, MavSeverity, TIMESYNC_DATA,
 };
 use link::param::{ParamRequest, ParamService, Values, value_message};
 use link::signing::{KEY_LEN, Verdict};
 use link::status::{MissionState, Text, chunks, heartbeat, named_float, named_int};
 use link::store::ParamStore;
-use link::telemetry::Stream;
+use link::telemetry::{Home, Stream, gps_global_origin};
 use link::timesync::Received as SyncReceived;
 use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
-use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, TABLE};
+use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, TABLE, is_origin};
 use shared::scenario::Scenario;
 use shared::scenario_wire::{MAX_ENCODED_LEN, MAX_NAME_LEN, decode_and_check};
 use static_cell::StaticCell;
@@ -129,6 +130,11 @@ pub enum Outbound {
     },
     /// A log-protocol answer (`LOG_ENTRY`, `LOG_DATA`), from the logger task.
     Log(LogReply),
+    /// The map origin in force (at start, set, or asked for): kept for the global position,
+    /// and sent as `GPS_GLOBAL_ORIGIN`.
+    Origin(GeoOrigin),
+    /// `HOME_POSITION`, on request.
+    Home,
 }
 
 /// The parameters' store on this board.
@@ -182,6 +188,12 @@ async fn open_params(flash: <Selected as Board>::ParamFlash) -> (ParamService, O
             if let Some(e) = loaded.error {
                 r.text(Severity::Error, format_args!("params: {e}"));
             }
+            if GeoOrigin::from_params(&values) == GeoOrigin::from_params(&ParamValues::DEFAULT) {
+                r.text(
+                    Severity::Notice,
+                    format_args!("origin: not set; the map shows PX4's simulation home"),
+                );
+            }
             if !<Selected as Board>::PARAM_FLASH_PERSISTENT {
                 r.text(
                     Severity::Warning,
@@ -200,6 +212,7 @@ async fn open_params(flash: <Selected as Board>::ParamFlash) -> (ParamService, O
     };
     let service = ParamService::new(values);
     MISSION_CONFIG.lock(|c| c.set(service.values().config()));
+    announce_origin(&service).await;
     (service, store)
 }
 
@@ -355,9 +368,13 @@ async fn handle_param(
                 ))
                 .await;
         }
-        // In force now for the loaded payload (the mission is not running) and the next.
-        MISSION_CONFIG.lock(|c| c.set(params.values().config()));
-        RELOAD.signal(());
+        if is_origin(index) {
+            announce_origin(params).await;
+        } else {
+            // In force now for the loaded payload (the mission is not running) and the next.
+            MISSION_CONFIG.lock(|c| c.set(params.values().config()));
+            RELOAD.signal(());
+        }
     }
     if answer.values != Values::None {
         OUTBOX
@@ -418,6 +435,74 @@ async fn refuse(command: CommandId, result: MavResult, why: &str) {
         .await;
 }
 
+/// Hands the map origin in force to the send task (which sends `GPS_GLOBAL_ORIGIN`); says so
+/// when the global position cannot be given (docs/ground-link.md#the-map-origin).
+async fn announce_origin(params: &ParamService) {
+    let origin = params.origin();
+    if let Err(e) = origin.check() {
+        OUTBOX
+            .send(report(
+                Severity::Warning,
+                format_args!("origin: unusable ({e}); no global position"),
+            ))
+            .await;
+    }
+    OUTBOX.send(Outbound::Origin(origin)).await;
+}
+
+/// `SET_GPS_GLOBAL_ORIGIN`: the origin's five parameters set and stored together (refused as
+/// a `PARAM_SET` is: unsigned once signing is on, or while the mission runs); answered with
+/// their `PARAM_VALUE`s and `GPS_GLOBAL_ORIGIN`.
+async fn set_origin(
+    (lat_e7, lon_e7, alt_mm): (i32, i32, i32),
+    verdict: Verdict,
+    params: &mut ParamService,
+    store: &mut Option<Store>,
+) {
+    let running = MISSION_STATE.load(Ordering::Relaxed) == MissionState::Running as u8;
+    let checked = if !verdict.trusted() {
+        Err(verdict.reason())
+    } else if running {
+        Err("the mission is running")
+    } else {
+        GeoOrigin::from_message(lat_e7, lon_e7, alt_mm).map_err(OriginError::as_str)
+    };
+    let origin = match checked {
+        Ok(origin) => origin,
+        Err(why) => {
+            OUTBOX
+                .send(report(
+                    Severity::Warning,
+                    format_args!("origin not changed: {why}"),
+                ))
+                .await;
+            return;
+        }
+    };
+    let Ok(changed) = params.set_origin(&origin) else {
+        return;
+    };
+    for &(index, value) in &changed {
+        if let Some(store) = store
+            && let Err(e) = store.save(index, value).await
+        {
+            OUTBOX
+                .send(report(
+                    Severity::Error,
+                    format_args!("param {} in force but not stored: {e}", TABLE[index].name),
+                ))
+                .await;
+        }
+        OUTBOX
+            .send(Outbound::Params {
+                values: params.values().clone(),
+                which: Values::One(index),
+            })
+            .await;
+    }
+    announce_origin(params).await;
+}
+
 async fn handle(
     inbound: Inbound,
     verdict: Verdict,
@@ -468,6 +553,24 @@ async fn handle(
                 let result = MavResult::MAV_RESULT_ACCEPTED;
                 OUTBOX.send(Outbound::Ack { command, result }).await;
                 OUTBOX.send(Outbound::Identity).await;
+            }
+            Request::Message(id)
+                if id == HOME_POSITION_DATA::ID || id == GPS_GLOBAL_ORIGIN_DATA::ID =>
+            {
+                if let Err(e) = params.origin().check() {
+                    let result = MavResult::MAV_RESULT_DENIED;
+                    refuse(command, result, e.as_str()).await;
+                } else {
+                    let result = MavResult::MAV_RESULT_ACCEPTED;
+                    OUTBOX.send(Outbound::Ack { command, result }).await;
+                    OUTBOX
+                        .send(if id == HOME_POSITION_DATA::ID {
+                            Outbound::Home
+                        } else {
+                            Outbound::Origin(params.origin())
+                        })
+                        .await;
+                }
             }
             Request::Message(id) => {
                 if telemetry(|t| t.request_once(id)) {
@@ -533,6 +636,12 @@ async fn handle(
         }
         Inbound::MissionList(to) => OUTBOX.send(Outbound::MissionCount { to }).await,
         Inbound::Log { request, .. } => handle_log(request, verdict).await,
+        Inbound::SetOrigin {
+            lat_e7,
+            lon_e7,
+            alt_mm,
+            ..
+        } => set_origin((lat_e7, lon_e7, alt_mm), verdict, params, store).await,
         Inbound::Ftp { message, from } if !verdict.trusted() => {
             OUTBOX
                 .send(Outbound::Ftp {
@@ -647,6 +756,10 @@ struct Sending<W> {
     encoder: Encoder,
     frame: Frame,
     text_id: u16,
+    /// The map origin in force (the receive task's parameters hand it over).
+    origin: GeoOrigin,
+    /// The take-off point.
+    home: Home,
 }
 
 impl<W: Write> Sending<W> {
@@ -705,6 +818,9 @@ impl<W: Write> Sending<W> {
         let now = Instant::now().as_micros();
         while let Some(stream) = telemetry(|t| t.take_due(now)) {
             let vehicle = VEHICLE.lock(|v| v.get());
+            if self.home.observe(&vehicle) {
+                self.home_position().await;
+            }
             match stream {
                 Stream::SysStatus => self.encode(&vehicle.sys_status()),
                 Stream::AttitudeQuaternion => self.encode(&vehicle.attitude_quaternion()),
@@ -714,7 +830,20 @@ impl<W: Write> Sending<W> {
                     self.encoder
                         .encode_extended(&array, &data[..len], &mut self.frame);
                 }
+                Stream::GlobalPositionInt => match vehicle.global_position_int(&self.origin) {
+                    Some(m) => self.encode(&m),
+                    // An unusable origin (said at start): nothing to send.
+                    None => continue,
+                },
             }
+            self.flush().await;
+        }
+    }
+
+    /// `HOME_POSITION` (nothing with an unusable origin).
+    async fn home_position(&mut self) {
+        if let Some(m) = self.home.home_position(&self.origin) {
+            self.encode(&m);
             self.flush().await;
         }
     }
@@ -752,6 +881,8 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
         encoder: Encoder::new(link::VEHICLE_SYSTEM_ID, link::VEHICLE_COMPONENT_ID),
         frame: Frame::default(),
         text_id: 0,
+        origin: GeoOrigin::from_params(&ParamValues::DEFAULT),
+        home: Home::START,
     };
     out.identity().await;
     let _ = out.tx.flush().await;
@@ -828,6 +959,12 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
                     out.encode(&data);
                     out.flush().await;
                 }
+                Outbound::Origin(origin) => {
+                    out.origin = origin;
+                    out.encode(&gps_global_origin(&origin));
+                    out.flush().await;
+                }
+                Outbound::Home => out.home_position().await,
                 Outbound::MissionCount { to } => {
                     out.encode(&MISSION_COUNT_DATA {
                         count: 0,
