@@ -15,7 +15,10 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
    telemetry (SYS_STATUS, ATTITUDE_QUATERNION, LOCAL_POSITION_NED and the robots' rail positions
    as DEBUG_FLOAT_ARRAY streamed; a stream stopped
    and restarted by MAV_CMD_SET_MESSAGE_INTERVAL, a bad interval and an unstreamed message
-   refused, SYS_STATUS sent once on MAV_CMD_REQUEST_MESSAGE), TIMESYNC answered and asked,
+   refused, SYS_STATUS sent once on MAV_CMD_REQUEST_MESSAGE), the map origin (GPS_GLOBAL_ORIGIN
+   the default, then set with SET_GPS_GLOBAL_ORIGIN and read back; HOME_POSITION on request
+   and on MAV_CMD_GET_HOME_POSITION; GLOBAL_POSITION_INT the local position through it),
+   TIMESYNC answered and asked,
    every parameter (count and indices consistent, read back by name and by index), arming
    refused with its COMMAND_ACK and a STATUSTEXT, bad values refused (PARAM_VALUE with the old
    value and a STATUSTEXT), MAVLink 2 signing set up (SETUP_SIGNING): the vehicle's frames
@@ -26,7 +29,8 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
    description are still there (an unsigned write is refused; `payload description restored
    from storage`); the ground station starts the mission, a PARAM_SET in
    flight is refused, the STATUSTEXTs are followed to the landing, and the plant's report shows
-   the parameter changed the mission (the pre-flight checks lasted MIS_CHECKS_T).
+   the parameter changed the mission (the pre-flight checks lasted MIS_CHECKS_T); the origin
+   is still the one set, and GLOBAL_POSITION_INT shows the vehicle in the air above it.
 
 Exit status 0 when everything holds; 2 with one line on stderr when pymavlink is missing
 (the Rust test turns that into a skip or, in CI, a failure); 1 for any failure, saying which.
@@ -34,6 +38,7 @@ Exit status 0 when everything holds; 2 with one line on stderr when pymavlink is
 
 import argparse
 import json
+import math
 import os
 import shutil
 import threading
@@ -55,6 +60,10 @@ CHECKS_PARAM = "MIS_CHECKS_T"
 CHECKS_VALUE = 2.0
 # The MAVLink 2 signing key the ground station sets up (test only).
 SIGNING_KEY = bytes(range(1, 33))
+# The map origin the ground station sets (SET_GPS_GLOBAL_ORIGIN): 1e-7 degrees, mm.
+ORIGIN = (-338688123, 1512093456, 58250)
+# The default until one is set: PX4's simulation home.
+DEFAULT_ORIGIN = (473977420, 85455940, 488000)
 BAD_VALUES = [("MAX_TILT", 5.0, "outside"), ("MAX_TILT", float("nan"), "finite"),
               ("MIS_CONFIRM", 1.5, "whole")]
 
@@ -224,6 +233,83 @@ def telemetry_checks(v):
           "UNSUPPORTED; REQUEST_MESSAGE(SYS_STATUS) sent once")
 
 
+def to_global(origin, north, east):
+    """Latitude and longitude (1e-7 degrees) of a local point near the origin, as the vehicle
+    converts it (WGS-84 radii at the origin; the second-order terms are nothing at metres)."""
+    a, e2 = 6378137.0, 6.69437999014e-3
+    lat0 = math.radians(origin[0] * 1e-7)
+    w = 1 - e2 * math.sin(lat0) ** 2
+    up = origin[2] * 1e-3
+    m, n = a * (1 - e2) / w ** 1.5 + up, a / math.sqrt(w) + up
+    lat = origin[0] + math.degrees(north / m) * 1e7
+    lon = origin[1] + math.degrees(east / (n * math.cos(lat0))) * 1e7
+    return lat, lon
+
+
+def map_checks(v):
+    """The vehicle on a map: the origin (GPS_GLOBAL_ORIGIN) by default and set with
+    SET_GPS_GLOBAL_ORIGIN (its ORIG_* parameters answered), HOME_POSITION on request (the
+    origin before any flight; MAVProxy's MAV_CMD_GET_HOME_POSITION too), GLOBAL_POSITION_INT
+    streamed: the local position through the origin."""
+    ack = v.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN)
+    if ack.result != mavlink.MAV_RESULT_ACCEPTED:
+        raise Failure(f"REQUEST_MESSAGE(GPS_GLOBAL_ORIGIN) acknowledged {ack.result}")
+    o = v.expect(["GPS_GLOBAL_ORIGIN"], 10, "GPS_GLOBAL_ORIGIN")
+    if (o.latitude, o.longitude, o.altitude) != DEFAULT_ORIGIN:
+        raise Failure(f"default origin {(o.latitude, o.longitude, o.altitude)}")
+    v.conn.mav.set_gps_global_origin_send(1, *ORIGIN)
+    o = v.expect(["GPS_GLOBAL_ORIGIN"], 10, "GPS_GLOBAL_ORIGIN after SET_GPS_GLOBAL_ORIGIN",
+                 lambda m: m.latitude == ORIGIN[0])
+    if (o.latitude, o.longitude, o.altitude) != ORIGIN:
+        raise Failure(f"origin set to {ORIGIN}, GPS_GLOBAL_ORIGIN says "
+                      f"{(o.latitude, o.longitude, o.altitude)}")
+    lat_deg = v.param_read(name="ORIG_LAT_DEG").param_value
+    lat_e7 = v.param_read(name="ORIG_LAT_E7").param_value
+    if (lat_deg, lat_e7) != (-33.0, -8688123.0):
+        raise Failure(f"ORIG_LAT_DEG, ORIG_LAT_E7 read {lat_deg}, {lat_e7}")
+    ack = v.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN)
+    o = v.expect(["GPS_GLOBAL_ORIGIN"], 10, "GPS_GLOBAL_ORIGIN on request")
+    if ack.result != mavlink.MAV_RESULT_ACCEPTED or o.latitude != ORIGIN[0]:
+        raise Failure(f"GPS_GLOBAL_ORIGIN read back {o.latitude} (ack {ack.result})")
+    for cmd, params in [(mavlink.MAV_CMD_REQUEST_MESSAGE, [mavlink.MAVLINK_MSG_ID_HOME_POSITION]),
+                        (mavlink.MAV_CMD_GET_HOME_POSITION, [])]:
+        ack = v.command(cmd, *params)
+        if ack.result != mavlink.MAV_RESULT_ACCEPTED:
+            raise Failure(f"command {cmd} (HOME_POSITION) acknowledged {ack.result}")
+        home = v.expect(["HOME_POSITION"], 10, f"HOME_POSITION after command {cmd}")
+        if (home.latitude, home.longitude, home.altitude) != ORIGIN or home.x != 0:
+            raise Failure(f"HOME_POSITION before a flight {home}, not the origin")
+    if v.has_text("refused: not supported"):
+        raise Failure(f"a request refused: {v.texts[-5:]}")
+    # Both streams read the last control step's state; on the ground at rest it barely
+    # moves, so a LOCAL_POSITION_NED within 150 ms is the same place to a centimetre.
+    local = []
+    end = time.monotonic() + 10
+    while time.monotonic() < end:
+        m = v.recv(["LOCAL_POSITION_NED", "GLOBAL_POSITION_INT"], 1)
+        if m is None:
+            continue
+        if m.get_type() == "LOCAL_POSITION_NED":
+            local.append(m)
+            continue
+        near = [p for p in local if abs(p.time_boot_ms - m.time_boot_ms) <= 150]
+        if not near:
+            continue
+        p = min(near, key=lambda p: abs(p.time_boot_ms - m.time_boot_ms))
+        lat, lon = to_global(ORIGIN, p.x, p.y)
+        if abs(m.lat - lat) > 3 or abs(m.lon - lon) > 3:
+            raise Failure(f"GLOBAL_POSITION_INT at {m.lat}, {m.lon} for the local "
+                          f"{p.x:.3f}, {p.y:.3f}: expected {lat:.0f}, {lon:.0f}")
+        if abs(m.relative_alt + p.z * 1000) > 10 or abs(m.alt - (ORIGIN[2] - p.z * 1000)) > 10:
+            raise Failure(f"GLOBAL_POSITION_INT altitudes {m.alt}, {m.relative_alt} "
+                          f"for z = {p.z}")
+        print(f"map: origin set and read back, HOME_POSITION the origin, GLOBAL_POSITION_INT "
+              f"{m.lat}, {m.lon} for the local {p.x:.3f}, {p.y:.3f} "
+              f"({m.time_boot_ms - p.time_boot_ms} ms apart)")
+        return
+    raise Failure("no GLOBAL_POSITION_INT with a LOCAL_POSITION_NED within 150 ms")
+
+
 def timesync_checks(v):
     """TIMESYNC both ways: the vehicle answers a request with its time and the request's,
     and asks once a second itself (answered here as a motion-capture computer would)."""
@@ -337,6 +423,7 @@ def first_run(args, port):
             raise Failure(f"MISSION_COUNT {count.count}, expected 0")
         print("AUTOPILOT_VERSION and MISSION_COUNT 0 as QGroundControl expects")
         telemetry_checks(v)
+        map_checks(v)
         timesync_checks(v)
 
         params = v.all_params()
@@ -396,6 +483,11 @@ def second_run(args, port):
         if len(v.all_params()) == 0:
             raise Failure("no parameters after the restart")
         print(f"after the restart {CHECKS_PARAM} = {value}")
+        v.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN)
+        o = v.expect(["GPS_GLOBAL_ORIGIN"], 10, "GPS_GLOBAL_ORIGIN after the restart")
+        if (o.latitude, o.longitude, o.altitude) != ORIGIN:
+            raise Failure(f"after the restart the origin is {(o.latitude, o.longitude)}")
+        print("after the restart the map origin is the one set")
         v.text_matching("accepted", 60)
         # The vehicle loads the description into its planner after it accepted it, and a start
         # meanwhile is TEMPORARILY_REJECTED (with a STATUSTEXT): the command protocol's answer
@@ -420,6 +512,13 @@ def second_run(args, port):
             v.text_matching(f"phase: {phase}", 900)
             seen.append(phase)
             print(f"  STATUSTEXT phase: {phase}")
+            if phase == "takeoff":
+                # In the air, on the map: above the origin, within metres of it.
+                up = v.expect(["GLOBAL_POSITION_INT"], 60, "GLOBAL_POSITION_INT in the air",
+                              lambda m: m.relative_alt > 300)
+                if abs(up.lat - ORIGIN[0]) > 1000 or abs(up.lon - ORIGIN[1]) > 1000:
+                    raise Failure(f"in the air at {up.lat}, {up.lon}: not near the origin")
+                print(f"  GLOBAL_POSITION_INT in the air: {up.relative_alt} mm above the origin")
         out, err = plant.communicate(timeout=120)
         try:
             report = json.loads(out)
