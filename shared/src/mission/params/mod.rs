@@ -7,8 +7,10 @@
 //! A value is accepted only when it is finite, inside `[min, max]` and, for a parameter marked
 //! integer, a whole number ([`check`]). The ranges bound what the mission has been shown to
 //! tolerate or what is physically sensible; they are not tuning advice. The drivers' settings
-//! ([`super::hardware`]: ESC protocol, thrust map, steppers) are parameters too. Not here: the
-//! estimator's thrust-scale axis (a grid, not a number).
+//! ([`super::hardware`]: ESC protocol, thrust map, steppers) are parameters too, and so is the
+//! ground link's map origin (`ORIG_*`, [`ORIGIN`]; no field of the configuration,
+//! docs/ground-link.md#the-map-origin). Not here: the estimator's thrust-scale axis (a grid,
+//! not a number).
 
 use crate::control::allocation::MixerKind;
 use crate::mission::config::MissionConfig;
