@@ -147,15 +147,20 @@ def download(v, watch, log_id, size):
 
 
 def expect_data(v, watch, log_id, ofs, count, what):
-    """The LOG_DATA answering a request of `count` bytes from `ofs`: must be one, empty."""
-    v.conn.mav.log_request_data_send(1, 1, log_id, ofs, count)
+    """The LOG_DATA answering a request of `count` bytes from `ofs`: one, empty. The request is
+    sent again when nothing answers it within a second and a half (as a ground station does: a
+    frame can be lost between the ground and the vehicle), so each answer must be that one."""
     got = []
-    end = time.monotonic() + 3
-    while time.monotonic() < end:
-        m = receive(v, watch, 0.3)
-        if m is not None and m.get_type() == "LOG_DATA":
-            got.append((m.id, m.ofs, m.count))
-    if got != [(log_id, ofs, 0)]:
+    for _ in range(3):
+        v.conn.mav.log_request_data_send(1, 1, log_id, ofs, count)
+        end = time.monotonic() + 1.5
+        while time.monotonic() < end:
+            m = receive(v, watch, 0.3)
+            if m is not None and m.get_type() == "LOG_DATA":
+                got.append((m.id, m.ofs, m.count))
+        if got:
+            break
+    if not got or any(g != (log_id, ofs, 0) for g in got):
         raise Failure(f"{what}: LOG_DATA {got}, expected one of count 0 at {ofs}")
 
 

@@ -18,7 +18,6 @@ use core::cell::Cell;
 use embassy_futures::select::{Either, select};
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::channel::{self, TrySendError};
-use embassy_sync::once_lock::OnceLock;
 use embassy_sync::zerocopy_channel::{Channel, Receiver, Sender};
 use embassy_time::{Duration, Timer};
 use link::flight_log::file::{LogInfo, SYS_NAME};
@@ -80,15 +79,11 @@ struct LoggerMemory {
     service: LogService,
     /// A log-protocol message the outbox had no room for, sent first at the next turn.
     pending: Option<LogReply>,
-    requests: Requests,
 }
 
-/// Log-protocol requests from the link, for the logger task.
-type Requests = channel::Channel<Cs, LogRequest, 2>;
-
-/// The logger task's requests, once it runs (in the log's memory with the rest of it; on a
-/// board that keeps no logs, never).
-static REQUESTS: OnceLock<&'static Requests> = OnceLock::new();
+/// Log-protocol requests from the link, for the logger task (queued from the start, before
+/// the task first runs: a ground station may ask as soon as it hears the vehicle).
+static REQUESTS: channel::Channel<Cs, LogRequest, 2> = channel::Channel::new();
 
 /// Most log-protocol messages sent in one turn of the logger task.
 pub const TURN_MESSAGES: usize = 8;
@@ -99,12 +94,12 @@ pub const TURN_PAUSE: Duration = Duration::from_millis(1);
 /// asking faster than it is answered: the newest counts). `false`: no logger task runs (the
 /// board keeps no logs this run).
 pub fn request(request: LogRequest) -> bool {
-    let Some(requests) = REQUESTS.try_get() else {
+    if !<Selected as Board>::keeps_logs() {
         return false;
-    };
-    if let Err(TrySendError::Full(request)) = requests.try_send(request) {
-        let _ = requests.try_receive();
-        let _ = requests.try_send(request);
+    }
+    if let Err(TrySendError::Full(request)) = REQUESTS.try_send(request) {
+        let _ = REQUESTS.try_receive();
+        let _ = REQUESTS.try_send(request);
     }
     true
 }
@@ -197,7 +192,6 @@ pub async fn logger(mut storage: <Selected as Board>::LogStorage) {
             report: Report::default(),
             service: LogService::new(),
             pending: None,
-            requests: Requests::new(),
         });
         (
             RING_MEMORY.init(Channel::new(SLOT_MEMORY.init_zeroed())),
@@ -212,10 +206,8 @@ pub async fn logger(mut storage: <Selected as Board>::LogStorage) {
         report,
         service,
         pending,
-        requests,
     } = memory;
-    let requests: &'static Requests = requests;
-    let _ = REQUESTS.init(requests);
+    let requests = &REQUESTS;
     let info = LogInfo {
         sys_name: SYS_NAME,
         ver_sw: env!("CARGO_PKG_VERSION"),
