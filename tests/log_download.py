@@ -12,6 +12,7 @@ mission into; by hand:
 
 The firmware restarted on that storage (idle, `--ground-start`), with pymavlink:
 
+0. SYS_STATUS: MAV_SYS_STATUS_LOGGING present, enabled and healthy;
 1. LOG_REQUEST_LIST: a LOG_ENTRY for each log-NNN.ulg in DIR, with its size;
 2. each log downloaded block by block (LOG_REQUEST_DATA of 45 KiB, missing pieces asked
    again), byte for byte the file in DIR; the speed is printed; meanwhile the vehicle's
@@ -266,7 +267,20 @@ def with_plant(args, checks):
         plant.communicate()
 
 
+def logging_health(v):
+    """SYS_STATUS says the vehicle keeps logs and its storage works (MAV_SYS_STATUS_LOGGING
+    present, enabled and healthy)."""
+    bit = mavlink.MAV_SYS_STATUS_LOGGING
+    status = v.expect(["SYS_STATUS"], 10, "SYS_STATUS")
+    bits = (status.onboard_control_sensors_present, status.onboard_control_sensors_enabled,
+            status.onboard_control_sensors_health)
+    if not all(b & bit for b in bits):
+        raise Failure(f"SYS_STATUS logging bits (present, enabled, healthy) {bits}")
+    print("SYS_STATUS: the log storage present, enabled and healthy")
+
+
 def pymavlink_checks(v, args, files, sizes):
+    logging_health(v)
     watch = Watch()
     count, entries = list_logs(v, watch)
     listed = [entries[i].size if i in entries else None for i in range(count)]

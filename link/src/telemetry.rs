@@ -240,6 +240,19 @@ pub struct VehicleSnapshot {
     pub battery_ok: bool,
 }
 
+/// The flight log's storage as `SYS_STATUS` reports it (`MAV_SYS_STATUS_LOGGING`,
+/// docs/formats.md#flight-logs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LogHealth {
+    /// The vehicle keeps no logs (the bit is not present).
+    Absent,
+    /// The storage works: present, enabled and healthy.
+    Ready,
+    /// The storage failed (a card missing, full or failing): present and enabled, not
+    /// healthy, until a log is opened again.
+    Failed,
+}
+
 impl VehicleSnapshot {
     /// Before the first control step: level, at rest, nothing valid.
     pub const START: Self = Self {
@@ -260,6 +273,22 @@ impl VehicleSnapshot {
 
     fn time_boot_ms(&self) -> u32 {
         (self.time_us / 1000) as u32
+    }
+
+    /// `SYS_STATUS` as [`Self::sys_status`] gives it, with the flight log's storage
+    /// (`MAV_SYS_STATUS_LOGGING`: present unless the vehicle keeps no logs, healthy while its
+    /// storage works).
+    pub fn sys_status_with_log(&self, log: LogHealth) -> SYS_STATUS_DATA {
+        let mut status = self.sys_status();
+        let logging = MavSysStatusSensor::MAV_SYS_STATUS_LOGGING;
+        if log != LogHealth::Absent {
+            status.onboard_control_sensors_present |= logging;
+            status.onboard_control_sensors_enabled |= logging;
+        }
+        if log == LogHealth::Ready {
+            status.onboard_control_sensors_health |= logging;
+        }
+        status
     }
 
     /// `SYS_STATUS`: gyro, accelerometer, motion capture (as vision position), the motor
@@ -571,6 +600,22 @@ mod tests {
         }
         assert_eq!(s.next_due(), None);
         assert_eq!(s.take_due(u64::MAX / 2), None);
+    }
+
+    #[test]
+    fn the_flight_logs_storage_is_present_and_healthy_while_it_works() {
+        let logging = MavSysStatusSensor::MAV_SYS_STATUS_LOGGING;
+        let snap = VehicleSnapshot::START;
+        let none = snap.sys_status_with_log(LogHealth::Absent);
+        assert!(!none.onboard_control_sensors_present.contains(logging));
+        assert_eq!(none, snap.sys_status());
+        let ready = snap.sys_status_with_log(LogHealth::Ready);
+        assert!(ready.onboard_control_sensors_present.contains(logging));
+        assert!(ready.onboard_control_sensors_enabled.contains(logging));
+        assert!(ready.onboard_control_sensors_health.contains(logging));
+        let failed = snap.sys_status_with_log(LogHealth::Failed);
+        assert!(failed.onboard_control_sensors_present.contains(logging));
+        assert!(!failed.onboard_control_sensors_health.contains(logging));
     }
 
     #[test]

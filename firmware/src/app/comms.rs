@@ -822,7 +822,9 @@ impl<W: Write> Sending<W> {
                 self.home_position().await;
             }
             match stream {
-                Stream::SysStatus => self.encode(&vehicle.sys_status()),
+                Stream::SysStatus => {
+                    self.encode(&vehicle.sys_status_with_log(super::logger::health()))
+                }
                 Stream::AttitudeQuaternion => self.encode(&vehicle.attitude_quaternion()),
                 Stream::LocalPositionNed => self.encode(&vehicle.local_position_ned()),
                 Stream::RailPositions => {

@@ -25,6 +25,7 @@ use link::flight_log::keeper::{KeeperEvent, LogKeeper, LogStorage};
 use link::flight_log::session::STEP_BYTES;
 use link::flight_log::stream::{LogRing, Splitter};
 use link::log_transfer::{LogNotice, LogReply, LogRequest, LogService};
+use link::telemetry::LogHealth;
 
 use super::autonomy::{Report, Severity};
 use super::comms::Outbound;
@@ -120,6 +121,20 @@ async fn send_report(report: &mut Report) {
 /// Whether the board keeps flight logs this run (the logger task runs): until then the ring
 /// has no room and the control step records nothing.
 pub static LOGGING: AtomicBool = AtomicBool::new(false);
+
+/// The storage failed, and no log has been opened since (`SYS_STATUS` reports it).
+static STORAGE_FAILED: AtomicBool = AtomicBool::new(false);
+
+/// The flight log's storage, for `SYS_STATUS`.
+pub fn health() -> LogHealth {
+    if !LOGGING.load(Ordering::Relaxed) {
+        LogHealth::Absent
+    } else if STORAGE_FAILED.load(Ordering::Relaxed) {
+        LogHealth::Failed
+    } else {
+        LogHealth::Ready
+    }
+}
 
 /// The control step's end of the ring: each step's messages are built in place in the slot
 /// being filled, which goes to the logger task when it has no room for another step, has
@@ -258,18 +273,25 @@ fn store_slot(
         &slot.bytes[..slot.len.min(SLOT_BYTES)],
         &mut |piece| match keeper.take(storage, piece, info, &config) {
             Ok(Some(KeeperEvent::Opened(id))) => {
+                STORAGE_FAILED.store(false, Ordering::Relaxed);
                 report.text(Severity::Info, format_args!("flight log {id} started"));
             }
             Ok(Some(KeeperEvent::Closed(id, size))) => report.text(
                 Severity::Info,
                 format_args!("flight log {id} written: {size} bytes"),
             ),
-            Ok(Some(KeeperEvent::Failed)) => report.text(
-                Severity::Error,
-                format_args!("flight log incomplete: the storage failed during the flight"),
-            ),
+            Ok(Some(KeeperEvent::Failed)) => {
+                STORAGE_FAILED.store(true, Ordering::Relaxed);
+                report.text(
+                    Severity::Error,
+                    format_args!("flight log incomplete: the storage failed during the flight"),
+                );
+            }
             Ok(None) => {}
-            Err(e) => report.text(Severity::Error, format_args!("flight log stopped: {e}")),
+            Err(e) => {
+                STORAGE_FAILED.store(true, Ordering::Relaxed);
+                report.text(Severity::Error, format_args!("flight log stopped: {e}"));
+            }
         },
     );
     slot.len = 0;

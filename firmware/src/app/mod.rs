@@ -189,6 +189,10 @@ pub fn run(
         irqs,
     } = parts;
 
+    // Before any task runs: the link reports the log storage from its first SYS_STATUS.
+    let keeps_logs = <Selected as crate::board::Board>::keeps_logs();
+    logger::LOGGING.store(keeps_logs, Ordering::Relaxed);
+
     let control = CONTROL_EXECUTOR.start(irqs.control);
     let autonomy = AUTONOMY.init_with(autonomy::Autonomy::new);
     match control::control(autonomy, outputs) {
@@ -218,8 +222,7 @@ pub fn run(
         Ok(token) => spawner.spawn(token),
         Err(_) => panic!("job task not spawned"),
     }
-    if <Selected as crate::board::Board>::keeps_logs() {
-        logger::LOGGING.store(true, Ordering::Relaxed);
+    if keeps_logs {
         match logger::logger(log_storage) {
             Ok(token) => spawner.spawn(token),
             Err(_) => panic!("logger task not spawned"),
