@@ -15,7 +15,7 @@ The firmware restarted on that storage (idle, `--ground-start`), with pymavlink:
 0. SYS_STATUS: MAV_SYS_STATUS_LOGGING present, enabled and healthy;
 1. LOG_REQUEST_LIST: a LOG_ENTRY for each log-NNN.ulg in DIR, with its size;
 2. each log downloaded block by block (LOG_REQUEST_DATA of 45 KiB, missing pieces asked
-   again), byte for byte the file in DIR; the speed is printed; meanwhile the vehicle's
+   again), byte for byte the file in DIR, then drawn by `host-sim plot`; the speed is printed; meanwhile the vehicle's
    HEARTBEAT keeps coming, at most 1.5 s of its clock apart (each comes with a TIMESYNC
    request stamped with that clock, which under QEMU runs at its own pace, not the wall's);
    then during a download to the end a PARAM_REQUEST_READ is answered;
@@ -30,6 +30,7 @@ Exit status 0 when everything holds; 2 with one line on stderr when pymavlink is
 """
 
 import argparse
+import json
 import os
 import shutil
 import subprocess
@@ -279,6 +280,26 @@ def logging_health(v):
     print("SYS_STATUS: the log storage present, enabled and healthy")
 
 
+def plot_downloaded(args, log_bytes):
+    """`host-sim plot` draws the mission's summary from the downloaded log: its page written."""
+    with tempfile.TemporaryDirectory() as out:
+        path = os.path.join(out, "downloaded.ulg")
+        with open(path, "wb") as f:
+            f.write(log_bytes)
+        run = subprocess.run([args.host_sim, "plot", path, "--output", out, "--json"],
+                             capture_output=True, text=True, timeout=120)
+        if run.returncode != 0:
+            raise Failure(f"host-sim plot of the downloaded log failed: {run.stderr.strip()}")
+        report = json.loads(run.stdout)
+        files = report.get("files", [])
+        if not files or not all(os.path.getsize(f) > 1000 for f in files):
+            raise Failure(f"host-sim plot of the downloaded log wrote {files}")
+        if not report.get("mission_ended") or len(report.get("lifts", [])) == 0:
+            raise Failure(f"host-sim plot read no whole mission from the downloaded log: "
+                          f"{report.get('notes')}")
+        print(f"host-sim plot drew the downloaded log: {[os.path.basename(f) for f in files]}")
+
+
 def pymavlink_checks(v, args, files, sizes):
     logging_health(v)
     watch = Watch()
@@ -305,6 +326,7 @@ def pymavlink_checks(v, args, files, sizes):
         if gap > MAX_BEAT_GAP_S:
             raise Failure(f"the vehicle's heartbeats were {gap:.2f} s of its clock apart "
                           f"during the download (at most {MAX_BEAT_GAP_S} s)")
+        plot_downloaded(args, got)
     # The link's other services during a download.
     v.conn.mav.log_request_data_send(1, 1, 0, 0, 0xFFFFFFFF)
     asked = time.monotonic()
