@@ -15,10 +15,11 @@ The firmware restarted on that storage (idle, `--ground-start`), with pymavlink:
 0. SYS_STATUS: MAV_SYS_STATUS_LOGGING present, enabled and healthy;
 1. LOG_REQUEST_LIST: a LOG_ENTRY for each log-NNN.ulg in DIR, with its size;
 2. each log downloaded block by block (LOG_REQUEST_DATA of 45 KiB, missing pieces asked
-   again), byte for byte the file in DIR, then drawn by `host-sim plot`; the speed is printed; meanwhile the vehicle's
-   HEARTBEAT keeps coming, at most 1.5 s of its clock apart (each comes with a TIMESYNC
-   request stamped with that clock, which under QEMU runs at its own pace, not the wall's);
-   then during a download to the end a PARAM_REQUEST_READ is answered;
+   again), byte for byte the file in DIR, then drawn by `host-sim plot`; the speed is
+   printed; meanwhile the vehicle's HEARTBEAT keeps coming, at most 1.5 s of its clock apart
+   (each comes with a TIMESYNC request stamped with that clock, which under QEMU runs at its
+   own pace, not the wall's); then during a download to the end a PARAM_REQUEST_READ is
+   answered;
 3. a request for a log that is not kept: no LOG_DATA, a STATUSTEXT saying so; a request past
    the end and one of count 0: one LOG_DATA of count 0 each;
 4. MAVProxy (when installed; required with HIL_REQUIRED=1): `log list`, `log download 0`,
