@@ -36,9 +36,9 @@ use link::command::{Request, ack};
 use link::command_wire::CommandId;
 use link::frame::{Encoder, Frame, Integrity, Parser};
 use link::ftp::{FileEvent, FtpMessage, Server};
+use link::geo::{GeoOrigin, OriginError};
 use link::hil::{ImuSample, JobDeadline, MAX_ROBOTS, MocapFix, VehicleClock};
 use link::log_transfer::LogRequest;
-use link::geo::{GeoOrigin, OriginError};
 use link::msg::{
     AUTOPILOT_VERSION_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, MISSION_COUNT_DATA, MavCmd,
     MavResult, MavSeverity, TIMESYNC_DATA,
