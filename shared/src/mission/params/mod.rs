@@ -125,6 +125,7 @@ pub const fn is_origin(index: usize) -> bool {
     index >= ORIGIN && index < ORIGIN + ORIGIN_LEN
 }
 
+pub mod metadata;
 mod table;
 #[cfg(test)]
 mod tests;
