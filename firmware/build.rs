@@ -4,6 +4,11 @@
 //! - `pixhawk6c`: the Pixhawk 6C application map behind the bootloader;
 //! - `qemu`: mps2-an500's, and an empty `device.x` (this crate's vector table,
 //!   `board::qemu::__INTERRUPTS`, names every handler itself).
+//!
+//! It also writes the component metadata the vehicle serves over MAVLink FTP
+//! (docs/ground-link.md#parameter-metadata) from the parameter table itself (`shared`, with
+//! its descriptions, is a build dependency): `comp_param.json`, `comp_general.json` and
+//! `metadata.rs` (the files as `link::ftp::ReadOnlyFile`s, the general file's CRC-32).
 
 use std::{env, fs, path::PathBuf};
 
@@ -30,6 +35,7 @@ fn main() {
         )
         .expect("OUT_DIR is writable");
     }
+    write_metadata(&out, qemu);
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed=../memory.x");
     println!("cargo:rerun-if-changed=build.rs");
@@ -42,4 +48,42 @@ fn main() {
             println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
         }
     }
+}
+
+/// The parameter metadata and the general file pointing at it, generated from the table.
+fn write_metadata(out: &std::path::Path, qemu: bool) {
+    use shared::mission::params::metadata;
+    let mut parameters = String::new();
+    metadata::parameter_json(&mut parameters).expect("writing to a String");
+    let model = if qemu {
+        "QEMU mps2-an500"
+    } else {
+        "Pixhawk 6C"
+    };
+    let version = env::var("CARGO_PKG_VERSION").expect("set by cargo");
+    let mut general = String::new();
+    metadata::general_json(
+        &mut general,
+        model,
+        &version,
+        metadata::PARAMETER_URI,
+        metadata::crc32(parameters.as_bytes()),
+    )
+    .expect("writing to a String");
+    fs::write(out.join("comp_param.json"), &parameters).expect("OUT_DIR is writable");
+    fs::write(out.join("comp_general.json"), &general).expect("OUT_DIR is writable");
+    let code = format!(
+        "/// The component metadata files, generated from the parameter table at build time.\n\
+         pub static FILES: [link::ftp::ReadOnlyFile; 2] = [\n\
+         link::ftp::ReadOnlyFile {{ path: {general_path:?}, \
+         contents: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/comp_general.json\")) }},\n\
+         link::ftp::ReadOnlyFile {{ path: {param_path:?}, \
+         contents: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/comp_param.json\")) }},\n];\n\
+         /// CRC-32 of the general metadata file (`COMPONENT_METADATA`'s `file_crc`).\n\
+         pub const GENERAL_CRC: u32 = {crc:#010x};\n",
+        general_path = metadata::GENERAL_PATH,
+        param_path = metadata::PARAMETER_PATH,
+        crc = metadata::crc32(general.as_bytes()),
+    );
+    fs::write(out.join("metadata.rs"), code).expect("OUT_DIR is writable");
 }

@@ -19,7 +19,7 @@
 //! [`Upload`] is the ground side of writing one file: `ResetSessions`, `CreateFile`, the
 //! `WriteFile`s, `TerminateSession`.
 
-use crate::msg::FILE_TRANSFER_PROTOCOL_DATA;
+use crate::msg::{COMPONENT_METADATA_DATA, FILE_TRANSFER_PROTOCOL_DATA};
 
 /// Bytes of data one FTP message carries.
 pub const DATA_LEN: usize = 239;
@@ -451,6 +451,16 @@ impl<const N: usize> Server<N> {
         answer.set_data(&rest[..wanted.min(rest.len())]);
         answer.burst_complete = u8::from(r.opcode == Opcode::BurstReadFile as u8);
         answer
+    }
+}
+
+/// `COMPONENT_METADATA`: the general metadata file at `uri` (`mftp://` and a path this
+/// server serves, docs/ground-link.md#parameter-metadata) with its CRC-32 `file_crc`.
+pub fn component_metadata(time_boot_ms: u32, file_crc: u32, uri: &str) -> COMPONENT_METADATA_DATA {
+    COMPONENT_METADATA_DATA {
+        time_boot_ms,
+        file_crc,
+        uri: uri.into(),
     }
 }
 

@@ -79,6 +79,7 @@ crc_extras!(
     HOME_POSITION_DATA,
     GPS_GLOBAL_ORIGIN_DATA,
     SET_GPS_GLOBAL_ORIGIN_DATA,
+    crate::msg::COMPONENT_METADATA_DATA,
 );
 
 /// Who sent a frame.

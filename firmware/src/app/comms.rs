@@ -18,13 +18,13 @@ use link::MessageData;
 use link::command::{Request, ack};
 use link::command_wire::CommandId;
 use link::frame::{Encoder, Frame, Parser};
-use link::ftp::{FileEvent, FtpMessage, Server};
+use link::ftp::{FileEvent, FtpMessage, Server, component_metadata};
 use link::geo::{GeoOrigin, OriginError};
 use link::hil::{Actuators, ImuSample};
 use link::log_transfer::{LogReply, LogRequest};
 use link::msg::{
-    AUTOPILOT_VERSION_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, MISSION_COUNT_DATA, MavCmd,
-    MavProtocolCapability, MavResult, MavSeverity, TIMESYNC_DATA,
+    AUTOPILOT_VERSION_DATA, COMPONENT_METADATA_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA,
+    MISSION_COUNT_DATA, MavCmd, MavProtocolCapability, MavResult, MavSeverity, TIMESYNC_DATA,
 };
 use link::param::{ParamRequest, ParamService, Values, value_message};
 use link::signing::{KEY_LEN, Verdict};
@@ -37,6 +37,12 @@ use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, TABLE, is_origi
 use shared::scenario::Scenario;
 use shared::scenario_wire::{MAX_ENCODED_LEN, MAX_NAME_LEN, decode_and_check};
 use static_cell::StaticCell;
+
+/// The component metadata the FTP server serves (docs/ground-link.md#parameter-metadata),
+/// written by the build script from the parameter table.
+mod metadata {
+    include!(concat!(env!("OUT_DIR"), "/metadata.rs"));
+}
 
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
 use super::{
@@ -109,6 +115,8 @@ pub enum Outbound {
     },
     /// `AUTOPILOT_VERSION` and the board's name, on request.
     Identity,
+    /// `COMPONENT_METADATA` (where the general metadata file is), on request.
+    ComponentMetadata,
     /// `PARAM_VALUE`s of these values.
     Params {
         /// The values in force.
@@ -554,6 +562,11 @@ async fn handle(
                 OUTBOX.send(Outbound::Ack { command, result }).await;
                 OUTBOX.send(Outbound::Identity).await;
             }
+            Request::Message(id) if id == COMPONENT_METADATA_DATA::ID => {
+                let result = MavResult::MAV_RESULT_ACCEPTED;
+                OUTBOX.send(Outbound::Ack { command, result }).await;
+                OUTBOX.send(Outbound::ComponentMetadata).await;
+            }
             Request::Message(id)
                 if id == HOME_POSITION_DATA::ID || id == GPS_GLOBAL_ORIGIN_DATA::ID =>
             {
@@ -657,7 +670,7 @@ async fn handle(
                 .await;
         }
         Inbound::Ftp { message, from } => {
-            let (answer, event) = ftp.handle(&message);
+            let (answer, event) = ftp.handle_with(&message, &metadata::FILES);
             OUTBOX
                 .send(Outbound::Ftp {
                     message: answer,
@@ -850,6 +863,14 @@ impl<W: Write> Sending<W> {
         }
     }
 
+    /// `COMPONENT_METADATA`: the general metadata file's URI and CRC-32.
+    async fn component_metadata(&mut self) {
+        let now_ms = Instant::now().as_millis() as u32;
+        let uri = shared::mission::params::metadata::GENERAL_URI;
+        self.encode(&component_metadata(now_ms, metadata::GENERAL_CRC, uri));
+        self.flush().await;
+    }
+
     async fn identity(&mut self) {
         let version = AUTOPILOT_VERSION_DATA {
             capabilities: MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MAVLINK2
@@ -928,6 +949,7 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
                     out.report(&report, Instant::now().as_millis() as u32).await;
                 }
                 Outbound::Identity => out.identity().await,
+                Outbound::ComponentMetadata => out.component_metadata().await,
                 Outbound::Params { values, which } => {
                     let range = match which {
                         Values::None => 0..0,
