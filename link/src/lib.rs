@@ -13,7 +13,7 @@
 //! - [`command`]: `COMMAND_LONG` to the operator's commands, and their `COMMAND_ACK`s.
 //! - [`command_wire`]: those two messages with the command as its number.
 //! - [`ftp`]: MAVLink FTP: the vehicle's minimal server (one writable file, the payload
-//!   description) and the ground side's upload.
+//!   description; read-only files, the parameter metadata) and the ground side's upload.
 //! - [`log_transfer`]: MAVLink's log protocol: the flight logs listed, downloaded, erased.
 //! - [`param`]: MAVLink's parameter protocol over the mission's parameter table.
 //! - [`slots`]: the payload description's two power-cut-safe slots.
