@@ -19,7 +19,9 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
    the default, then set with SET_GPS_GLOBAL_ORIGIN and read back; HOME_POSITION on request
    and on MAV_CMD_GET_HOME_POSITION; GLOBAL_POSITION_INT the local position through it),
    TIMESYNC answered and asked,
-   every parameter (count and indices consistent, read back by name and by index), arming
+   every parameter (count and indices consistent, read back by name and by index), the
+   parameter metadata read over MAVLink FTP as QGroundControl reads it (the general file, the
+   parameter file of its CRC-32 naming every parameter), arming
    refused with its COMMAND_ACK and a STATUSTEXT, bad values refused (PARAM_VALUE with the old
    value and a STATUSTEXT), MAVLink 2 signing set up (SETUP_SIGNING): the vehicle's frames
    signed, an unsigned start and an unsigned parameter write refused, one good value set
@@ -43,10 +45,12 @@ import os
 import shutil
 import threading
 import socket
+import struct
 import subprocess
 import sys
 import tempfile
 import time
+import zlib
 
 os.environ.setdefault("MAVLINK20", "1")
 try:
@@ -404,6 +408,53 @@ def connect(port, plant):
     return v
 
 
+def ftp_read(v, path):
+    """A file read whole over MAVLink FTP (OpenFileRO, ReadFile, TerminateSession), as
+    QGroundControl reads the component metadata: its bytes."""
+    seq = [0]
+
+    def ask(opcode, session=0, offset=0, size=0, data=b""):
+        seq[0] += 1
+        payload = data.ljust(239, b"\0")
+        header = struct.pack("<HBBBBBBI", seq[0], session, opcode, size or len(data), 0, 0, 0,
+                             offset)
+        v.conn.mav.file_transfer_protocol_send(0, 1, 1, list(header + payload))
+        m = v.expect(["FILE_TRANSFER_PROTOCOL"], 10, f"an FTP answer about {path}")
+        raw = bytes(m.payload)
+        _, got_session, op, n, req, _, _, _ = struct.unpack("<HBBBBBBI", raw[:12])
+        return op, got_session, raw[12:12 + n]
+
+    op, session, data = ask(4, data=path.encode())  # OpenFileRO
+    if op != 128:
+        raise Failure(f"FTP OpenFileRO {path}: NAK {data!r}")
+    size = struct.unpack("<I", data[:4])[0]
+    out = bytearray()
+    while len(out) < size:
+        op, _, data = ask(5, session=session, offset=len(out), size=239)  # ReadFile
+        if op != 128 or not data:
+            raise Failure(f"FTP ReadFile {path} at {len(out)}: NAK {data!r}")
+        out += data
+    ask(1, session=session)  # TerminateSession
+    return bytes(out)
+
+
+def metadata_checks(v, param_count):
+    """QGroundControl's parameter metadata over FTP: the general file names the parameter
+    file with its CRC-32, and the parameter file lists every parameter."""
+    general = json.loads(ftp_read(v, "/comp_general.json"))
+    entry = next(m for m in general["metadataTypes"] if m["type"] == 1)
+    uri = entry["uri"]
+    body = ftp_read(v, uri.replace("mftp://", ""))
+    if zlib.crc32(body) != entry["fileCrc"]:
+        raise Failure(f"{uri}: CRC-32 {zlib.crc32(body)} against the general file's "
+                      f"{entry['fileCrc']}")
+    names = [p["name"] for p in json.loads(body)["parameters"]]
+    if len(names) != param_count:
+        raise Failure(f"{uri} lists {len(names)} parameters; the vehicle has {param_count}")
+    print(f"parameter metadata over FTP: {uri}, {len(body)} bytes, its CRC-32 as the general "
+          f"file says, {len(names)} parameters")
+
+
 def first_run(args, port):
     plant = start_hil(args, port, [])
     try:
@@ -428,6 +479,7 @@ def first_run(args, port):
 
         params = v.all_params()
         print(f"{len(params)} parameters, indices 0..{len(params) - 1}")
+        metadata_checks(v, len(params))
         for name in [CHECKS_PARAM, "MAX_TILT", "LIFT_SIGMA"]:
             if name not in params:
                 raise Failure(f"parameter {name} missing")
