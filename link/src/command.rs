@@ -1,7 +1,9 @@
-//! The MAVLink command service (`COMMAND_LONG` answered by `COMMAND_ACK`) as the vehicle reads it:
-//! which operator command a request is.
+//! The MAVLink command service (`COMMAND_LONG` or `COMMAND_INT`, answered by `COMMAND_ACK`) as
+//! the vehicle reads it: which operator command a request is
+//! (docs/ground-link.md#commands-long-or-int). Both messages are read into one [`Command`] and
+//! classified here alone, so a command means the same whichever way it comes.
 //!
-//! | `COMMAND_LONG` | meaning |
+//! | command | meaning |
 //! |---|---|
 //! | `MAV_CMD_MISSION_START` | [`OperatorCommand::Start`] the mission |
 //! | `MAV_CMD_NAV_LAND` | [`OperatorCommand::LandNow`] |
@@ -10,12 +12,78 @@
 //! | `MAV_CMD_REQUEST_MESSAGE` | [`Request::Message`] (the link answers it) |
 //! | `MAV_CMD_GET_HOME_POSITION` (deprecated, MAVProxy's) | [`Request::Message`] of `HOME_POSITION` |
 //! | `MAV_CMD_SET_MESSAGE_INTERVAL` | [`Request::SetInterval`] (the link's telemetry schedule) |
+//! | `MAV_CMD_DO_SET_GLOBAL_ORIGIN` as `COMMAND_INT` in `MAV_FRAME_GLOBAL` (or its deprecated `_INT` twin) | [`Request::SetOrigin`]; as `COMMAND_LONG` refused `MAV_RESULT_COMMAND_INT_ONLY`, in another frame `MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME`, with an altitude not finite `DENIED` |
 //!
 //! Arming by command is refused (the mission arms itself); any other command is unsupported.
 
 use crate::MessageData;
-use crate::command_wire::{CommandAck, CommandId, CommandLong};
-use crate::msg::{COMMAND_LONG_DATA, HOME_POSITION_DATA, MavCmd, MavResult};
+use crate::command_wire::{CommandAck, CommandId, CommandInt, CommandLong};
+use crate::msg::{COMMAND_LONG_DATA, HOME_POSITION_DATA, MavCmd, MavFrame, MavResult};
+
+/// A command as [`classify`] reads it, from a `COMMAND_LONG` or a `COMMAND_INT`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Command {
+    /// The command's number.
+    pub id: CommandId,
+    /// Parameters 1 to 4 (the same in both messages).
+    pub params: [f32; 4],
+    /// A `COMMAND_INT`'s position (parameters 5 to 7 and the frame); `None` from a
+    /// `COMMAND_LONG`, whose float parameters 5 and 6 cannot hold a latitude to a centimetre.
+    pub position: Option<Position>,
+}
+
+/// Parameters 5 to 7 of a `COMMAND_INT` and their frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Position {
+    /// `x`: in a global frame the latitude, 1e-7 degrees.
+    pub x: i32,
+    /// `y`: in a global frame the longitude, 1e-7 degrees.
+    pub y: i32,
+    /// `z`: in a global frame the altitude, m.
+    pub z: f32,
+    /// The frame (`MAV_FRAME`, as sent).
+    pub frame: u8,
+}
+
+impl From<&CommandLong> for Command {
+    fn from(c: &CommandLong) -> Self {
+        let [p1, p2, p3, p4, ..] = c.params;
+        Self {
+            id: CommandId(c.command),
+            params: [p1, p2, p3, p4],
+            position: None,
+        }
+    }
+}
+
+impl From<&CommandInt> for Command {
+    fn from(c: &CommandInt) -> Self {
+        Self {
+            id: CommandId(c.command),
+            params: c.params,
+            position: Some(Position {
+                x: c.x,
+                y: c.y,
+                z: c.z,
+                frame: c.frame,
+            }),
+        }
+    }
+}
+
+/// Whether `frame` is global with the altitude above mean sea level: `MAV_FRAME_GLOBAL` or
+/// its deprecated twin `MAV_FRAME_GLOBAL_INT` (the same frame; older senders use it).
+#[allow(deprecated)]
+fn global_msl(frame: u8) -> bool {
+    frame == MavFrame::MAV_FRAME_GLOBAL as u8 || frame == MavFrame::MAV_FRAME_GLOBAL_INT as u8
+}
+
+/// Metres to whole millimetres, rounded (saturating: an altitude far out of range stays out
+/// of range). `m` must be finite.
+fn millimetres(m: f32) -> i32 {
+    let mm = m * 1000.0;
+    (if mm < 0.0 { mm - 0.5 } else { mm + 0.5 }) as i32
+}
 
 /// `MAV_CMD_GET_HOME_POSITION`: superseded by `MAV_CMD_REQUEST_MESSAGE`, still what MAVProxy
 /// sends every few seconds; answered as a request of `HOME_POSITION`.
@@ -82,13 +150,24 @@ pub enum Request {
         /// The interval, us (-1 off, 0 the default).
         interval_us: f32,
     },
-    /// Refused at once with this result.
+    /// `MAV_CMD_DO_SET_GLOBAL_ORIGIN`: the map origin (docs/ground-link.md#the-map-origin),
+    /// not yet checked, as `SET_GPS_GLOBAL_ORIGIN` gives it.
+    SetOrigin {
+        /// Latitude, 1e-7 degrees.
+        lat_e7: i32,
+        /// Longitude, 1e-7 degrees.
+        lon_e7: i32,
+        /// Altitude above mean sea level, mm.
+        alt_mm: i32,
+    },
+    /// Refused at once with this result ([`refusal`] says why).
     Refused(MavResult),
 }
 
-/// What `command` asks for.
-pub fn classify(command: &CommandLong) -> Request {
-    let id = CommandId(command.command);
+/// What `command` (a `&CommandLong`, a `&CommandInt` or a [`Command`]) asks for.
+pub fn classify(command: impl Into<Command>) -> Request {
+    let command: Command = command.into();
+    let id = command.id;
     let [param1, param2, ..] = command.params;
     if id.is(MavCmd::MAV_CMD_MISSION_START) {
         Request::Operator(OperatorCommand::Start)
@@ -113,8 +192,37 @@ pub fn classify(command: &CommandLong) -> Request {
             message_id: param1,
             interval_us: param2,
         }
+    } else if id.is(MavCmd::MAV_CMD_DO_SET_GLOBAL_ORIGIN) {
+        match command.position {
+            None => Request::Refused(MavResult::MAV_RESULT_COMMAND_INT_ONLY),
+            Some(p) if !global_msl(p.frame) => {
+                Request::Refused(MavResult::MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME)
+            }
+            Some(p) if !p.z.is_finite() => Request::Refused(MavResult::MAV_RESULT_DENIED),
+            Some(p) => Request::SetOrigin {
+                lat_e7: p.x,
+                lon_e7: p.y,
+                alt_mm: millimetres(p.z),
+            },
+        }
     } else {
         Request::Refused(MavResult::MAV_RESULT_UNSUPPORTED)
+    }
+}
+
+/// Why [`classify`] refused `command` with `result` ([`Request::Refused`]), for the
+/// `STATUSTEXT` that goes with the acknowledgement.
+pub fn refusal(command: CommandId, result: MavResult) -> &'static str {
+    match result {
+        MavResult::MAV_RESULT_COMMAND_INT_ONLY => "send it as COMMAND_INT",
+        MavResult::MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME => {
+            "the frame must be MAV_FRAME_GLOBAL (altitude above mean sea level)"
+        }
+        _ if command.is(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM) => {
+            "the mission arms the rotors itself, at take-off"
+        }
+        _ if command.is(MavCmd::MAV_CMD_DO_SET_GLOBAL_ORIGIN) => "the altitude is not a number",
+        _ => "not supported",
     }
 }
 

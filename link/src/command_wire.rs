@@ -1,15 +1,20 @@
-//! `COMMAND_LONG` and `COMMAND_ACK` with the command as its number (MAVLink's `MAV_CMD`, any
-//! `u16`), for the vehicle's command service (every command gets its `COMMAND_ACK`).
+//! `COMMAND_LONG`, `COMMAND_INT` and `COMMAND_ACK` with the command as its number (MAVLink's
+//! `MAV_CMD`, any `u16`), for the vehicle's command service (every command gets its
+//! `COMMAND_ACK`; docs/ground-link.md#commands-long-or-int).
 //!
 //! The `mavlink` crate decodes a command into its `MavCmd` enum: a command number the dialect
 //! does not list fails to decode (so it could not be acknowledged), and the conversion is a
 //! 2,000-entry jump table that cost the firmware 3.4 KiB of flash. These two types have the
 //! crate's wire layout, `CRC_EXTRA` and MAVLink 2 zero truncation, checked against the crate's
 //! own encoding in the tests; the ground side keeps using the crate's types.
+//! (`COMMAND_INT`'s frame is a `MAV_FRAME` the crate's enum may not list either: kept as its
+//! number.)
 
 use mavlink::{MavlinkVersion, MessageData, error::ParserError};
 
-use crate::msg::{COMMAND_ACK_DATA, COMMAND_LONG_DATA, MavCmd, MavMessage, MavResult};
+use crate::msg::{
+    COMMAND_ACK_DATA, COMMAND_INT_DATA, COMMAND_LONG_DATA, MavCmd, MavMessage, MavResult,
+};
 
 /// A MAVLink command number (`MAV_CMD`), as sent.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -81,6 +86,81 @@ impl MessageData for CommandLong {
             target_system: bytes[30],
             target_component: bytes[31],
             confirmation: bytes[32],
+        })
+    }
+}
+
+/// `COMMAND_INT` as the vehicle reads it: parameters 1 to 4 as floats, 5 and 6 as integers
+/// (`x`, `y`: latitude and longitude in 1e-7 degrees in a global frame), 7 a float (`z`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CommandInt {
+    /// Parameters 1 to 4.
+    pub params: [f32; 4],
+    /// Parameter 5.
+    pub x: i32,
+    /// Parameter 6.
+    pub y: i32,
+    /// Parameter 7.
+    pub z: f32,
+    /// The command's number.
+    pub command: u16,
+    /// Target system.
+    pub target_system: u8,
+    /// Target component.
+    pub target_component: u8,
+    /// The coordinate frame of `x`, `y`, `z` (`MAV_FRAME`, as sent).
+    pub frame: u8,
+    /// Not used.
+    pub current: u8,
+    /// Not used.
+    pub autocontinue: u8,
+}
+
+impl MessageData for CommandInt {
+    type Message = MavMessage;
+    const ID: u32 = COMMAND_INT_DATA::ID;
+    const NAME: &'static str = COMMAND_INT_DATA::NAME;
+    const EXTRA_CRC: u8 = COMMAND_INT_DATA::EXTRA_CRC;
+    const ENCODED_LEN: usize = COMMAND_INT_DATA::ENCODED_LEN;
+
+    fn ser(&self, version: MavlinkVersion, payload: &mut [u8]) -> usize {
+        let mut bytes = [0u8; Self::ENCODED_LEN];
+        for (i, p) in self.params.iter().enumerate() {
+            bytes[4 * i..4 * i + 4].copy_from_slice(&p.to_le_bytes());
+        }
+        bytes[16..20].copy_from_slice(&self.x.to_le_bytes());
+        bytes[20..24].copy_from_slice(&self.y.to_le_bytes());
+        bytes[24..28].copy_from_slice(&self.z.to_le_bytes());
+        bytes[28..30].copy_from_slice(&self.command.to_le_bytes());
+        bytes[30] = self.target_system;
+        bytes[31] = self.target_component;
+        bytes[32] = self.frame;
+        bytes[33] = self.current;
+        bytes[34] = self.autocontinue;
+        put(&bytes, version, payload)
+    }
+
+    fn deser(_version: MavlinkVersion, payload: &[u8]) -> Result<Self, ParserError> {
+        // MAVLink 2 cuts a payload's trailing zeros: the missing bytes are zeros.
+        let mut bytes = [0u8; Self::ENCODED_LEN];
+        let n = payload.len().min(Self::ENCODED_LEN);
+        bytes[..n].copy_from_slice(&payload[..n]);
+        let word = |at: usize| [bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]];
+        let mut params = [0.0; 4];
+        for (i, p) in params.iter_mut().enumerate() {
+            *p = f32::from_le_bytes(word(4 * i));
+        }
+        Ok(Self {
+            params,
+            x: i32::from_le_bytes(word(16)),
+            y: i32::from_le_bytes(word(20)),
+            z: f32::from_le_bytes(word(24)),
+            command: u16::from_le_bytes([bytes[28], bytes[29]]),
+            target_system: bytes[30],
+            target_component: bytes[31],
+            frame: bytes[32],
+            current: bytes[33],
+            autocontinue: bytes[34],
         })
     }
 }
@@ -175,6 +255,54 @@ mod tests {
         }
         // MAVLink 2 cut this one's zero target component and confirmation.
         assert_eq!(crate_bytes(&sent, MavlinkVersion::V2).len(), 31);
+    }
+
+    #[test]
+    fn command_int_reads_what_the_crate_writes_and_writes_it_back_the_same() {
+        let sent = COMMAND_INT_DATA {
+            param1: 1.5,
+            param2: f32::NAN,
+            param3: -3.25,
+            param4: 0.0,
+            x: -338_688_123,
+            y: 1_512_093_456,
+            z: 58.5,
+            command: MavCmd::MAV_CMD_DO_SET_GLOBAL_ORIGIN,
+            target_system: 1,
+            target_component: 1,
+            frame: crate::msg::MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT,
+            current: 0,
+            autocontinue: 0,
+        };
+        for version in [MavlinkVersion::V1, MavlinkVersion::V2] {
+            let bytes = crate_bytes(&sent, version);
+            let read = CommandInt::deser(version, &bytes).expect("decodes");
+            assert_eq!(read.params[0], 1.5);
+            assert!(read.params[1].is_nan());
+            assert_eq!(read.params[2..], [-3.25, 0.0]);
+            assert_eq!(
+                (read.x, read.y, read.z),
+                (-338_688_123, 1_512_093_456, 58.5)
+            );
+            assert!(CommandId(read.command).is(MavCmd::MAV_CMD_DO_SET_GLOBAL_ORIGIN));
+            assert_eq!((read.target_system, read.target_component), (1, 1));
+            assert_eq!(
+                read.frame,
+                crate::msg::MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT as u8
+            );
+            assert_eq!(crate_bytes(&read, version), bytes);
+        }
+        // MAVLink 2 cut the zero `current` and `autocontinue`.
+        assert_eq!(crate_bytes(&sent, MavlinkVersion::V2).len(), 33);
+        // A frame and a command the dialect does not list keep their numbers.
+        let mut bytes = crate_bytes(&sent, MavlinkVersion::V2);
+        bytes[28..30].copy_from_slice(&0xfffe_u16.to_le_bytes());
+        bytes[32] = 0xee;
+        let read = CommandInt::deser(MavlinkVersion::V2, &bytes).expect("decodes");
+        assert_eq!((read.command, read.frame), (0xfffe, 0xee));
+        // Cut short (a hostile sender): the missing bytes are zeros.
+        let short = CommandInt::deser(MavlinkVersion::V2, &bytes[..3]).expect("decodes");
+        assert_eq!((short.command, short.target_system, short.x), (0, 0, 0));
     }
 
     #[test]

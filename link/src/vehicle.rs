@@ -1,26 +1,27 @@
 //! The vehicle's dispatch of received frames: which of its services a frame is for, decoded and
-//! checked. Only the messages the vehicle handles are decoded, so the
+//! checked (docs/ground-link.md; commands: #commands-long-or-int). Only the messages the
+//! vehicle handles are decoded, so the
 //! firmware links those decoders and no others (decoding the whole dialect costs ~80 KB).
 
 use mavlink::MessageData;
 
 use crate::command::{Request, classify};
-use crate::command_wire::{CommandId, CommandLong};
+use crate::command_wire::{CommandId, CommandInt, CommandLong};
 use crate::frame::{Frame, Integrity};
 use crate::ftp::{FtpMessage, PAYLOAD_LEN};
 use crate::hil::{HilError, ImuSample, MocapFix};
 use crate::log_transfer::LogRequest;
 use crate::msg::{
     ACTUATOR_OUTPUT_STATUS_DATA, ATT_POS_MOCAP_DATA, ATTITUDE_QUATERNION_DATA,
-    AUTOPILOT_VERSION_DATA, BATTERY_STATUS_DATA, COMMAND_ACK_DATA, COMMAND_LONG_DATA,
-    DEBUG_FLOAT_ARRAY_DATA, FILE_TRANSFER_PROTOCOL_DATA, GLOBAL_POSITION_INT_DATA,
-    GPS_GLOBAL_ORIGIN_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA, HIL_SENSOR_DATA,
-    HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, LOG_DATA_DATA, LOG_ENTRY_DATA, LOG_ERASE_DATA,
-    LOG_REQUEST_DATA_DATA, LOG_REQUEST_END_DATA, LOG_REQUEST_LIST_DATA, MISSION_COUNT_DATA,
-    MISSION_REQUEST_LIST_DATA, MavAutopilot, MavBatteryFunction, MavType, NAMED_VALUE_FLOAT_DATA,
-    NAMED_VALUE_INT_DATA, ODOMETRY_DATA, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA,
-    PARAM_SET_DATA, PARAM_VALUE_DATA, SETUP_SIGNING_DATA, STATUSTEXT_DATA, SYS_STATUS_DATA,
-    TIMESYNC_DATA,
+    AUTOPILOT_VERSION_DATA, BATTERY_STATUS_DATA, COMMAND_ACK_DATA, COMMAND_INT_DATA,
+    COMMAND_LONG_DATA, DEBUG_FLOAT_ARRAY_DATA, FILE_TRANSFER_PROTOCOL_DATA,
+    GLOBAL_POSITION_INT_DATA, GPS_GLOBAL_ORIGIN_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA,
+    HIL_SENSOR_DATA, HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, LOG_DATA_DATA, LOG_ENTRY_DATA,
+    LOG_ERASE_DATA, LOG_REQUEST_DATA_DATA, LOG_REQUEST_END_DATA, LOG_REQUEST_LIST_DATA,
+    MISSION_COUNT_DATA, MISSION_REQUEST_LIST_DATA, MavAutopilot, MavBatteryFunction, MavType,
+    NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA, ODOMETRY_DATA, PARAM_REQUEST_LIST_DATA,
+    PARAM_REQUEST_READ_DATA, PARAM_SET_DATA, PARAM_VALUE_DATA, SETUP_SIGNING_DATA, STATUSTEXT_DATA,
+    SYS_STATUS_DATA, TIMESYNC_DATA,
 };
 use crate::param::ParamRequest;
 
@@ -45,6 +46,7 @@ macro_rules! crc_extras {
 crc_extras!(
     HEARTBEAT_DATA,
     COMMAND_LONG_DATA,
+    COMMAND_INT_DATA,
     COMMAND_ACK_DATA,
     STATUSTEXT_DATA,
     NAMED_VALUE_FLOAT_DATA,
@@ -110,7 +112,8 @@ pub enum Inbound {
         /// `ts1`.
         ts1: i64,
     },
-    /// `COMMAND_LONG` addressed to the vehicle, classified.
+    /// `COMMAND_LONG` or `COMMAND_INT` addressed to the vehicle, classified (the same way
+    /// whichever it came as).
     Command {
         /// The command as sent (for its acknowledgement).
         command: CommandId,
@@ -224,6 +227,14 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
             }
         }),
         COMMAND_LONG_DATA::ID => match frame.decode::<CommandLong>() {
+            Some(c) if for_us(c.target_system, c.target_component) => Inbound::Command {
+                command: CommandId(c.command),
+                request: classify(&c),
+                from,
+            },
+            _ => ignored,
+        },
+        COMMAND_INT_DATA::ID => match frame.decode::<CommandInt>() {
             Some(c) if for_us(c.target_system, c.target_component) => Inbound::Command {
                 command: CommandId(c.command),
                 request: classify(&c),
@@ -432,7 +443,7 @@ pub fn battery_status(volts: f32) -> BATTERY_STATUS_DATA {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::command::{OperatorCommand, command_long};
+    use crate::command::{FORCE_DISARM_MAGIC, OperatorCommand, command_long};
     use crate::frame::{Encoder, Parser};
     use crate::ftp::Opcode;
     use crate::msg::MavCmd;
@@ -469,6 +480,186 @@ mod tests {
                 },
             }
         );
+    }
+
+    /// The `COMMAND_INT` a ground station sends for `long`'s command and parameters 1 to 4
+    /// (pymavlink's `command_int_send`).
+    fn as_command_int(long: &crate::msg::COMMAND_LONG_DATA, frame: u8) -> CommandInt {
+        CommandInt {
+            params: [long.param1, long.param2, long.param3, long.param4],
+            x: 0,
+            y: 0,
+            z: 0.0,
+            command: long.command as u16,
+            target_system: long.target_system,
+            target_component: long.target_component,
+            frame,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn command_int_is_read_as_command_long_is() {
+        let mut sent = std::vec![
+            OperatorCommand::Start.to_command_long(),
+            OperatorCommand::Abort.to_command_long(),
+            OperatorCommand::LandNow.to_command_long(),
+            OperatorCommand::Kill.to_command_long(),
+            command_long(
+                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+                0.0,
+                FORCE_DISARM_MAGIC
+            ),
+            command_long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0),
+            command_long(MavCmd::MAV_CMD_REQUEST_MESSAGE, 148.0, 0.0),
+            command_long(MavCmd::MAV_CMD_REQUEST_MESSAGE, 49.0, 0.0),
+            command_long(crate::command::GET_HOME_POSITION, 0.0, 0.0),
+            command_long(MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL, 31.0, 20_000.0),
+            command_long(MavCmd::MAV_CMD_NAV_TAKEOFF, 0.0, 0.0),
+            command_long(MavCmd::MAV_CMD_DO_FLIGHTTERMINATION, 0.0, 0.0),
+            // Hostile: parameters not numbers, infinite, negative.
+            command_long(MavCmd::MAV_CMD_REQUEST_MESSAGE, f32::NAN, 0.0),
+            command_long(MavCmd::MAV_CMD_REQUEST_MESSAGE, -1.0, 0.0),
+            command_long(MavCmd::MAV_CMD_REQUEST_MESSAGE, f32::INFINITY, 0.0),
+            command_long(MavCmd::MAV_CMD_DO_FLIGHTTERMINATION, f32::NAN, 0.0),
+            command_long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, f32::NAN, f32::NAN),
+            command_long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 0.0, f32::NAN),
+            command_long(
+                MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
+                f32::NAN,
+                f32::NEG_INFINITY
+            ),
+        ];
+        // Addressed to every system, to another one, to another component.
+        let mut anyone = command_long(MavCmd::MAV_CMD_MISSION_START, 0.0, 0.0);
+        anyone.target_system = 0;
+        anyone.target_component = 0;
+        sent.push(anyone.clone());
+        sent.push(crate::msg::COMMAND_LONG_DATA {
+            target_system: 42,
+            ..anyone.clone()
+        });
+        sent.push(crate::msg::COMMAND_LONG_DATA {
+            target_component: 7,
+            ..anyone
+        });
+        // The frame does not matter to a command without a position: any, also one the
+        // dialect does not list.
+        for frame in [0, 1, 6, 200, 255] {
+            for long in &sent {
+                let int = as_command_int(long, frame);
+                let (got, want) = (through_the_wire(&int), through_the_wire(long));
+                if let Inbound::Ignored { id } = got {
+                    // Not for this vehicle: ignored as the COMMAND_LONG is.
+                    assert_eq!(id, CommandInt::ID);
+                    assert_eq!(
+                        want,
+                        Inbound::Ignored {
+                            id: CommandLong::ID
+                        },
+                        "{long:?}"
+                    );
+                } else {
+                    // NaN parameters make `Request` unequal to itself: compare its debug text.
+                    assert_eq!(
+                        std::format!("{got:?}"),
+                        std::format!("{want:?}"),
+                        "{long:?}"
+                    );
+                }
+            }
+        }
+        // A command the dialect does not list: unsupported, with its number.
+        let unknown = CommandInt {
+            command: 0xfffe,
+            target_system: crate::VEHICLE_SYSTEM_ID,
+            frame: 0xee,
+            ..Default::default()
+        };
+        assert!(matches!(
+            through_the_wire(&unknown),
+            Inbound::Command {
+                command: CommandId(0xfffe),
+                request: Request::Refused(crate::msg::MavResult::MAV_RESULT_UNSUPPORTED),
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn the_map_origin_comes_as_command_int_in_a_global_frame() {
+        let origin = CommandInt {
+            x: -338_688_123,
+            y: 1_512_093_456,
+            z: 58.25,
+            command: MavCmd::MAV_CMD_DO_SET_GLOBAL_ORIGIN as u16,
+            target_system: 1,
+            target_component: 1,
+            frame: crate::msg::MavFrame::MAV_FRAME_GLOBAL as u8,
+            ..Default::default()
+        };
+        let set = Request::SetOrigin {
+            lat_e7: -338_688_123,
+            lon_e7: 1_512_093_456,
+            alt_mm: 58_250,
+        };
+        assert!(matches!(
+            through_the_wire(&origin),
+            Inbound::Command { request, .. } if request == set
+        ));
+        let refused = |c: &CommandInt| match through_the_wire(c) {
+            Inbound::Command {
+                request: Request::Refused(r),
+                ..
+            } => Some(r),
+            _ => None,
+        };
+        use crate::msg::MavResult;
+        // Altitude above the ground or the terrain, a local frame, a frame nobody knows.
+        for frame in [3, 10, 1, 0xee] {
+            assert_eq!(
+                refused(&CommandInt { frame, ..origin }),
+                Some(MavResult::MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME)
+            );
+        }
+        for z in [f32::NAN, f32::INFINITY] {
+            assert_eq!(
+                refused(&CommandInt { z, ..origin }),
+                Some(MavResult::MAV_RESULT_DENIED)
+            );
+        }
+        // Out of range is the origin's checks' to refuse (with the reason): taken as sent.
+        let far = CommandInt {
+            x: i32::MAX,
+            z: -1e30,
+            ..origin
+        };
+        assert!(matches!(
+            through_the_wire(&far),
+            Inbound::Command {
+                request: Request::SetOrigin {
+                    lat_e7: i32::MAX,
+                    alt_mm: i32::MIN,
+                    ..
+                },
+                ..
+            }
+        ));
+        // As COMMAND_LONG its float latitude would lose a metre: refused.
+        let long = command_long(MavCmd::MAV_CMD_DO_SET_GLOBAL_ORIGIN, 0.0, 0.0);
+        assert!(matches!(
+            through_the_wire(&long),
+            Inbound::Command {
+                request: Request::Refused(MavResult::MAV_RESULT_COMMAND_INT_ONLY),
+                ..
+            }
+        ));
+        // Another vehicle's origin is not this one's.
+        let other = CommandInt {
+            target_system: 9,
+            ..origin
+        };
+        assert!(matches!(through_the_wire(&other), Inbound::Ignored { .. }));
     }
 
     #[test]
