@@ -40,7 +40,7 @@ use link::geo::{GeoOrigin, OriginError};
 use link::hil::{ImuSample, JobDeadline, MAX_ROBOTS, MocapFix, VehicleClock};
 use link::log_transfer::LogRequest;
 use link::msg::{
-    AUTOPILOT_VERSION_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, MISSION_COUNT_DATA, MavCmd,
+    AUTOPILOT_VERSION_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, MISSION_COUNT_DATA,
     MavResult, MavSeverity, TIMESYNC_DATA,
 };
 use link::param::{ParamService, Values, value_message};
@@ -537,13 +537,20 @@ impl Vehicle {
                     }
                 }
                 Request::Refused(result) => {
-                    let why = if command.is(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM) {
-                        "the mission arms the rotors itself, at take-off"
-                    } else {
-                        "not supported"
-                    };
-                    self.refuse(command, result, why);
+                    self.refuse(command, result, link::command::refusal(command, result));
                 }
+                // comms.rs `command_origin`.
+                Request::SetOrigin {
+                    lat_e7,
+                    lon_e7,
+                    alt_mm,
+                } => match self.checked_origin((lat_e7, lon_e7, alt_mm), verdict) {
+                    Ok(origin) => {
+                        self.send(&ack(command, MavResult::MAV_RESULT_ACCEPTED));
+                        self.store_origin(&origin);
+                    }
+                    Err(why) => self.refuse(command, MavResult::MAV_RESULT_DENIED, why),
+                },
             },
             Inbound::Param { request, .. } => {
                 let running = self.mission_state == MissionState::Running;
@@ -628,33 +635,8 @@ impl Vehicle {
                 ..
             } => {
                 // comms.rs `set_origin`.
-                let running = self.mission_state == MissionState::Running;
-                let checked = if !verdict.trusted() {
-                    Err(verdict.reason())
-                } else if running {
-                    Err("the mission is running")
-                } else {
-                    GeoOrigin::from_message(lat_e7, lon_e7, alt_mm).map_err(OriginError::as_str)
-                };
-                match checked {
-                    Ok(origin) => {
-                        let changed = self
-                            .params
-                            .set_origin(&origin)
-                            .expect("a checked origin fits its parameters");
-                        assert_eq!(self.params.origin(), origin);
-                        for &(index, value) in &changed {
-                            if let Some(store) = &mut self.store
-                                && block_on(store.save(index, value)).is_err()
-                            {
-                                self.store_failed = true;
-                            }
-                            let m = value_message(self.params.values(), index)
-                                .expect("an index in range");
-                            self.send(&m);
-                        }
-                        self.send(&gps_global_origin(&origin));
-                    }
+                match self.checked_origin((lat_e7, lon_e7, alt_mm), verdict) {
+                    Ok(origin) => self.store_origin(&origin),
                     Err(why) => self.report_text(Severity::Warning, why),
                 }
             }
@@ -692,6 +674,40 @@ impl Vehicle {
             Inbound::Battery { volts, .. } => self.link_battery_mv = (volts * 1000.0) as u32,
             Inbound::Heartbeat(_) | Inbound::Ignored { .. } => {}
         }
+    }
+
+    /// comms.rs `checked_origin`.
+    fn checked_origin(
+        &self,
+        (lat_e7, lon_e7, alt_mm): (i32, i32, i32),
+        verdict: Verdict,
+    ) -> Result<GeoOrigin, &'static str> {
+        if !verdict.trusted() {
+            Err(verdict.reason())
+        } else if self.mission_state == MissionState::Running {
+            Err("the mission is running")
+        } else {
+            GeoOrigin::from_message(lat_e7, lon_e7, alt_mm).map_err(OriginError::as_str)
+        }
+    }
+
+    /// comms.rs `store_origin`.
+    fn store_origin(&mut self, origin: &GeoOrigin) {
+        let changed = self
+            .params
+            .set_origin(origin)
+            .expect("a checked origin fits its parameters");
+        assert_eq!(self.params.origin(), *origin);
+        for &(index, value) in &changed {
+            if let Some(store) = &mut self.store
+                && block_on(store.save(index, value)).is_err()
+            {
+                self.store_failed = true;
+            }
+            let m = value_message(self.params.values(), index).expect("an index in range");
+            self.send(&m);
+        }
+        self.send(&gps_global_origin(origin));
     }
 
     fn refuse(&mut self, command: CommandId, result: MavResult, why: &str) {
@@ -944,7 +960,10 @@ impl Vehicle {
     }
 
     fn send_identity(&mut self) {
-        self.send(&AUTOPILOT_VERSION_DATA::default());
+        self.send(&AUTOPILOT_VERSION_DATA {
+            capabilities: link::status::capabilities(),
+            ..Default::default()
+        });
         self.report_text(Severity::Info, "board: fuzz (firmware 0.1.0)");
     }
 

@@ -16,9 +16,21 @@ use heapless::{String, Vec};
 use crate::frame::{Encoder, Frame};
 
 use crate::msg::{
-    HEARTBEAT_DATA, MavAutopilot, MavModeFlag, MavSeverity, MavState, MavType,
-    NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA, STATUSTEXT_DATA,
+    HEARTBEAT_DATA, MavAutopilot, MavModeFlag, MavProtocolCapability, MavSeverity, MavState,
+    MavType, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA, STATUSTEXT_DATA,
 };
+
+/// `AUTOPILOT_VERSION.capabilities`: what the vehicle does
+/// (docs/ground-link.md#the-declared-capabilities). MAVLink 2 (and its signing), `COMMAND_INT`
+/// ([`crate::command`]), FTP ([`crate::ftp`]), and the parameters' byte-wise encoding (every
+/// parameter is a `REAL32`, sent as itself, [`crate::param`]). Not `MISSION_INT`: the mission
+/// protocol is not served (`MISSION_COUNT` 0).
+pub fn capabilities() -> MavProtocolCapability {
+    MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MAVLINK2
+        | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_COMMAND_INT
+        | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_FTP
+        | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
+}
 
 /// Bytes of text in one `STATUSTEXT`.
 pub const CHUNK_LEN: usize = 50;

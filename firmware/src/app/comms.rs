@@ -24,7 +24,7 @@ use link::hil::{Actuators, ImuSample};
 use link::log_transfer::{LogReply, LogRequest};
 use link::msg::{
     AUTOPILOT_VERSION_DATA, COMPONENT_METADATA_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA,
-    MISSION_COUNT_DATA, MavCmd, MavProtocolCapability, MavResult, MavSeverity, TIMESYNC_DATA,
+    MISSION_COUNT_DATA, MavResult, MavSeverity, TIMESYNC_DATA,
 };
 use link::param::{ParamRequest, ParamService, Values, value_message};
 use link::signing::{KEY_LEN, Verdict};
@@ -458,25 +458,33 @@ async fn announce_origin(params: &ParamService) {
     OUTBOX.send(Outbound::Origin(origin)).await;
 }
 
-/// `SET_GPS_GLOBAL_ORIGIN`: the origin's five parameters set and stored together (refused as
-/// a `PARAM_SET` is: unsigned once signing is on, or while the mission runs); answered with
-/// their `PARAM_VALUE`s and `GPS_GLOBAL_ORIGIN`.
-async fn set_origin(
+/// The origin a `SET_GPS_GLOBAL_ORIGIN` or `MAV_CMD_DO_SET_GLOBAL_ORIGIN` asks for, checked:
+/// refused as a `PARAM_SET` is (unsigned once signing is on, or while the mission runs), or
+/// when it cannot place the vehicle (the reason).
+fn checked_origin(
     (lat_e7, lon_e7, alt_mm): (i32, i32, i32),
     verdict: Verdict,
-    params: &mut ParamService,
-    store: &mut Option<Store>,
-) {
+) -> Result<GeoOrigin, &'static str> {
     let running = MISSION_STATE.load(Ordering::Relaxed) == MissionState::Running as u8;
-    let checked = if !verdict.trusted() {
+    if !verdict.trusted() {
         Err(verdict.reason())
     } else if running {
         Err("the mission is running")
     } else {
         GeoOrigin::from_message(lat_e7, lon_e7, alt_mm).map_err(OriginError::as_str)
-    };
-    let origin = match checked {
-        Ok(origin) => origin,
+    }
+}
+
+/// `SET_GPS_GLOBAL_ORIGIN`: the origin's five parameters set and stored together
+/// ([`checked_origin`]); answered with their `PARAM_VALUE`s and `GPS_GLOBAL_ORIGIN`.
+async fn set_origin(
+    origin: (i32, i32, i32),
+    verdict: Verdict,
+    params: &mut ParamService,
+    store: &mut Option<Store>,
+) {
+    match checked_origin(origin, verdict) {
+        Ok(origin) => store_origin(&origin, params, store).await,
         Err(why) => {
             OUTBOX
                 .send(report(
@@ -484,10 +492,33 @@ async fn set_origin(
                     format_args!("origin not changed: {why}"),
                 ))
                 .await;
-            return;
         }
-    };
-    let Ok(changed) = params.set_origin(&origin) else {
+    }
+}
+
+/// `MAV_CMD_DO_SET_GLOBAL_ORIGIN` (a `COMMAND_INT`): as `SET_GPS_GLOBAL_ORIGIN`, acknowledged
+/// first (a refusal `DENIED` with the reason; docs/ground-link.md#commands-long-or-int).
+async fn command_origin(
+    command: CommandId,
+    origin: (i32, i32, i32),
+    verdict: Verdict,
+    params: &mut ParamService,
+    store: &mut Option<Store>,
+) {
+    match checked_origin(origin, verdict) {
+        Ok(origin) => {
+            let result = MavResult::MAV_RESULT_ACCEPTED;
+            OUTBOX.send(Outbound::Ack { command, result }).await;
+            store_origin(&origin, params, store).await;
+        }
+        Err(why) => refuse(command, MavResult::MAV_RESULT_DENIED, why).await,
+    }
+}
+
+/// Sets and stores a checked origin's parameters; sends their `PARAM_VALUE`s and
+/// `GPS_GLOBAL_ORIGIN`.
+async fn store_origin(origin: &GeoOrigin, params: &mut ParamService, store: &mut Option<Store>) {
+    let Ok(changed) = params.set_origin(origin) else {
         return;
     };
     for &(index, value) in &changed {
@@ -634,13 +665,13 @@ async fn handle(
                     }
                 }
             }
+            Request::SetOrigin {
+                lat_e7,
+                lon_e7,
+                alt_mm,
+            } => command_origin(command, (lat_e7, lon_e7, alt_mm), verdict, params, store).await,
             Request::Refused(result) => {
-                let why = if command.is(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM) {
-                    "the mission arms the rotors itself, at take-off"
-                } else {
-                    "not supported"
-                };
-                refuse(command, result, why).await;
+                refuse(command, result, link::command::refusal(command, result)).await;
             }
         },
         Inbound::Param { request, .. } => handle_param(request, verdict, params, store).await,
@@ -873,9 +904,7 @@ impl<W: Write> Sending<W> {
 
     async fn identity(&mut self) {
         let version = AUTOPILOT_VERSION_DATA {
-            capabilities: MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MAVLINK2
-                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_FTP
-                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE,
+            capabilities: link::status::capabilities(),
             flight_sw_version: 0x0001_0000,
             ..Default::default()
         };
