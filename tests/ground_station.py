@@ -11,12 +11,15 @@ Run by tests/ground_link.rs (cargo test); by hand:
 Two runs of the firmware share one parameter flash (`--storage DIR`):
 
 1. connect (HEARTBEAT from component 1, MAV_AUTOPILOT_GENERIC), AUTOPILOT_VERSION through
-   MAV_CMD_REQUEST_MESSAGE (MAVLink 2 and parameter-encoding capabilities), MISSION_COUNT 0,
+   MAV_CMD_REQUEST_MESSAGE as COMMAND_LONG and COMMAND_INT (capabilities MAVLink 2, COMMAND_INT,
+   FTP, byte-wise parameter encoding; not MISSION_INT), MISSION_COUNT 0,
    telemetry (SYS_STATUS, ATTITUDE_QUATERNION, LOCAL_POSITION_NED and the robots' rail positions
    as DEBUG_FLOAT_ARRAY streamed; a stream stopped
    and restarted by MAV_CMD_SET_MESSAGE_INTERVAL, a bad interval and an unstreamed message
    refused, SYS_STATUS sent once on MAV_CMD_REQUEST_MESSAGE), the map origin (GPS_GLOBAL_ORIGIN
-   the default, then set with SET_GPS_GLOBAL_ORIGIN and read back; HOME_POSITION on request
+   the default, then set with SET_GPS_GLOBAL_ORIGIN and read back, set with
+   MAV_CMD_DO_SET_GLOBAL_ORIGIN as COMMAND_INT and read back, a bad frame and latitude refused,
+   NAV_TAKEOFF as COMMAND_INT UNSUPPORTED; HOME_POSITION on request
    and on MAV_CMD_GET_HOME_POSITION; GLOBAL_POSITION_INT the local position through it),
    TIMESYNC answered and asked,
    every parameter (count and indices consistent, read back by name and by index), the
@@ -66,6 +69,10 @@ CHECKS_VALUE = 2.0
 SIGNING_KEY = bytes(range(1, 33))
 # The map origin the ground station sets (SET_GPS_GLOBAL_ORIGIN): 1e-7 degrees, mm.
 ORIGIN = (-338688123, 1512093456, 58250)
+# MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME (pymavlink 2.4.50 does not list it yet).
+UNSUPPORTED_MAV_FRAME = getattr(mavlink, "MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME", 9)
+# The one set with MAV_CMD_DO_SET_GLOBAL_ORIGIN (COMMAND_INT) in between.
+ORIGIN_INT = (515007123, -1275456, 12250)
 # The default until one is set: PX4's simulation home.
 DEFAULT_ORIGIN = (473977420, 85455940, 488000)
 BAD_VALUES = [("MAX_TILT", 5.0, "outside"), ("MAX_TILT", float("nan"), "finite"),
@@ -145,6 +152,13 @@ class Vehicle:
         p = list(params) + [0.0] * (7 - len(params))
         self.conn.mav.command_long_send(1, 1, cmd, 0, *p)
         return self.expect(["COMMAND_ACK"], 10, f"COMMAND_ACK of command {cmd}",
+                           lambda m: m.command == cmd)
+
+    def command_int(self, cmd, frame=mavlink.MAV_FRAME_GLOBAL, params=(), x=0, y=0, z=0.0):
+        """A COMMAND_INT (as MAVSDK sends position commands) and its COMMAND_ACK."""
+        p = list(params) + [0.0] * (4 - len(params))
+        self.conn.mav.command_int_send(1, 1, frame, cmd, 0, 0, *p, x, y, z)
+        return self.expect(["COMMAND_ACK"], 10, f"COMMAND_ACK of COMMAND_INT {cmd}",
                            lambda m: m.command == cmd)
 
     def param_set(self, name, value):
@@ -250,6 +264,44 @@ def to_global(origin, north, east):
     return lat, lon
 
 
+def command_int_origin_checks(v):
+    """MAV_CMD_DO_SET_GLOBAL_ORIGIN as COMMAND_INT (x, y 1e-7 degrees, z m): another origin set
+    and read back, a frame with a relative altitude and a latitude beyond 85 degrees refused
+    (the origin unchanged), a command the vehicle does not do UNSUPPORTED as COMMAND_LONG is;
+    then ORIGIN again, as the rest of the test expects it."""
+    cmd = mavlink.MAV_CMD_DO_SET_GLOBAL_ORIGIN
+    ack = v.command_int(cmd, x=ORIGIN_INT[0], y=ORIGIN_INT[1], z=ORIGIN_INT[2] * 1e-3)
+    if ack.result != mavlink.MAV_RESULT_ACCEPTED:
+        raise Failure(f"DO_SET_GLOBAL_ORIGIN acknowledged {ack.result}")
+    o = v.expect(["GPS_GLOBAL_ORIGIN"], 10, "GPS_GLOBAL_ORIGIN after DO_SET_GLOBAL_ORIGIN",
+                 lambda m: m.latitude == ORIGIN_INT[0])
+    if (o.latitude, o.longitude, o.altitude) != ORIGIN_INT:
+        raise Failure(f"origin set to {ORIGIN_INT} by COMMAND_INT, GPS_GLOBAL_ORIGIN says "
+                      f"{(o.latitude, o.longitude, o.altitude)}")
+    ack = v.command_int(cmd, frame=mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT, x=ORIGIN[0],
+                        y=ORIGIN[1], z=1.0)
+    if ack.result != UNSUPPORTED_MAV_FRAME:
+        raise Failure(f"DO_SET_GLOBAL_ORIGIN with a relative altitude acknowledged {ack.result}")
+    ack = v.command_int(cmd, x=860000000, y=ORIGIN[1], z=1.0)
+    if ack.result != mavlink.MAV_RESULT_DENIED:
+        raise Failure(f"DO_SET_GLOBAL_ORIGIN at 86 degrees acknowledged {ack.result}")
+    v.text_matching("latitude beyond 85", 10)
+    ack = v.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN)
+    o = v.expect(["GPS_GLOBAL_ORIGIN"], 10, "GPS_GLOBAL_ORIGIN on request")
+    if o.latitude != ORIGIN_INT[0]:
+        raise Failure(f"a refused DO_SET_GLOBAL_ORIGIN moved the origin to {o.latitude}")
+    ack = v.command_int(mavlink.MAV_CMD_NAV_TAKEOFF, x=ORIGIN[0], y=ORIGIN[1], z=1.0)
+    if ack.result != mavlink.MAV_RESULT_UNSUPPORTED:
+        raise Failure(f"NAV_TAKEOFF as COMMAND_INT acknowledged {ack.result}")
+    ack = v.command_int(cmd, x=ORIGIN[0], y=ORIGIN[1], z=ORIGIN[2] * 1e-3)
+    o = v.expect(["GPS_GLOBAL_ORIGIN"], 10, "GPS_GLOBAL_ORIGIN after DO_SET_GLOBAL_ORIGIN",
+                 lambda m: m.latitude == ORIGIN[0])
+    if ack.result != mavlink.MAV_RESULT_ACCEPTED or (o.longitude, o.altitude) != ORIGIN[1:]:
+        raise Failure(f"origin set back by COMMAND_INT: {o} (ack {ack.result})")
+    print("COMMAND_INT: DO_SET_GLOBAL_ORIGIN set and read back, a relative altitude and 86 "
+          "degrees refused, NAV_TAKEOFF UNSUPPORTED")
+
+
 def map_checks(v):
     """The vehicle on a map: the origin (GPS_GLOBAL_ORIGIN) by default and set with
     SET_GPS_GLOBAL_ORIGIN (its ORIG_* parameters answered), HOME_POSITION on request (the
@@ -267,6 +319,7 @@ def map_checks(v):
     if (o.latitude, o.longitude, o.altitude) != ORIGIN:
         raise Failure(f"origin set to {ORIGIN}, GPS_GLOBAL_ORIGIN says "
                       f"{(o.latitude, o.longitude, o.altitude)}")
+    command_int_origin_checks(v)
     lat_deg = v.param_read(name="ORIG_LAT_DEG").param_value
     lat_e7 = v.param_read(name="ORIG_LAT_E7").param_value
     if (lat_deg, lat_e7) != (-33.0, -8688123.0):
@@ -465,9 +518,21 @@ def first_run(args, port):
             raise Failure(f"REQUEST_MESSAGE(AUTOPILOT_VERSION) acknowledged {ack.result}")
         version = v.expect(["AUTOPILOT_VERSION"], 10, "AUTOPILOT_VERSION")
         need = (mavlink.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+                | mavlink.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
+                | mavlink.MAV_PROTOCOL_CAPABILITY_FTP
                 | mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE)
-        if version.capabilities & need != need:
+        # Not the mission protocol, nor the other parameter encoding (one of the two).
+        never = (mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_INT
+                 | mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST
+                 | mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT)
+        if version.capabilities & need != need or version.capabilities & never:
             raise Failure(f"AUTOPILOT_VERSION capabilities {version.capabilities:#x}")
+        # The same request as COMMAND_INT, as MAVSDK may send it.
+        ack = v.command_int(mavlink.MAV_CMD_REQUEST_MESSAGE,
+                            params=[mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION])
+        if ack.result != mavlink.MAV_RESULT_ACCEPTED:
+            raise Failure(f"REQUEST_MESSAGE(AUTOPILOT_VERSION) as COMMAND_INT: {ack.result}")
+        v.expect(["AUTOPILOT_VERSION"], 10, "AUTOPILOT_VERSION asked by COMMAND_INT")
         v.conn.mav.mission_request_list_send(1, 1)
         count = v.expect(["MISSION_COUNT"], 10, "MISSION_COUNT")
         if count.count != 0:
