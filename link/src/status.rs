@@ -256,6 +256,20 @@ impl Reassembler {
 mod tests {
     use super::*;
 
+    #[test]
+    #[allow(deprecated)] // PARAM_FLOAT, checked absent
+    fn the_capabilities_are_what_the_vehicle_does_and_no_more() {
+        let c = capabilities();
+        assert!(c.contains(MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_COMMAND_INT));
+        // One parameter encoding, and no mission protocol.
+        assert!(!c.intersects(
+            MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST
+                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
+                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_INT
+        ));
+        assert_eq!(c.bits(), 8 | 16 | 32 | 8192);
+    }
+
     fn round_trip(text: &str) -> std::string::String {
         let mut r = Reassembler::new();
         let mut out = None;
