@@ -8,19 +8,17 @@
 //! millivolts), and pyulog opens it too. Without python3 and pyulog, or QEMU, a test says it
 //! was skipped and why; with `HIL_REQUIRED=1` (CI, which installs them) it fails instead.
 
+mod common;
+
+use common::{image_or_skip, skip, workspace};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use host_sim::hil::qemu;
 use host_sim::mission_run::{self, MissionSetup};
 use host_sim::scenario_file;
 use link::flight_log::topics::Topic;
 use shared::mission::params::TABLE;
-
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 /// Flies rect-ex1 with its log written to a fresh file; the mission's outcome and the log.
 fn fly_logged(name: &str) -> (mission_run::MissionOutcome, PathBuf) {
@@ -204,7 +202,7 @@ fn pyulog_opens_the_mission_log() {
             use std::io::Write;
             let _ = writeln!(std::io::stderr(), "{report}");
         }
-        Err(why) => skip(&why),
+        Err(why) => skip("flight log with pyulog", &why),
     }
     let _ = std::fs::remove_file(&path);
 }
@@ -246,13 +244,8 @@ fn pyulog_check(path: &Path) -> Result<String, String> {
 
 #[test]
 fn the_firmware_in_the_loop_keeps_the_simulators_log_in_its_storage() {
-    if !qemu::available() {
-        qemu::note_skipped(true);
-        return skip("qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)");
-    }
-    let elf = match qemu::test_image(&workspace()) {
-        Ok(elf) => elf,
-        Err(why) => return skip(&why),
+    let Some(elf) = image_or_skip("flight log in the loop") else {
+        return;
     };
     let (_, host_log) = fly_logged("hil");
     let storage = host_log.with_file_name("storage");
@@ -301,19 +294,8 @@ fn the_firmware_in_the_loop_keeps_the_simulators_log_in_its_storage() {
             use std::io::Write;
             let _ = writeln!(std::io::stderr(), "firmware's log: {report}");
         }
-        Err(why) => skip(&why),
+        Err(why) => skip("flight log in the loop with pyulog", &why),
     }
     let _ = std::fs::remove_dir_all(&storage);
     let _ = std::fs::remove_file(&host_log);
-}
-
-fn skip(reason: &str) {
-    if std::env::var("HIL_REQUIRED").is_ok_and(|v| v == "1") {
-        panic!("flight log: HIL_REQUIRED=1 but {reason}");
-    }
-    use std::io::Write;
-    let _ = writeln!(
-        std::io::stderr(),
-        "flight log with pyulog: SKIPPED: {reason}"
-    );
 }

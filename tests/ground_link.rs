@@ -9,36 +9,21 @@
 //! was skipped and why, and passes; with `HIL_REQUIRED=1` (CI, which installs them) it fails
 //! instead.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::{image_or_skip, skip, workspace};
 use std::process::Command;
 
-use host_sim::hil::qemu;
-
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn skip(reason: &str) {
-    if std::env::var("HIL_REQUIRED").is_ok_and(|v| v == "1") {
-        panic!("ground station: HIL_REQUIRED=1 but {reason}");
-    }
-    qemu::note_skipped(reason.starts_with("qemu-system-arm is not installed"));
-    // Straight to stderr: the harness hides what a passing test prints with `eprintln!`.
-    use std::io::Write;
-    let _ = writeln!(std::io::stderr(), "ground station: SKIPPED: {reason}");
-}
+/// The test's name in what it says when skipped.
+const TEST: &str = "ground station";
 
 /// Exit status of the script when pymavlink is missing.
 const NO_PYMAVLINK: i32 = 2;
 
 #[test]
 fn a_pymavlink_ground_station_tunes_restarts_and_flies_the_firmware() {
-    if !qemu::available() {
-        return skip("qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)");
-    }
-    let elf = match qemu::test_image(&workspace()) {
-        Ok(elf) => elf,
-        Err(why) => return skip(&why),
+    let Some(elf) = image_or_skip(TEST) else {
+        return;
     };
     let script = workspace().join("tests/ground_station.py");
     let output = match Command::new("python3")
@@ -52,12 +37,12 @@ fn a_pymavlink_ground_station_tunes_restarts_and_flies_the_firmware() {
         .output()
     {
         Ok(output) => output,
-        Err(e) => return skip(&format!("python3 cannot be run ({e})")),
+        Err(e) => return skip(TEST, &format!("python3 cannot be run ({e})")),
     };
     let stdout = String::from_utf8_lossy(&output.stdout);
     let stderr = String::from_utf8_lossy(&output.stderr);
     if output.status.code() == Some(NO_PYMAVLINK) {
-        return skip(stderr.trim());
+        return skip(TEST, stderr.trim());
     }
     assert!(
         output.status.success(),

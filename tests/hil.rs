@@ -11,12 +11,15 @@
 //! same `shared` code on the Cortex-M7, so the lifts, the estimate and the formation must
 //! agree.
 
+mod common;
+
+use common::{image_or_skip, workspace};
 use std::net::TcpListener;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use host_sim::hil::qemu::{self, Qemu, QemuLink};
+use host_sim::hil::qemu::{Qemu, QemuLink};
 use host_sim::hil::run::{HilSetup, run};
 use host_sim::hil::session::{LoggedText, Session};
 use host_sim::hil::transport::Link;
@@ -30,32 +33,6 @@ use shared::scenario_wire::{MAX_ENCODED_LEN, encode};
 
 /// One QEMU at a time: the machines that run this have two cores.
 static ONE_QEMU: Mutex<()> = Mutex::new(());
-
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// The firmware image if the test can run (built first when it is missing or stale);
-/// otherwise says why it is skipped (or, with `HIL_REQUIRED=1`, fails).
-fn image_or_skip(test: &str) -> Option<PathBuf> {
-    let no_qemu = !qemu::available();
-    let reason = if no_qemu {
-        "qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)".to_string()
-    } else {
-        match qemu::test_image(&workspace()) {
-            Ok(elf) => return Some(elf),
-            Err(why) => why,
-        }
-    };
-    if std::env::var("HIL_REQUIRED").is_ok_and(|v| v == "1") {
-        panic!("{test}: HIL_REQUIRED=1 but {reason}");
-    }
-    qemu::note_skipped(no_qemu);
-    // Straight to stderr: the test harness hides what `eprintln!` prints in a passing test.
-    use std::io::Write;
-    let _ = writeln!(std::io::stderr(), "{test}: SKIPPED: {reason}");
-    None
-}
 
 /// Prints a measurement where it is seen even when the test passes (the harness hides what
 /// `println!` prints then).

@@ -1,5 +1,6 @@
 //! Helpers the scenario tests share: where the scenario files are, loading one, running the
-//! `host-sim` binary.
+//! `host-sim` binary, and the firmware-in-the-loop tests' image and skipping (a test that
+//! needs a missing tool says it was skipped and why; with `HIL_REQUIRED=1`, CI, it fails).
 #![allow(dead_code)] // each test crate uses its own subset
 
 use std::path::{Path, PathBuf};
@@ -25,4 +26,40 @@ pub fn host_sim(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("host-sim runs")
+}
+
+/// The repository's root.
+pub fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Why a firmware-in-the-loop test is skipped on a machine without QEMU.
+pub const NO_QEMU: &str =
+    "qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)";
+
+/// Says that `test` was skipped for `reason` (counted for the process's closing line), or,
+/// with `HIL_REQUIRED=1`, fails it.
+pub fn skip(test: &str, reason: &str) {
+    if std::env::var("HIL_REQUIRED").is_ok_and(|v| v == "1") {
+        panic!("{test}: HIL_REQUIRED=1 but {reason}");
+    }
+    host_sim::hil::qemu::note_skipped(reason == NO_QEMU);
+    // Straight to stderr: the test harness hides what `eprintln!` prints in a passing test.
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "{test}: SKIPPED: {reason}");
+}
+
+/// The firmware's QEMU image if `test` can run (built first when it is missing or stale);
+/// otherwise [`skip`]s it.
+pub fn image_or_skip(test: &str) -> Option<PathBuf> {
+    let reason = if host_sim::hil::qemu::available() {
+        match host_sim::hil::qemu::test_image(&workspace()) {
+            Ok(elf) => return Some(elf),
+            Err(why) => why,
+        }
+    } else {
+        NO_QEMU.to_string()
+    };
+    skip(test, &reason);
+    None
 }
