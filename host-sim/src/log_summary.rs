@@ -10,41 +10,16 @@
 //! payload's truth are not in the log; with the scenario they come from, the thrusts are in
 //! newtons and each lift stands beside the model's lift-off thrust.
 
-use link::flight_log::recorder::phase_code;
-use shared::control::trajectory::FlightPhase;
-use shared::mission::Phase;
+use link::flight_log::recorder::phase_from_code;
 use shared::scenario::Scenario;
 
 use crate::figures::mission_summary::{LiftBar, MissionSummary, Span, SummarySample};
 use crate::mission_run::model_lift;
 use crate::ulog_read::{Field, Stop, TopicData, Ulog};
 
-/// Every phase, to name a logged `mission_phase` number.
-const PHASES: [Phase; 16] = [
-    Phase::Idle,
-    Phase::PreflightChecks,
-    Phase::SelectingPair,
-    Phase::MovingRobots,
-    Phase::Lifting,
-    Phase::Relaxing,
-    Phase::DecidingFormation,
-    Phase::Rearranging,
-    Phase::Arming,
-    Phase::Flying(FlightPhase::Takeoff),
-    Phase::Flying(FlightPhase::Transit),
-    Phase::Flying(FlightPhase::Hover),
-    Phase::Flying(FlightPhase::Land),
-    Phase::Flying(FlightPhase::Done),
-    Phase::Disarmed,
-    Phase::Aborted,
-];
-
 /// The name of logged phase number `code` (`phase 99` for one this firmware does not have).
 pub fn phase_name(code: u8) -> String {
-    PHASES
-        .iter()
-        .find(|p| phase_code(**p) == code)
-        .map_or_else(|| format!("phase {code}"), |p| p.name().to_string())
+    phase_from_code(code).map_or_else(|| format!("phase {code}"), |p| p.name().to_string())
 }
 
 /// The summary of a log and what it lacks.
@@ -458,8 +433,9 @@ mod tests {
 
     #[test]
     fn every_phase_number_names_its_phase_and_an_unknown_one_says_so() {
-        for p in PHASES {
-            assert_eq!(phase_name(phase_code(p)), p.name());
+        for code in 0..16 {
+            let phase = phase_from_code(code).expect("a phase");
+            assert_eq!(phase_name(code), phase.name());
         }
         assert_eq!(phase_name(99), "phase 99");
     }

@@ -339,6 +339,17 @@ mod tests {
             .collect()
     }
 
+    /// The ids a list of `start..=end` answers.
+    fn listed(
+        service: &mut LogService,
+        storage: &mut MemoryLogs,
+        start: u16,
+        end: u16,
+    ) -> Vec<u16> {
+        let (replies, _) = answer(service, storage, LogRequest::List { start, end });
+        entries(&replies).iter().map(|e| e.id).collect()
+    }
+
     fn entries(replies: &[LogReply]) -> Vec<&LOG_ENTRY_DATA> {
         replies
             .iter()
@@ -381,34 +392,10 @@ mod tests {
             .collect();
         assert_eq!(got, [(0, 3, 2, 1000, 0), (1, 3, 2, 0, 0), (2, 3, 2, 90, 0)]);
         // A part of the list, and a range past the logs clamped to the last.
-        let (replies, _) = answer(
-            &mut service,
-            &mut storage,
-            LogRequest::List { start: 1, end: 1 },
-        );
-        assert_eq!(
-            entries(&replies).iter().map(|e| e.id).collect::<Vec<_>>(),
-            [1]
-        );
-        let (replies, _) = answer(
-            &mut service,
-            &mut storage,
-            LogRequest::List { start: 9, end: 40 },
-        );
-        assert_eq!(
-            entries(&replies).iter().map(|e| e.id).collect::<Vec<_>>(),
-            [2]
-        );
+        assert_eq!(listed(&mut service, &mut storage, 1, 1), [1]);
+        assert_eq!(listed(&mut service, &mut storage, 9, 40), [2]);
         // Start after end: the one entry at end.
-        let (replies, _) = answer(
-            &mut service,
-            &mut storage,
-            LogRequest::List { start: 2, end: 0 },
-        );
-        assert_eq!(
-            entries(&replies).iter().map(|e| e.id).collect::<Vec<_>>(),
-            [0]
-        );
+        assert_eq!(listed(&mut service, &mut storage, 2, 0), [0]);
     }
 
     #[test]

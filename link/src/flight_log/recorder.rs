@@ -67,6 +67,30 @@ pub fn phase_code(phase: Phase) -> u8 {
     }
 }
 
+/// The phase a logged `mission_phase` number stands for ([`phase_code`]'s inverse; `None` for
+/// a number this firmware does not write).
+pub fn phase_from_code(code: u8) -> Option<Phase> {
+    Some(match code {
+        0 => Phase::Idle,
+        1 => Phase::PreflightChecks,
+        2 => Phase::SelectingPair,
+        3 => Phase::MovingRobots,
+        4 => Phase::Lifting,
+        5 => Phase::Relaxing,
+        6 => Phase::DecidingFormation,
+        7 => Phase::Rearranging,
+        8 => Phase::Arming,
+        9 => Phase::Flying(FlightPhase::Takeoff),
+        10 => Phase::Flying(FlightPhase::Transit),
+        11 => Phase::Flying(FlightPhase::Hover),
+        12 => Phase::Flying(FlightPhase::Land),
+        13 => Phase::Flying(FlightPhase::Done),
+        14 => Phase::Disarmed,
+        15 => Phase::Aborted,
+        _ => return None,
+    })
+}
+
 /// PX4's `nav_state` nearest a phase: take-off 17 (`AUTO_TAKEOFF`), hover 4 (`AUTO_LOITER`),
 /// landing and touchdown 18 (`AUTO_LAND`), every other phase 3 (`AUTO_MISSION`).
 pub fn nav_state(phase: Phase) -> u8 {
@@ -407,5 +431,20 @@ pub fn step_texts(out: &TickOutput, each: &mut impl FnMut(LogLevel, core::fmt::A
             _ => LogLevel::Warning,
         };
         each(level, format_args!("{notice}"));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_phase_number_reads_back_as_its_phase() {
+        for code in 0..=u8::MAX {
+            match phase_from_code(code) {
+                Some(phase) => assert_eq!(phase_code(phase), code),
+                None => assert!(code > 15, "{code} names no phase"),
+            }
+        }
     }
 }

@@ -161,12 +161,10 @@ mod tests {
         hover_with(steps, capacity, true)
     }
 
-    /// [`hover`], with the cascade's setpoints or without them (the rotors stopped).
-    fn hover_with(steps: u64, capacity: usize, setpoints: bool) -> (TestRing, MissionLog) {
-        let scenario = shared::paper::checked(shared::paper::rect_sim1());
-        let mut mission = Mission::new(&scenario, MissionConfig::default());
-        let mut input = TickInput {
-            time_us: 0,
+    /// A step's input at `time_us`: the IMU at rest, nothing else.
+    fn resting(time_us: u64) -> TickInput {
+        TickInput {
+            time_us,
             imu: ImuSample {
                 gyro: Vec3::ZERO,
                 accel: Vec3::new(0.0, 0.0, -9.8),
@@ -175,7 +173,14 @@ mod tests {
             command: None,
             faults: HardwareFaults::NONE,
             supervision: Supervision::NONE,
-        };
+        }
+    }
+
+    /// [`hover`], with the cascade's setpoints or without them (the rotors stopped).
+    fn hover_with(steps: u64, capacity: usize, setpoints: bool) -> (TestRing, MissionLog) {
+        let scenario = shared::paper::checked(shared::paper::rect_sim1());
+        let mut mission = Mission::new(&scenario, MissionConfig::default());
+        let mut input = resting(0);
         let mut out = mission.step(&input);
         out.phase = Phase::Flying(FlightPhase::Hover);
         out.cascade = setpoints.then_some(CascadeSetpoints {
@@ -312,17 +317,7 @@ mod tests {
         ring.capacity = usize::MAX;
         let scenario = shared::paper::checked(shared::paper::rect_sim1());
         let mut mission = Mission::new(&scenario, MissionConfig::default());
-        let input = TickInput {
-            time_us: 20_000,
-            imu: ImuSample {
-                gyro: Vec3::ZERO,
-                accel: Vec3::new(0.0, 0.0, -9.8),
-            },
-            mocap: None,
-            command: None,
-            faults: HardwareFaults::NONE,
-            supervision: Supervision::NONE,
-        };
+        let input = resting(20_000);
         let mut out = mission.step(&input);
         out.phase = Phase::Flying(FlightPhase::Hover);
         log.step(&input, &out, &mission, 14.2, &mut ring, |_| {});
