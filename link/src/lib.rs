@@ -49,6 +49,8 @@ pub mod geo;
 pub mod hil;
 pub mod hil_ethernet;
 pub mod log_transfer;
+pub mod mission;
+pub mod modes;
 pub mod odometry;
 pub mod param;
 pub mod signing;

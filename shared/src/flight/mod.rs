@@ -8,17 +8,20 @@
 //!   take-off check, land detector, failsafes and the operator's land and kill commands.
 //! - [`trim`]: the payload's COM and mass from the wrench that holds it in a hover.
 //! - [`adapt`]: the formation re-solved and the robots moved in flight when the load shifts.
+//! - [`route`]: a ground station's mission items in the local frame, checked.
 //! - [`rotor_monitor`]: a rotor that stops in flight, found from the vehicle's response.
 
 pub mod adapt;
 pub mod model;
 pub mod rotor_monitor;
+pub mod route;
 pub mod stack;
 pub mod trim;
 
 pub use adapt::{AdaptConfig, AdaptEvent, Adapter};
 pub use model::FlightModel;
 pub use rotor_monitor::{RotorMonitor, RotorMonitorConfig};
+pub use route::{Route, RouteError, RouteItem, RoutePoint, RouteProblem};
 pub use stack::{
     CascadeSetpoints, FlightCommand, FlightConfig, FlightEvent, FlightOutput, FlightStack,
     FlightStop, LandingCause, RotorOut,

@@ -33,6 +33,8 @@ use crate::control::controller::{ControlInputs, FlightController};
 use crate::control::land_detector::{Contact, LandDetector};
 use crate::control::navigator::NavState;
 use crate::control::params::ControlParams;
+#[cfg(doc)]
+use crate::control::trajectory::PlanSegment;
 use crate::control::trajectory::{FlightPhase, FlightPlan, PlanLimits, Setpoint};
 use crate::control::vector::{Quat, Vec3};
 use crate::control::vehicle::VehicleModel;
@@ -219,6 +221,8 @@ pub struct FlightStack {
     hold_here: bool,
     /// The COM the mixer's torques are about, m.
     com: Vec2,
+    /// The last route item reached ([`PlanSegment::ends_item`]), if any.
+    reached: Option<u8>,
     monitor: RotorMonitor,
     /// Rotors found stopped, in order (the first [`MAX_ROTORS_OUT`]).
     rotors_lost: heapless::Vec<RotorOut, MAX_ROTORS_OUT>,
@@ -230,12 +234,24 @@ impl FlightStack {
     /// A flight of `model` from `start` (on the ground, NED) to `target` = [x, y, height
     /// above ground].
     pub fn new(config: FlightConfig, model: FlightModel, start: Vec3, target: [f32; 3]) -> Self {
+        let plan = FlightPlan::new(start, target, 0.0, config.plan);
+        Self::with_plan(config, model, start, plan)
+    }
+
+    /// A flight of `model` from `start` (on the ground, NED) along `plan` (a route's:
+    /// [`FlightPlan::from_route`]).
+    pub fn with_plan(
+        config: FlightConfig,
+        model: FlightModel,
+        start: Vec3,
+        plan: FlightPlan,
+    ) -> Self {
         Self {
             config,
             weight: model.vehicle.hover_thrust(),
             controller: FlightController::new(config.control, model.vehicle),
             mixer: model.mixer,
-            plan: FlightPlan::new(start, target, 0.0, config.plan),
+            plan,
             segment: 0,
             segment_time: 0.0,
             phase: FlightPhase::Takeoff,
@@ -253,6 +269,7 @@ impl FlightStack {
             hold_hover: false,
             hold_here: false,
             com: model.com,
+            reached: None,
             monitor: RotorMonitor::new(),
             rotors_lost: heapless::Vec::new(),
             rotor_landing: None,
@@ -416,6 +433,16 @@ impl FlightStack {
     /// The plan being followed.
     pub fn plan(&self) -> &FlightPlan {
         &self.plan
+    }
+
+    /// The route item being flown (from 0; the last one once landing) and the last one
+    /// reached, if any.
+    pub fn route_progress(&self) -> (u8, Option<u8>) {
+        let current = match self.plan.segment(self.segment) {
+            Some(s) if self.landing.is_none() => s.item,
+            _ => self.reached.unwrap_or(0),
+        };
+        (current.max(self.reached.unwrap_or(0)), self.reached)
     }
 
     fn stop(&mut self, why: FlightStop) -> Option<FlightEvent> {
@@ -589,6 +616,9 @@ impl FlightStack {
         let arrived = segment.phase == FlightPhase::Land
             || (nav.position.position - segment.to).norm() <= self.config.arrival_tolerance;
         if arrived {
+            if segment.ends_item && self.landing.is_none() {
+                self.reached = Some(segment.item);
+            }
             self.segment += 1;
             self.segment_time = 0.0;
             self.phase = self
