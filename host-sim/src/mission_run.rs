@@ -65,6 +65,8 @@ pub struct MissionSetup {
     pub rotors_out: Vec<RotorStop>,
     /// Write the mission's flight log (ULog) to this file.
     pub log: Option<PathBuf>,
+    /// A ground station's route to fly instead of the scenario's target.
+    pub route: Option<shared::flight::Route>,
 }
 
 /// A rotor that stops: from `after` seconds after take-off began, robot `robot`'s rotor
@@ -203,6 +205,7 @@ impl Default for MissionSetup {
             battery_drop: None,
             rotors_out: Vec::new(),
             log: None,
+            route: None,
         }
     }
 }
@@ -603,7 +606,11 @@ pub fn fly(
     if let Some(last) = record.phases.last_mut() {
         last.1 = end - entered;
     }
-    let landing = Vec3::new(flight.target[0], flight.target[1], start.z);
+    let (x, y) = match &setup.route {
+        Some(route) if !route.is_empty() => route_landing(route).unwrap_or((start.x, start.y)),
+        _ => (flight.target[0], flight.target[1]),
+    };
+    let landing = Vec3::new(x, y, start.z);
     let end_position = plant.state().position;
     record.final_position_error_m = (end_position - landing).norm();
     record.moved_after_imu_fault_m = imu_fault_position.map(|p| {
@@ -709,6 +716,8 @@ pub struct InProcess {
     pub jobs: Vec<JobRequest>,
     /// Every refused start, in order.
     pub refusals: Vec<CommandRefusal>,
+    /// Every operator command's reply, in order.
+    pub replies: Vec<(OperatorCommand, Result<(), CommandRefusal>)>,
     /// The flight log being written, if one is.
     log: Option<LogFile>,
 }
@@ -724,6 +733,7 @@ impl InProcess {
             reasons: Vec::new(),
             jobs: Vec::new(),
             refusals: Vec::new(),
+            replies: Vec::new(),
             log: None,
         })
     }
@@ -784,6 +794,9 @@ impl Autopilot for InProcess {
         }
         if let Some(n) = out.notice {
             events.push(Event::Notice(n.to_string()));
+        }
+        if let Some(reply) = out.reply {
+            self.replies.push((reply.command, reply.outcome));
         }
         if let Some(reply) = out.reply
             && reply.command == OperatorCommand::Start
@@ -878,6 +891,18 @@ pub struct MissionOutcome {
     pub min_battery_volts: f32,
 }
 
+/// Where a route lands (north, east): below its last item with a place; `None` when no item
+/// has one (it lands where it took off).
+fn route_landing(route: &shared::flight::Route) -> Option<(f32, f32)> {
+    use shared::flight::RouteItem;
+    route.items().iter().rev().find_map(|item| match item {
+        RouteItem::Waypoint(p)
+        | RouteItem::Loiter { at: Some(p), .. }
+        | RouteItem::Land { at: Some(p) } => Some((p.north, p.east)),
+        _ => None,
+    })
+}
+
 /// A flight counts as delivered within this distance of the target, m.
 pub const DELIVERY_RADIUS: f32 = 0.25;
 
@@ -889,6 +914,12 @@ pub fn run(
     on_phase: &mut dyn FnMut(f32, &str, &str),
 ) -> Result<(MissionOutcome, InProcess)> {
     let mut autopilot = InProcess::new(scenario, setup.config)?;
+    if let Some(route) = &setup.route {
+        autopilot
+            .mission
+            .set_route(route)
+            .map_err(|e| anyhow!("the route was refused: {e}"))?;
+    }
     if let Some(path) = &setup.log {
         autopilot.log = Some(LogFile::create(
             path,

@@ -7,6 +7,9 @@
 //! |---|---|
 //! | `MAV_CMD_MISSION_START` | [`OperatorCommand::Start`] the mission |
 //! | `MAV_CMD_NAV_LAND` | [`OperatorCommand::LandNow`] |
+//! | `MAV_CMD_DO_SET_MODE` with PX4's AUTO main mode (4) and a sub mode: MISSION (4), LOITER (3), LAND (6) | [`OperatorCommand::Resume`], [`OperatorCommand::Hold`], [`OperatorCommand::LandNow`] ([`crate::modes`]); other modes `DENIED` |
+//! | `MAV_CMD_DO_SET_STANDARD_MODE`: `MISSION`, `LAND` | [`OperatorCommand::Resume`], [`OperatorCommand::LandNow`]; other modes `DENIED` |
+//! | `MAV_CMD_DO_PAUSE_CONTINUE`: param1 0, 1 | [`OperatorCommand::Hold`], [`OperatorCommand::Resume`] |
 //! | `MAV_CMD_COMPONENT_ARM_DISARM`, param1 = 0 | [`OperatorCommand::Abort`] (the mission stops in a safe way) |
 //! | the same with param2 = 21196 (forced), or `MAV_CMD_DO_FLIGHTTERMINATION` param1 > 0.5 | [`OperatorCommand::Kill`]: rotors off now |
 //! | `MAV_CMD_REQUEST_MESSAGE` | [`Request::Message`] (the link answers it) |
@@ -18,6 +21,7 @@
 
 use crate::MessageData;
 use crate::command_wire::{CommandAck, CommandId, CommandInt, CommandLong};
+use crate::modes::FlightMode;
 use crate::msg::{COMMAND_LONG_DATA, HOME_POSITION_DATA, MavCmd, MavFrame, MavResult};
 
 /// A command as [`classify`] reads it, from a `COMMAND_LONG` or a `COMMAND_INT`.
@@ -104,6 +108,10 @@ pub enum OperatorCommand {
     LandNow,
     /// Stop the rotors at once, wherever the vehicle is.
     Kill,
+    /// Hold where the vehicle is in flight (the Hold mode).
+    Hold,
+    /// The Mission mode: start, or fly on after a hold.
+    Resume,
 }
 
 impl OperatorCommand {
@@ -114,6 +122,7 @@ impl OperatorCommand {
             Self::Abort => MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
             Self::LandNow => MavCmd::MAV_CMD_NAV_LAND,
             Self::Kill => MavCmd::MAV_CMD_DO_FLIGHTTERMINATION,
+            Self::Hold | Self::Resume => MavCmd::MAV_CMD_DO_PAUSE_CONTINUE,
         }
     }
 
@@ -131,6 +140,8 @@ impl OperatorCommand {
             Self::Abort => command_long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 0.0, 0.0),
             Self::LandNow => command_long(MavCmd::MAV_CMD_NAV_LAND, 0.0, 0.0),
             Self::Kill => command_long(MavCmd::MAV_CMD_DO_FLIGHTTERMINATION, 1.0, 0.0),
+            Self::Hold => command_long(MavCmd::MAV_CMD_DO_PAUSE_CONTINUE, 0.0, 0.0),
+            Self::Resume => command_long(MavCmd::MAV_CMD_DO_PAUSE_CONTINUE, 1.0, 0.0),
         }
     }
 }
@@ -173,6 +184,17 @@ pub fn classify(command: impl Into<Command>) -> Request {
         Request::Operator(OperatorCommand::Start)
     } else if id.is(MavCmd::MAV_CMD_NAV_LAND) {
         Request::Operator(OperatorCommand::LandNow)
+    } else if id.is(MavCmd::MAV_CMD_DO_SET_MODE) {
+        let [_, main, sub, _] = command.params;
+        mode_request(FlightMode::from_px4(main, sub))
+    } else if id.is(MavCmd::MAV_CMD_DO_SET_STANDARD_MODE) {
+        mode_request(FlightMode::from_standard(param1))
+    } else if id.is(MavCmd::MAV_CMD_DO_PAUSE_CONTINUE) && (param1 == 0.0 || param1 == 1.0) {
+        Request::Operator(if param1 == 0.0 {
+            OperatorCommand::Hold
+        } else {
+            OperatorCommand::Resume
+        })
     } else if id.is(MavCmd::MAV_CMD_DO_FLIGHTTERMINATION) && param1 > 0.5 {
         Request::Operator(OperatorCommand::Kill)
     } else if id.is(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM) {
@@ -210,6 +232,17 @@ pub fn classify(command: impl Into<Command>) -> Request {
     }
 }
 
+/// The operator command that switches to `mode`: Ready is not commanded (the vehicle is in
+/// it on the ground), and a mode the vehicle does not have is refused.
+fn mode_request(mode: Option<FlightMode>) -> Request {
+    match mode {
+        Some(FlightMode::Mission) => Request::Operator(OperatorCommand::Resume),
+        Some(FlightMode::Hold) => Request::Operator(OperatorCommand::Hold),
+        Some(FlightMode::Land) => Request::Operator(OperatorCommand::LandNow),
+        Some(FlightMode::Ready) | None => Request::Refused(MavResult::MAV_RESULT_DENIED),
+    }
+}
+
 /// Why [`classify`] refused `command` with `result` ([`Request::Refused`]), for the
 /// `STATUSTEXT` that goes with the acknowledgement.
 pub fn refusal(command: CommandId, result: MavResult) -> &'static str {
@@ -222,6 +255,11 @@ pub fn refusal(command: CommandId, result: MavResult) -> &'static str {
             "the mission arms the rotors itself, at take-off"
         }
         _ if command.is(MavCmd::MAV_CMD_DO_SET_GLOBAL_ORIGIN) => "the altitude is not a number",
+        _ if command.is(MavCmd::MAV_CMD_DO_SET_MODE)
+            || command.is(MavCmd::MAV_CMD_DO_SET_STANDARD_MODE) =>
+        {
+            "the modes are Mission, Hold and Land (PX4's AUTO 4/4, 4/3, 4/6)"
+        }
         _ => "not supported",
     }
 }

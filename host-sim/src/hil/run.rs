@@ -273,6 +273,8 @@ fn command_to_link(c: OperatorCommand) -> link::command::OperatorCommand {
         OperatorCommand::Abort => Link::Abort,
         OperatorCommand::LandNow => Link::LandNow,
         OperatorCommand::Kill => Link::Kill,
+        OperatorCommand::Hold => Link::Hold,
+        OperatorCommand::Resume => Link::Resume,
     }
 }
 

@@ -1,5 +1,7 @@
 //! The reference trajectory: take-off, transit to the target, hover, landing
-//! (docs/models.md#reference-trajectory; the target: docs/formats.md#scenario-keys).
+//! (docs/models.md#reference-trajectory; the target: docs/formats.md#scenario-keys), or the
+//! items of a ground station's route ([`crate::flight::route`], docs/ground-link.md#missions)
+//! flown one after the other, then a landing.
 //!
 //! Each segment is a minimum-jerk polynomial `p(t) = a + (b - a) s(t/T)`,
 //! `s(u) = 10 u^3 - 15 u^4 + 6 u^5`, smooth in position, velocity and acceleration, with zero
@@ -8,6 +10,7 @@
 //! take-off point.
 
 use crate::control::vector::Vec3;
+use crate::flight::route::{MAX_ROUTE_ITEMS, Route, RouteItem, RoutePoint};
 use crate::math;
 
 /// Where the flight is.
@@ -91,6 +94,10 @@ pub struct PlanSegment {
     pub duration: f32,
     /// Heading, rad.
     pub yaw: f32,
+    /// The route item this segment flies (0 for a plan to the payload description's target).
+    pub item: u8,
+    /// The segment's end is its item's end: the item is reached there.
+    pub ends_item: bool,
 }
 
 impl PlanSegment {
@@ -103,6 +110,33 @@ impl PlanSegment {
             to,
             duration,
             yaw,
+            item: 0,
+            ends_item: false,
+        }
+    }
+
+    /// A move from `from` to `to` within both the horizontal and the vertical limits.
+    fn moving(phase: FlightPhase, from: Vec3, to: Vec3, limits: &PlanLimits, yaw: f32) -> Self {
+        let d = to - from;
+        let horizontal = libm::hypotf(d.x, d.y) / limits.cruise_speed.max(1e-3);
+        let vertical_speed = if d.z < 0.0 {
+            limits.climb_speed
+        } else {
+            limits.descent_speed
+        };
+        let vertical = math::abs(d.z) / vertical_speed.max(1e-3);
+        let duration = (MIN_JERK_PEAK * math::max(horizontal, vertical)).max(MIN_DURATION);
+        Self {
+            duration,
+            ..Self::new(phase, from, to, 1.0, yaw)
+        }
+    }
+
+    fn of_item(self, item: usize, ends_item: bool) -> Self {
+        Self {
+            item: item as u8,
+            ends_item,
+            ..self
         }
     }
 
@@ -132,11 +166,15 @@ impl PlanSegment {
     }
 }
 
-/// The segments of a flight: take-off, transit, hover and landing at the target, or a landing
-/// where the vehicle is.
+/// Most segments a plan has: two for each route item (a move to its point, then what it does
+/// there), a take-off before the first and a landing after the last.
+pub const MAX_PLAN_SEGMENTS: usize = 2 * MAX_ROUTE_ITEMS + 2;
+
+/// The segments of a flight: take-off, transit, hover and landing at the target, a route's
+/// items, or a landing where the vehicle is.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlightPlan {
-    segments: heapless::Vec<PlanSegment, 4>,
+    segments: heapless::Vec<PlanSegment, MAX_PLAN_SEGMENTS>,
 }
 
 impl FlightPlan {
@@ -151,17 +189,104 @@ impl FlightPlan {
             PlanSegment::new(FlightPhase::Takeoff, start, top, limits.climb_speed, yaw),
             PlanSegment::new(FlightPhase::Transit, top, above, limits.cruise_speed, yaw),
             PlanSegment {
-                phase: FlightPhase::Hover,
-                from: above,
-                to: above,
                 duration: limits.hover_time.max(0.0),
-                yaw,
+                ..PlanSegment::new(FlightPhase::Hover, above, above, 1.0, yaw)
             },
             PlanSegment::new(FlightPhase::Land, above, ground, limits.descent_speed, yaw),
         ];
         Self {
             segments: heapless::Vec::from_slice(&segments).unwrap_or_default(),
         }
+    }
+
+    /// A plan from `start` (NED; on the ground at NED height `ground`, or in the air) flying
+    /// `route`'s items from item `first` on, holding heading `yaw`: on the ground, a take-off
+    /// to the first item's height unless it is one; each item's move and what it does; a
+    /// landing where the last item ends unless it is one. Each item's last segment is marked
+    /// reached ([`PlanSegment::ends_item`]), its items numbered as in the whole route. An
+    /// empty route is a plan that lands where it is.
+    pub fn from_route(
+        start: Vec3,
+        ground: f32,
+        route: &Route,
+        first: usize,
+        yaw: f32,
+        limits: PlanLimits,
+    ) -> Self {
+        let mut segments = heapless::Vec::new();
+        let at = |p: &RoutePoint| Vec3::new(p.north, p.east, ground - p.height);
+        let mut here = start;
+        let mut last_item = first;
+        let mut landed = false;
+        let items = route.items().iter().enumerate().skip(first);
+        for (i, item) in items {
+            last_item = i;
+            // Clear of the ground by more than the land detector's few centimetres.
+            let airborne = here.z < ground - 0.05;
+            let mut push = |segment: PlanSegment| {
+                let _ = segments.push(segment.of_item(i, false));
+            };
+            // The first item's height: a climb straight up to it first.
+            let target = match item {
+                RouteItem::Takeoff { height } => Some(Vec3::new(here.x, here.y, ground - height)),
+                RouteItem::Waypoint(p) => Some(at(p)),
+                RouteItem::Loiter { at: point, .. } => point.as_ref().map(at),
+                RouteItem::Land { at: point } => {
+                    point.as_ref().map(|p| Vec3::new(p.north, p.east, here.z))
+                }
+            };
+            if !airborne
+                && let Some(t) = target
+                && !matches!(item, RouteItem::Takeoff { .. } | RouteItem::Land { .. })
+            {
+                let top = Vec3::new(here.x, here.y, t.z);
+                push(PlanSegment::moving(
+                    FlightPhase::Takeoff,
+                    here,
+                    top,
+                    &limits,
+                    yaw,
+                ));
+                here = top;
+            }
+            let phase = if airborne {
+                FlightPhase::Transit
+            } else {
+                FlightPhase::Takeoff
+            };
+            if let Some(t) = target {
+                push(PlanSegment::moving(phase, here, t, &limits, yaw));
+                here = t;
+            }
+            match item {
+                RouteItem::Loiter { seconds, .. } => push(PlanSegment {
+                    duration: seconds.max(0.0),
+                    ..PlanSegment::new(FlightPhase::Hover, here, here, 1.0, yaw)
+                }),
+                RouteItem::Land { .. } => {
+                    let down = Vec3::new(here.x, here.y, ground);
+                    push(PlanSegment::moving(
+                        FlightPhase::Land,
+                        here,
+                        down,
+                        &limits,
+                        yaw,
+                    ));
+                    here = down;
+                    landed = true;
+                }
+                RouteItem::Takeoff { .. } | RouteItem::Waypoint(_) => {}
+            }
+            if let Some(last) = segments.last_mut() {
+                last.ends_item = true;
+            }
+        }
+        if !landed {
+            let down = Vec3::new(here.x, here.y, ground);
+            let land = PlanSegment::moving(FlightPhase::Land, here, down, &limits, yaw);
+            let _ = segments.push(land.of_item(last_item, false));
+        }
+        Self { segments }
     }
 
     /// A landing straight down from `from` to the ground at height `ground_z` (NED z).

@@ -425,6 +425,11 @@ impl FlightStack {
         self.max_height
     }
 
+    /// The ground's NED height at the take-off point, m.
+    pub fn ground_z(&self) -> f32 {
+        self.ground_z
+    }
+
     /// Time since the flight began, s.
     pub fn clock(&self) -> f32 {
         self.clock
@@ -433,6 +438,20 @@ impl FlightStack {
     /// The plan being followed.
     pub fn plan(&self) -> &FlightPlan {
         &self.plan
+    }
+
+    /// Flies `plan` from its start now (a jump along a route in flight); not once landing or
+    /// stopped. Returns whether it was taken.
+    pub fn replan(&mut self, plan: FlightPlan) -> bool {
+        if self.landing.is_some() || self.stopped.is_some() {
+            return false;
+        }
+        self.phase = plan.segment(0).map_or(FlightPhase::Done, |s| s.phase);
+        self.plan = plan;
+        self.segment = 0;
+        self.segment_time = 0.0;
+        self.after_plan = 0.0;
+        true
     }
 
     /// The route item being flown (from 0; the last one once landing) and the last one
@@ -561,6 +580,14 @@ impl FlightStack {
             return None;
         }
         if contact == Contact::Landed {
+            // A route's landing item is reached at its touchdown.
+            if let Some(s) = self.plan.segment(self.segment)
+                && s.phase == FlightPhase::Land
+                && s.ends_item
+                && self.landing.is_none()
+            {
+                self.reached = Some(s.item);
+            }
             return self.stop(FlightStop::Landed);
         }
         if !position.valid {

@@ -22,6 +22,10 @@ pub enum OperatorCommand {
     LandNow,
     /// Stop the rotors now, wherever the vehicle is (flight termination).
     Kill,
+    /// In flight: hold where the vehicle is until [`Self::Resume`].
+    Hold,
+    /// Mission mode: before the start, start; held in flight, fly on; otherwise nothing to do.
+    Resume,
 }
 
 impl OperatorCommand {
@@ -32,6 +36,8 @@ impl OperatorCommand {
             Self::Abort => "abort",
             Self::LandNow => "land now",
             Self::Kill => "kill",
+            Self::Hold => "hold",
+            Self::Resume => "mission",
         }
     }
 }
@@ -49,6 +55,10 @@ pub enum CommandRefusal {
     NoPayload,
     /// No ground link: no ground station's heartbeat within `FS_GCS_LOSS_T`.
     NoGroundLink,
+    /// The route has no such item (or, before the start, the flight cannot begin there).
+    NoRouteItem,
+    /// The vehicle is landing: nothing else is flown.
+    Landing,
     /// The battery is below its low threshold (`BAT_LOW_V`).
     BatteryLow {
         /// The filtered pack voltage, mV.
@@ -62,6 +72,8 @@ impl core::fmt::Display for CommandRefusal {
             Self::AlreadyStarted => write!(f, "the mission has already started"),
             Self::Finished => write!(f, "the mission is over"),
             Self::NotFlying => write!(f, "not flying"),
+            Self::NoRouteItem => write!(f, "the mission has no such item to fly from"),
+            Self::Landing => write!(f, "the vehicle is landing"),
             Self::NoPayload => write!(f, "no payload description is loaded"),
             Self::NoGroundLink => write!(
                 f,

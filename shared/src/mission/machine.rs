@@ -19,12 +19,12 @@
 
 use crate::control::imu_monitor::ImuMonitor;
 use crate::control::navigator::{NavState, Navigator};
-use crate::control::trajectory::FlightPhase;
+use crate::control::trajectory::{FlightPhase, FlightPlan};
 use crate::control::vector::Vec3;
 use crate::estimation::{Estimate, Status};
 use crate::flight::{
     AdaptEvent, Adapter, CascadeSetpoints, FlightCommand, FlightEvent, FlightModel, FlightStack,
-    FlightStop, LandingCause,
+    FlightStop, LandingCause, Route,
 };
 use crate::geometry::Vec2;
 use crate::liftoff_detector::{LiftState, LiftoffDetector};
@@ -83,6 +83,15 @@ pub struct Mission {
     gcs_hold: Option<f32>,
     /// A notice that could not go out in its own tick (one goes out per tick).
     notice: Option<Notice>,
+    /// A ground station's route (docs/ground-link.md#missions); empty: the payload
+    /// description's target is flown.
+    route: Route,
+    /// The route item the flight begins with (a set-current before the start).
+    route_first: u8,
+    /// A jump along the route asked for in flight, for the next tick.
+    jump: Option<u8>,
+    /// The operator holds the vehicle where it is in flight.
+    held: bool,
 }
 
 impl Mission {
@@ -131,6 +140,10 @@ impl Mission {
             battery: BatteryMonitor::new(),
             gcs_hold: None,
             notice: None,
+            route: Route::EMPTY,
+            route_first: 0,
+            jump: None,
+            held: false,
         }
     }
 
@@ -158,6 +171,84 @@ impl Mission {
         self.imu_detection = None;
         self.navigator.restore_imu();
         self.gcs_hold = None;
+        self.jump = None;
+        self.held = false;
+    }
+
+    /// Flies `route` instead of the payload description's target from the next start (an
+    /// empty route: the target again). Refused while the mission runs.
+    pub fn set_route(&mut self, route: &Route) -> Result<(), CommandRefusal> {
+        if !self.not_running() {
+            return Err(CommandRefusal::AlreadyStarted);
+        }
+        self.route.clone_from(route);
+        self.route_first = 0;
+        Ok(())
+    }
+
+    /// The route flown (empty: the payload description's target).
+    pub fn route(&self) -> &Route {
+        &self.route
+    }
+
+    /// Flies the route from item `item` on: before the start, the flight begins there; in
+    /// flight, the vehicle goes there now from where it is. Refused without a route, for an
+    /// item it does not have, once landing, or (before the start) for an item the vehicle
+    /// cannot take off to.
+    pub fn set_route_item(&mut self, item: u8) -> Result<(), CommandRefusal> {
+        let first = usize::from(item);
+        if first >= self.route.len() {
+            return Err(CommandRefusal::NoRouteItem);
+        }
+        match self.phase {
+            Phase::Flying(_) => {
+                let landing = self
+                    .flight
+                    .as_ref()
+                    .is_none_or(|f| f.landing_cause().is_some() || f.stopped().is_some());
+                if landing || self.abort.is_some() {
+                    return Err(CommandRefusal::Landing);
+                }
+                self.jump = Some(item);
+            }
+            _ if self.not_running() || self.flight.is_none() => {
+                Route::new(&self.route.items()[first..])
+                    .map_err(|_| CommandRefusal::NoRouteItem)?;
+                self.route_first = item;
+            }
+            _ => return Err(CommandRefusal::AlreadyStarted),
+        }
+        Ok(())
+    }
+
+    /// The route's progress in flight: the item flown (the first one before the flight) and
+    /// the last one reached; `None` without a route.
+    pub fn route_progress(&self) -> Option<(u8, Option<u8>)> {
+        if self.route.is_empty() {
+            return None;
+        }
+        Some(
+            self.flight
+                .as_ref()
+                .map_or((self.route_first, None), |f| f.route_progress()),
+        )
+    }
+
+    /// Whether the operator holds the vehicle where it is (and it is not landing).
+    pub fn held(&self) -> bool {
+        self.held && self.flight.as_ref().is_some_and(|f| f.holding())
+    }
+
+    fn not_running(&self) -> bool {
+        matches!(self.phase, Phase::Idle | Phase::Disarmed | Phase::Aborted)
+    }
+
+    /// Holds the flight where it is while the operator or a lost ground link asks for it.
+    fn apply_hold(&mut self) {
+        let hold = self.held || self.gcs_hold.is_some();
+        if let Some(f) = self.flight.as_mut() {
+            f.hold_position(hold);
+        }
     }
 
     /// The phase.
@@ -476,9 +567,7 @@ impl Mission {
             }
             Some(LinkChange::Regained) if watched => {
                 let resumed = self.gcs_hold.take().is_some();
-                if let Some(f) = self.flight.as_mut() {
-                    f.hold_position(false);
-                }
+                self.apply_hold();
                 notices[0] = Some(Notice::LinkRegained { resumed });
             }
             _ => {}
@@ -487,9 +576,7 @@ impl Mission {
             *left -= dt;
             if *left <= 0.0 || !cruising {
                 self.gcs_hold = None;
-                if let Some(f) = self.flight.as_mut() {
-                    f.hold_position(false);
-                }
+                self.apply_hold();
                 if cruising {
                     landing = Some(AbortReason::GcsLost);
                 }
@@ -513,9 +600,8 @@ impl Mission {
             }
             Some(BatteryLevel::Critical) if cruising => {
                 self.gcs_hold = None;
-                if let Some(f) = self.flight.as_mut() {
-                    f.hold_position(false);
-                }
+                self.held = false;
+                self.apply_hold();
                 landing = Some(AbortReason::BatteryCritical { volts });
             }
             Some(BatteryLevel::Critical) => {
@@ -538,6 +624,11 @@ impl Mission {
     /// The operator's command; the transition it makes on the ground, if any (in flight the
     /// flight stack carries it out).
     fn command(&mut self, command: OperatorCommand) -> (Option<CommandReply>, Option<Transition>) {
+        // Mission mode asked for before the start: the start.
+        let command = match command {
+            OperatorCommand::Resume if self.phase == Phase::Idle => OperatorCommand::Start,
+            other => other,
+        };
         let finished = matches!(self.phase, Phase::Disarmed | Phase::Aborted);
         let flying = matches!(self.phase, Phase::Flying(_));
         let mut transition = None;
@@ -573,7 +664,38 @@ impl Mission {
                 transition = Some(self.enter(Phase::PreflightChecks, Reason::Started));
                 Ok(())
             }
+            OperatorCommand::Start | OperatorCommand::Resume if flying && self.held => {
+                self.held = false;
+                self.apply_hold();
+                Ok(())
+            }
             OperatorCommand::Start => Err(CommandRefusal::AlreadyStarted),
+            // Mission mode asked for while the mission runs: it is in it already.
+            OperatorCommand::Resume => Ok(()),
+            OperatorCommand::Hold if !flying => Err(CommandRefusal::NotFlying),
+            OperatorCommand::Hold => {
+                let cruising = self.abort.is_none()
+                    && self
+                        .flight
+                        .as_ref()
+                        .is_some_and(|f| f.landing_cause().is_none() && f.stopped().is_none())
+                    && !matches!(
+                        self.phase,
+                        Phase::Flying(FlightPhase::Land | FlightPhase::Done)
+                    );
+                // A hold before the payload has left the ground would hold it there under
+                // take-off thrust.
+                let airborne = self.flight.as_ref().is_some_and(|f| f.airborne());
+                if !airborne {
+                    Err(CommandRefusal::NotFlying)
+                } else if cruising {
+                    self.held = true;
+                    self.apply_hold();
+                    Ok(())
+                } else {
+                    Err(CommandRefusal::Landing)
+                }
+            }
             OperatorCommand::LandNow if !flying => Err(CommandRefusal::NotFlying),
             OperatorCommand::Abort if flying => {
                 self.abort = Some(AbortReason::OperatorAbort);
@@ -775,11 +897,25 @@ impl Mission {
             return Err(AbortReason::JobOverrun);
         };
         let model = model?;
-        let Some(target) = self.scenario.flight.map(|f| f.target) else {
-            return Err(AbortReason::NoFlightTarget);
-        };
         let start = nav.position.position;
-        self.flight = Some(FlightStack::new(self.config.flight, model, start, target));
+        let flight = if self.route.is_empty() {
+            let Some(target) = self.scenario.flight.map(|f| f.target) else {
+                return Err(AbortReason::NoFlightTarget);
+            };
+            FlightStack::new(self.config.flight, model, start, target)
+        } else {
+            let first = usize::from(self.route_first);
+            let plan = FlightPlan::from_route(
+                start,
+                start.z,
+                &self.route,
+                first,
+                0.0,
+                self.config.flight.plan,
+            );
+            FlightStack::with_plan(self.config.flight, model, start, plan)
+        };
+        self.flight = Some(flight);
         self.adapter = self.estimate.map(|e| {
             let r = &self.scenario.robots;
             Adapter::new(
@@ -801,6 +937,14 @@ impl Mission {
         cascade: &mut Option<CascadeSetpoints>,
     ) -> Option<Transition> {
         let flight = self.flight.as_mut()?;
+        if let Some(item) = self.jump.take() {
+            let limits = self.config.flight.plan;
+            let here = nav.position.position;
+            let first = usize::from(item);
+            let plan =
+                FlightPlan::from_route(here, flight.ground_z(), &self.route, first, 0.0, limits);
+            flight.replan(plan);
+        }
         let out = flight.step(nav, command, dt);
         *cascade = out.cascade;
         let n = self.scenario.robots.count();
