@@ -132,6 +132,21 @@ impl OperatorCommand {
     }
 }
 
+/// The mission's command for the link's (the same commands, one enum each side of the
+/// crate boundary).
+impl From<OperatorCommand> for shared::mission::OperatorCommand {
+    fn from(c: OperatorCommand) -> Self {
+        match c {
+            OperatorCommand::Start => Self::Start,
+            OperatorCommand::Abort => Self::Abort,
+            OperatorCommand::LandNow => Self::LandNow,
+            OperatorCommand::Kill => Self::Kill,
+            OperatorCommand::Hold => Self::Hold,
+            OperatorCommand::Resume => Self::Resume,
+        }
+    }
+}
+
 impl OperatorCommand {
     /// The `COMMAND_LONG` a ground station sends for it (read back by [`classify`]).
     pub fn to_command_long(self) -> COMMAND_LONG_DATA {

@@ -117,14 +117,9 @@ fn received(sent: &COMMAND_LONG_DATA) -> CommandLong {
     CommandLong::deser(MavlinkVersion::V2, &bytes[..n]).expect("a COMMAND_LONG decodes")
 }
 
-/// The mission's command for the link's (`firmware/src/app/autonomy.rs` `command`).
+/// The mission's command for the link's (as `firmware/src/app/autonomy.rs` converts it).
 fn to_mission(c: link::command::OperatorCommand) -> OperatorCommand {
-    match c {
-        link::command::OperatorCommand::Start => OperatorCommand::Start,
-        link::command::OperatorCommand::Abort => OperatorCommand::Abort,
-        link::command::OperatorCommand::LandNow => OperatorCommand::LandNow,
-        link::command::OperatorCommand::Kill => OperatorCommand::Kill,
-    }
+    c.into()
 }
 
 /// A parameter's name as `PARAM_SET` carries it; past the table, a name no parameter has.

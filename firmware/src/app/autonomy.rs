@@ -231,12 +231,7 @@ fn level(severity: Severity) -> LogLevel {
 }
 
 fn command(c: OperatorCommand) -> Command {
-    match c {
-        OperatorCommand::Start => Command::Start,
-        OperatorCommand::Abort => Command::Abort,
-        OperatorCommand::LandNow => Command::LandNow,
-        OperatorCommand::Kill => Command::Kill,
-    }
+    c.into()
 }
 
 fn fix(f: &MocapFix) -> Fix {
