@@ -168,6 +168,9 @@ pub enum Request {
     Operator(OperatorCommand),
     /// `MAV_CMD_REQUEST_MESSAGE` of this message id.
     Message(u32),
+    /// `MAV_CMD_REQUEST_MESSAGE` of `AVAILABLE_MODES`: the mode of this index (from 1), or
+    /// every mode (0).
+    AvailableModes(u8),
     /// `MAV_CMD_SET_MESSAGE_INTERVAL`: param1 and param2 as sent (checked by
     /// [`crate::telemetry::Schedule::set_interval`]).
     SetInterval {
@@ -220,6 +223,15 @@ pub fn classify(command: impl Into<Command>) -> Request {
         } else {
             Request::Operator(OperatorCommand::Abort)
         }
+    } else if id.is(MavCmd::MAV_CMD_REQUEST_MESSAGE)
+        && param1 == crate::msg::AVAILABLE_MODES_DATA::ID as f32
+    {
+        let index = if param2.is_finite() && (0.0..=255.0).contains(&param2) {
+            param2 as u8
+        } else {
+            0
+        };
+        Request::AvailableModes(index)
     } else if id.is(MavCmd::MAV_CMD_REQUEST_MESSAGE) && param1.is_finite() && param1 >= 0.0 {
         Request::Message(param1 as u32)
     } else if id.is(GET_HOME_POSITION) {

@@ -143,11 +143,6 @@ impl FlightMode {
     }
 }
 
-/// The mission's state coded in a `HEARTBEAT`'s `custom_mode` (its low byte).
-pub fn mission_state(custom_mode: u32) -> Option<MissionState> {
-    MissionState::from_custom_mode(custom_mode & 0xff)
-}
-
 /// The flight mode coded in a `HEARTBEAT`'s `custom_mode`, if it is one of this vehicle's.
 pub fn flight_mode(custom_mode: u32) -> Option<FlightMode> {
     MODES
@@ -191,7 +186,7 @@ mod tests {
                 MissionState::Aborted,
             ] {
                 let c = m.heartbeat_custom_mode(s);
-                assert_eq!(mission_state(c), Some(s));
+                assert_eq!(MissionState::from_custom_mode(c), Some(s));
                 assert_eq!(flight_mode(c), Some(m));
             }
         }

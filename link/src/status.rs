@@ -14,6 +14,7 @@
 use heapless::{String, Vec};
 
 use crate::frame::{Encoder, Frame};
+use crate::modes::FlightMode;
 
 use crate::msg::{
     HEARTBEAT_DATA, MavAutopilot, MavModeFlag, MavProtocolCapability, MavSeverity, MavState,
@@ -22,11 +23,12 @@ use crate::msg::{
 
 /// `AUTOPILOT_VERSION.capabilities`: what the vehicle does
 /// (docs/ground-link.md#the-declared-capabilities). MAVLink 2 (and its signing), `COMMAND_INT`
-/// ([`crate::command`]), FTP ([`crate::ftp`]), and the parameters' byte-wise encoding (every
-/// parameter is a `REAL32`, sent as itself, [`crate::param`]). Not `MISSION_INT`: the mission
-/// protocol is not served (`MISSION_COUNT` 0).
+/// ([`crate::command`]), FTP ([`crate::ftp`]), the parameters' byte-wise encoding (every
+/// parameter is a `REAL32`, sent as itself, [`crate::param`]) and the mission protocol's
+/// `_INT` messages ([`crate::mission`]).
 pub fn capabilities() -> MavProtocolCapability {
     MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MAVLINK2
+        | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_INT
         | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_COMMAND_INT
         | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_FTP
         | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
@@ -62,11 +64,12 @@ pub enum MissionState {
 }
 
 impl MissionState {
-    /// The state coded in a `HEARTBEAT`'s `custom_mode`.
+    /// The state coded in a `HEARTBEAT`'s `custom_mode` (its low byte; the flight mode is
+    /// above it, [`crate::modes`]).
     pub fn from_custom_mode(code: u32) -> Option<Self> {
         [Self::Idle, Self::Running, Self::Completed, Self::Aborted]
             .into_iter()
-            .find(|s| *s as u32 == code)
+            .find(|s| *s as u32 == code & 0xff)
     }
 
     /// The state's name for people and reports: `idle`, `running`, `completed`, `aborted`.
@@ -85,9 +88,15 @@ impl MissionState {
     }
 }
 
-/// The vehicle's `HEARTBEAT`: a multirotor whose `custom_mode` is the [`MissionState`], armed
-/// and HIL flags in `base_mode`.
-pub fn heartbeat(state: MissionState, armed: bool, in_hil: bool) -> HEARTBEAT_DATA {
+/// The vehicle's `HEARTBEAT`: a multirotor whose `custom_mode` is its flight mode in PX4's
+/// numbers with the [`MissionState`] in the low byte ([`crate::modes`]), armed and HIL flags
+/// in `base_mode`.
+pub fn heartbeat(
+    state: MissionState,
+    mode: FlightMode,
+    armed: bool,
+    in_hil: bool,
+) -> HEARTBEAT_DATA {
     let mut base_mode = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
     if armed {
         base_mode |= MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
@@ -96,7 +105,7 @@ pub fn heartbeat(state: MissionState, armed: bool, in_hil: bool) -> HEARTBEAT_DA
         base_mode |= MavModeFlag::MAV_MODE_FLAG_HIL_ENABLED;
     }
     HEARTBEAT_DATA {
-        custom_mode: state as u32,
+        custom_mode: mode.heartbeat_custom_mode(state),
         mavtype: MavType::MAV_TYPE_GENERIC_MULTIROTOR,
         autopilot: MavAutopilot::MAV_AUTOPILOT_GENERIC,
         base_mode,
@@ -261,13 +270,16 @@ mod tests {
     fn the_capabilities_are_what_the_vehicle_does_and_no_more() {
         let c = capabilities();
         assert!(c.contains(MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_COMMAND_INT));
-        // One parameter encoding, and no mission protocol.
+        assert!(c.contains(MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_INT));
+        // One parameter encoding; the mission's items as `_INT` only; no geofence or rally.
         assert!(!c.intersects(
             MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST
                 | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
-                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_INT
+                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT
+                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
+                | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_RALLY
         ));
-        assert_eq!(c.bits(), 8 | 16 | 32 | 8192);
+        assert_eq!(c.bits(), 4 | 8 | 16 | 32 | 8192);
     }
 
     fn round_trip(text: &str) -> std::string::String {
@@ -332,8 +344,17 @@ mod tests {
             MissionState::Completed,
             MissionState::Aborted,
         ] {
-            let h = heartbeat(state, state == MissionState::Running, true);
+            let h = heartbeat(
+                state,
+                FlightMode::Hold,
+                state == MissionState::Running,
+                true,
+            );
             assert_eq!(MissionState::from_custom_mode(h.custom_mode), Some(state));
+            assert_eq!(
+                crate::modes::flight_mode(h.custom_mode),
+                Some(FlightMode::Hold)
+            );
             assert_eq!(
                 h.base_mode
                     .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED),

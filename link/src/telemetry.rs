@@ -238,6 +238,30 @@ pub struct VehicleSnapshot {
     pub battery_mv: u16,
     /// The battery is above its low threshold.
     pub battery_ok: bool,
+    /// The flight mode ([`crate::modes::FlightMode::code`]).
+    pub mode: u8,
+    /// The route's progress, for `MISSION_CURRENT` and `MISSION_ITEM_REACHED`.
+    pub route: RouteStatus,
+}
+
+/// Where the vehicle is along its route (docs/ground-link.md#missions).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RouteStatus {
+    /// The item flown (the first one before the flight).
+    pub current: u16,
+    /// The last item reached, if any.
+    pub reached: Option<u16>,
+    /// `MISSION_CURRENT`'s `mission_state`.
+    pub progress: crate::mission::wire::MissionProgress,
+}
+
+impl RouteStatus {
+    /// No route.
+    pub const NONE: Self = Self {
+        current: 0,
+        reached: None,
+        progress: crate::mission::wire::MissionProgress::NoMission,
+    };
 }
 
 /// The flight log's storage as `SYS_STATUS` reports it (`MAV_SYS_STATUS_LOGGING`,
@@ -269,6 +293,8 @@ impl VehicleSnapshot {
         load_permille: 0,
         battery_mv: u16::MAX,
         battery_ok: true,
+        mode: 0,
+        route: RouteStatus::NONE,
     };
 
     fn time_boot_ms(&self) -> u32 {
@@ -636,6 +662,7 @@ mod tests {
             load_permille: 1500,
             battery_mv: u16::MAX,
             battery_ok: true,
+            ..VehicleSnapshot::START
         };
         let (array, data, len) = snap.rail_positions();
         assert_eq!(

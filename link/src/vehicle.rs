@@ -11,6 +11,7 @@ use crate::frame::{Frame, Integrity};
 use crate::ftp::{FtpMessage, PAYLOAD_LEN};
 use crate::hil::{HilError, ImuSample, MocapFix};
 use crate::log_transfer::LogRequest;
+use crate::mission::wire::MissionMessage;
 use crate::msg::{
     ACTUATOR_OUTPUT_STATUS_DATA, ATT_POS_MOCAP_DATA, ATTITUDE_QUATERNION_DATA,
     AUTOPILOT_VERSION_DATA, BATTERY_STATUS_DATA, COMMAND_ACK_DATA, COMMAND_INT_DATA,
@@ -30,6 +31,12 @@ use crate::param::ParamRequest;
 /// Read from its payload's bytes ([`set_origin`]), its fields being deprecated.
 #[allow(deprecated, non_camel_case_types)]
 type SET_GPS_GLOBAL_ORIGIN_DATA = crate::msg::SET_GPS_GLOBAL_ORIGIN_DATA;
+/// `MISSION_REQUEST` and `MISSION_SET_CURRENT`: deprecated, still sent by older tools
+/// (read by [`crate::mission::wire`]).
+#[allow(deprecated, non_camel_case_types)]
+type MISSION_REQUEST_DATA = crate::msg::MISSION_REQUEST_DATA;
+#[allow(deprecated, non_camel_case_types)]
+type MISSION_SET_CURRENT_DATA = crate::msg::MISSION_SET_CURRENT_DATA;
 
 macro_rules! crc_extras {
     ($($m:ty),* $(,)?) => {
@@ -63,6 +70,16 @@ crc_extras!(
     PARAM_VALUE_DATA,
     MISSION_REQUEST_LIST_DATA,
     MISSION_COUNT_DATA,
+    crate::msg::MISSION_ITEM_INT_DATA,
+    crate::msg::MISSION_REQUEST_INT_DATA,
+    MISSION_REQUEST_DATA,
+    crate::msg::MISSION_ACK_DATA,
+    crate::msg::MISSION_CLEAR_ALL_DATA,
+    MISSION_SET_CURRENT_DATA,
+    crate::msg::MISSION_CURRENT_DATA,
+    crate::msg::MISSION_ITEM_REACHED_DATA,
+    crate::msg::AVAILABLE_MODES_DATA,
+    crate::msg::CURRENT_MODE_DATA,
     SYS_STATUS_DATA,
     ATTITUDE_QUATERNION_DATA,
     LOCAL_POSITION_NED_DATA,
@@ -154,9 +171,13 @@ pub enum Inbound {
         /// Its sender.
         from: Sender,
     },
-    /// `MISSION_REQUEST_LIST` addressed to the vehicle (it has no mission items: the answer
-    /// is `MISSION_COUNT` 0).
-    MissionList(Sender),
+    /// A mission-protocol message addressed to the vehicle ([`crate::mission`]).
+    Mission {
+        /// The message.
+        message: MissionMessage,
+        /// Its sender.
+        from: Sender,
+    },
     /// A ground station's `HEARTBEAT` (type `MAV_TYPE_GCS`, from another system than the
     /// vehicle's): the ground link is up.
     GcsHeartbeat(Sender),
@@ -302,10 +323,14 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
             },
             _ => ignored,
         },
-        MISSION_REQUEST_LIST_DATA::ID => match frame.decode::<MISSION_REQUEST_LIST_DATA>() {
-            Some(m) if for_us(m.target_system, m.target_component) => Inbound::MissionList(from),
-            _ => ignored,
-        },
+        id if crate::mission::wire::READ_IDS.contains(&id) => {
+            match crate::mission::wire::read(frame) {
+                Some((message, system, component)) if for_us(system, component) => {
+                    Inbound::Mission { message, from }
+                }
+                _ => ignored,
+            }
+        }
         LOG_REQUEST_LIST_DATA::ID => match frame.decode::<LOG_REQUEST_LIST_DATA>() {
             Some(m) if for_us(m.target_system, m.target_component) => Inbound::Log {
                 request: LogRequest::from_list(&m),
@@ -772,7 +797,10 @@ mod tests {
         };
         assert!(matches!(
             through_the_wire(&missions),
-            Inbound::MissionList(_)
+            Inbound::Mission {
+                message: MissionMessage::RequestList { mission_type: 0 },
+                ..
+            }
         ));
         let origin = SET_GPS_GLOBAL_ORIGIN_DATA {
             latitude: -338_688_000,
