@@ -89,132 +89,137 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             None
         };
 
-        // The flag before the payload: a description offered before the flag was cleared is
-        // in the channel by then.
-        let loading = LOADING.load(Ordering::SeqCst);
-        let payload = PAYLOAD.try_receive().ok();
-        let pending = COMMANDS.try_receive().ok();
-        let input = TickInput {
-            time_us: step.time_us,
-            step: step.index,
-            imu: sample.reading(),
-            mocap: MOCAP.try_take(),
-            command: pending.map(|p| p.command),
-            payload: payload.as_ref().map(|p| (&p.scenario, p.config)),
-            job,
-            faults: if sample.hil {
-                HardwareFaults::NONE
-            } else {
-                <Selected as Board>::hardware_faults()
-            },
-            loading,
-            supervision: Supervision {
-                gcs_heartbeat: GCS_HEARTBEAT.swap(false, Ordering::Relaxed),
-                // In HIL the plant's pack; on a board its own measurement.
-                battery_volts: if sample.hil {
-                    match LINK_BATTERY_MV.load(Ordering::Relaxed) {
-                        u32::MAX => None,
-                        mv => Some(mv as f32 * 1e-3),
-                    }
+        // The step itself, in a block of its own: its payload, input and output (4 KB) are
+        // gone before the wait for the link's queue below, so the task's future (a static)
+        // does not keep them.
+        let message = {
+            // The flag before the payload: a description offered before the flag was cleared is
+            // in the channel by then.
+            let loading = LOADING.load(Ordering::SeqCst);
+            let payload = PAYLOAD.try_receive().ok();
+            let pending = COMMANDS.try_receive().ok();
+            let input = TickInput {
+                time_us: step.time_us,
+                step: step.index,
+                imu: sample.reading(),
+                mocap: MOCAP.try_take(),
+                command: pending.map(|p| p.command),
+                payload: payload.as_ref().map(|p| (&p.scenario, p.config)),
+                job,
+                faults: if sample.hil {
+                    HardwareFaults::NONE
                 } else {
-                    <Selected as Board>::battery_volts()
+                    <Selected as Board>::hardware_faults()
                 },
-            },
-        };
-        let imu_failed = input.faults.imu;
-        let mut out = autonomy.tick_logged(&input, &mut log_ring);
-        if late {
-            out.report
-                .text(Severity::Critical, format_args!("job late at its deadline"));
-        }
-        if let Some(request) = out.job.take() {
-            let next_id = job_id.wrapping_add(1);
-            match deadline.request(step.index, request.deadline_steps) {
-                Ok(_) if JOB_REQUESTS.try_send((next_id, request)).is_ok() => job_id = next_id,
-                _ => {
-                    deadline.taken();
-                    out.report.text(
-                        Severity::Error,
-                        format_args!("job refused: another job is still running"),
-                    );
+                loading,
+                supervision: Supervision {
+                    gcs_heartbeat: GCS_HEARTBEAT.swap(false, Ordering::Relaxed),
+                    // In HIL the plant's pack; on a board its own measurement.
+                    battery_volts: if sample.hil {
+                        match LINK_BATTERY_MV.load(Ordering::Relaxed) {
+                            u32::MAX => None,
+                            mv => Some(mv as f32 * 1e-3),
+                        }
+                    } else {
+                        <Selected as Board>::battery_volts()
+                    },
+                },
+            };
+            let imu_failed = input.faults.imu;
+            let mut out = autonomy.tick_logged(&input, &mut log_ring);
+            if late {
+                out.report
+                    .text(Severity::Critical, format_args!("job late at its deadline"));
+            }
+            if let Some(request) = out.job.take() {
+                let next_id = job_id.wrapping_add(1);
+                match deadline.request(step.index, request.deadline_steps) {
+                    Ok(_) if JOB_REQUESTS.try_send((next_id, request)).is_ok() => job_id = next_id,
+                    _ => {
+                        deadline.taken();
+                        out.report.text(
+                            Severity::Error,
+                            format_args!("job refused: another job is still running"),
+                        );
+                    }
                 }
             }
-        }
-        if sample.hil {
-            // In HIL the plant flies the commands; the real outputs stay off.
-            outputs.apply(&[], &[], false);
-        } else {
-            outputs.apply(
-                &out.thrust[..out.robots],
-                &out.rail[..out.robots],
-                out.armed,
-            );
-        }
-        MISSION_STATE.store(out.state as u8, Ordering::SeqCst);
-        ARMED.store(out.armed, Ordering::Relaxed);
+            if sample.hil {
+                // In HIL the plant flies the commands; the real outputs stay off.
+                outputs.apply(&[], &[], false);
+            } else {
+                outputs.apply(
+                    &out.thrust[..out.robots],
+                    &out.rail[..out.robots],
+                    out.armed,
+                );
+            }
+            MISSION_STATE.store(out.state as u8, Ordering::SeqCst);
+            ARMED.store(out.armed, Ordering::Relaxed);
 
-        let cost = <Selected as Board>::cycle_count()
-            .wrapping_sub(start)
-            .wrapping_sub(held_counts)
-            .saturating_mul(<Selected as Board>::TICK_COST_PER_COUNT);
-        worst_cost = worst_cost.max(cost);
-        second_worst = second_worst.max(cost);
-        if step.index % COST_REPORT_STEPS == 0 {
-            let period = u64::from(<Selected as Board>::TICK_PERIOD_COST.max(1));
-            load_permille = (u64::from(second_worst) * 1000 / period).min(1000) as u16;
-            second_worst = 0;
-        }
-        let mut snapshot = out.telemetry;
-        snapshot.time_us = step.time_us;
-        snapshot.imu_healthy = !imu_failed;
-        snapshot.load_permille = load_permille;
-        VEHICLE.lock(|v| v.set(snapshot));
-        if held_counts > 0 {
-            out.report.value("job_holds", Value::Int(holds as i32));
-        }
-        if dropped_reports > 0 && step.index % COST_REPORT_STEPS == 0 {
-            out.report
-                .value("tlm_drop", Value::Int(dropped_reports as i32));
-        }
-        if step.index % COST_REPORT_STEPS == 0 || out.state.is_over() {
-            out.report.value(
-                <Selected as Board>::TICK_COST_NAME,
-                Value::Int(worst_cost.min(i32::MAX as u32) as i32),
-            );
-        }
-        if step.index % COST_REPORT_STEPS == 0 {
-            let now = <Selected as Board>::cycle_count();
-            let idle = IDLE_COUNTS.swap(0, Ordering::Relaxed);
-            let busy = now.wrapping_sub(busy_since).saturating_sub(idle);
-            busy_since = now;
-            out.report.value(
-                <Selected as Board>::BUSY_COST_NAME,
-                Value::Int(
-                    busy.saturating_mul(<Selected as Board>::TICK_COST_PER_COUNT)
-                        .min(i32::MAX as u32) as i32,
-                ),
-            );
-        }
-        let actuators = Actuators {
-            time_us: step.time_us,
-            robots: out.robots,
-            thrust: out.thrust,
-            rail: out.rail,
-            armed: out.armed,
-        };
-        let message = Outbound::Step {
-            time_us: step.time_us,
-            report: out.report,
-            // Every command is acknowledged; one the autonomy took without a word is accepted.
-            ack: pending.map(|p| {
-                (
-                    p,
-                    out.ack
-                        .map_or(CommandResult::Accepted, |(_, result)| result),
-                )
-            }),
-            state: out.state,
-            actuators: sample.hil.then_some(actuators),
+            let cost = <Selected as Board>::cycle_count()
+                .wrapping_sub(start)
+                .wrapping_sub(held_counts)
+                .saturating_mul(<Selected as Board>::TICK_COST_PER_COUNT);
+            worst_cost = worst_cost.max(cost);
+            second_worst = second_worst.max(cost);
+            if step.index % COST_REPORT_STEPS == 0 {
+                let period = u64::from(<Selected as Board>::TICK_PERIOD_COST.max(1));
+                load_permille = (u64::from(second_worst) * 1000 / period).min(1000) as u16;
+                second_worst = 0;
+            }
+            let mut snapshot = out.telemetry;
+            snapshot.time_us = step.time_us;
+            snapshot.imu_healthy = !imu_failed;
+            snapshot.load_permille = load_permille;
+            VEHICLE.lock(|v| v.set(snapshot));
+            if held_counts > 0 {
+                out.report.value("job_holds", Value::Int(holds as i32));
+            }
+            if dropped_reports > 0 && step.index % COST_REPORT_STEPS == 0 {
+                out.report
+                    .value("tlm_drop", Value::Int(dropped_reports as i32));
+            }
+            if step.index % COST_REPORT_STEPS == 0 || out.state.is_over() {
+                out.report.value(
+                    <Selected as Board>::TICK_COST_NAME,
+                    Value::Int(worst_cost.min(i32::MAX as u32) as i32),
+                );
+            }
+            if step.index % COST_REPORT_STEPS == 0 {
+                let now = <Selected as Board>::cycle_count();
+                let idle = IDLE_COUNTS.swap(0, Ordering::Relaxed);
+                let busy = now.wrapping_sub(busy_since).saturating_sub(idle);
+                busy_since = now;
+                out.report.value(
+                    <Selected as Board>::BUSY_COST_NAME,
+                    Value::Int(
+                        busy.saturating_mul(<Selected as Board>::TICK_COST_PER_COUNT)
+                            .min(i32::MAX as u32) as i32,
+                    ),
+                );
+            }
+            let actuators = Actuators {
+                time_us: step.time_us,
+                robots: out.robots,
+                thrust: out.thrust,
+                rail: out.rail,
+                armed: out.armed,
+            };
+            Outbound::Step {
+                time_us: step.time_us,
+                report: out.report,
+                // Every command is acknowledged; one the autonomy took without a word is accepted.
+                ack: pending.map(|p| {
+                    (
+                        p,
+                        out.ack
+                            .map_or(CommandResult::Accepted, |(_, result)| result),
+                    )
+                }),
+                state: out.state,
+                actuators: sample.hil.then_some(actuators),
+            }
         };
         if sample.hil {
             // The plant waits for this reply: it must go, and nothing else is waiting.
