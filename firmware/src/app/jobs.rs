@@ -48,82 +48,34 @@ static LAST: StaticCell<Option<Received>> = StaticCell::new();
 
 /// Runs each job asked for by the control task and hands its result back, numbered as asked;
 /// loads each payload description received.
+///
+/// The task's future is a static: what it keeps across a wait costs RAM for good. So a
+/// description (1.4 KB) never crosses one: it stays in `TO_LOAD` until the task is ready to
+/// load it, and the loading, in [`load`] and [`reload`], is synchronous; only the report
+/// crosses the wait for the link's queue.
 #[embassy_executor::task]
 pub async fn jobs() {
     let planner = PLANNER.take();
     let last = LAST.init(None);
     loop {
-        match select3(TO_LOAD.receive(), JOB_REQUESTS.receive(), RELOAD.wait()).await {
-            Either3::First(received) => {
-                LOADING.store(true, Ordering::SeqCst);
-                let mut report = Report::default();
-                // The parameters in force now; the mission gets the same with the description.
-                let config = MISSION_CONFIG.lock(|c| c.get());
-                // A running mission's jobs need the planner it started with: a description
-                // that comes now is not loaded (the mission would ignore it anyway).
-                let running = MISSION_STATE.load(Ordering::SeqCst) == MissionState::Running as u8;
-                let loaded = if running {
-                    Err(LoadRefusal::Running)
-                } else {
-                    planner
-                        .load(&received.scenario, config)
-                        .map_err(LoadRefusal::Checks)
+        match select3(
+            TO_LOAD.ready_to_receive(),
+            JOB_REQUESTS.receive(),
+            RELOAD.wait(),
+        )
+        .await
+        {
+            Either3::First(()) => {
+                let Some(report) = load(planner, last) else {
+                    continue;
                 };
-                match loaded {
-                    Ok(()) => {
-                        let grid = &received.scenario.estimation;
-                        report.text(
-                            Severity::Info,
-                            format_args!(
-                                "payload {} accepted: {} robots, {} candidates, grid {}x{}x{}",
-                                received.name,
-                                received.scenario.robots.count(),
-                                received.scenario.payload.candidates.len(),
-                                grid.axis_len(0),
-                                grid.axis_len(1),
-                                grid.axis_len(2)
-                            ),
-                        );
-                        offer_payload(LoadedPayload {
-                            scenario: received.scenario.clone(),
-                            config,
-                        });
-                        *last = Some(received);
-                    }
-                    Err(why) => {
-                        report.text(Severity::Error, format_args!("payload refused: {why}"));
-                    }
-                }
-                LOADING.store(false, Ordering::SeqCst);
                 OUTBOX.send(Outbound::Report(report)).await;
             }
             Either3::Third(()) => {
-                // New parameters: the payload loaded again with them, unless the mission runs
-                // (the link refuses changes then; this guards the moment of a start).
-                LOADING.store(true, Ordering::SeqCst);
-                let running = MISSION_STATE.load(Ordering::SeqCst) == MissionState::Running as u8;
-                if let (Some(received), false) = (last.as_ref(), running) {
-                    let config = MISSION_CONFIG.lock(|c| c.get());
-                    let mut report = Report::default();
-                    match planner.load(&received.scenario, config) {
-                        Ok(()) => {
-                            report.text(
-                                Severity::Info,
-                                format_args!("params applied to payload {}", received.name),
-                            );
-                            offer_payload(LoadedPayload {
-                                scenario: received.scenario.clone(),
-                                config,
-                            });
-                        }
-                        Err(why) => {
-                            report.text(Severity::Error, format_args!("params not applied: {why}"));
-                        }
-                    }
-                    LOADING.store(false, Ordering::SeqCst);
-                    OUTBOX.send(Outbound::Report(report)).await;
-                }
-                LOADING.store(false, Ordering::SeqCst);
+                let Some(report) = reload(planner, last) else {
+                    continue;
+                };
+                OUTBOX.send(Outbound::Report(report)).await;
             }
             Either3::Second((id, request)) => {
                 let result = run_job(planner, &request.work);
@@ -131,4 +83,83 @@ pub async fn jobs() {
             }
         }
     }
+}
+
+/// Loads the planner with the description waiting in `TO_LOAD` and offers it to the control
+/// task, keeping it in `last`; says which, or why not (nothing if none waits: the task is
+/// `TO_LOAD`'s only receiver, so one does).
+fn load(planner: &mut MissionPlanner, last: &mut Option<Received>) -> Option<Report> {
+    let received = TO_LOAD.try_receive().ok()?;
+    let mut report = Report::default();
+    LOADING.store(true, Ordering::SeqCst);
+    // The parameters in force now; the mission gets the same with the description.
+    let config = MISSION_CONFIG.lock(|c| c.get());
+    // A running mission's jobs need the planner it started with: a description
+    // that comes now is not loaded (the mission would ignore it anyway).
+    let running = MISSION_STATE.load(Ordering::SeqCst) == MissionState::Running as u8;
+    let loaded = if running {
+        Err(LoadRefusal::Running)
+    } else {
+        planner
+            .load(&received.scenario, config)
+            .map_err(LoadRefusal::Checks)
+    };
+    match loaded {
+        Ok(()) => {
+            let grid = &received.scenario.estimation;
+            report.text(
+                Severity::Info,
+                format_args!(
+                    "payload {} accepted: {} robots, {} candidates, grid {}x{}x{}",
+                    received.name,
+                    received.scenario.robots.count(),
+                    received.scenario.payload.candidates.len(),
+                    grid.axis_len(0),
+                    grid.axis_len(1),
+                    grid.axis_len(2)
+                ),
+            );
+            offer_payload(LoadedPayload {
+                scenario: received.scenario.clone(),
+                config,
+            });
+            *last = Some(received);
+        }
+        Err(why) => {
+            report.text(Severity::Error, format_args!("payload refused: {why}"));
+        }
+    }
+    LOADING.store(false, Ordering::SeqCst);
+    Some(report)
+}
+
+/// New parameters: the last description loaded again with them, unless the mission runs (the
+/// link refuses changes then; this guards the moment of a start); says so, or nothing when
+/// there is nothing to load.
+fn reload(planner: &mut MissionPlanner, last: &Option<Received>) -> Option<Report> {
+    LOADING.store(true, Ordering::SeqCst);
+    let running = MISSION_STATE.load(Ordering::SeqCst) == MissionState::Running as u8;
+    let mut answer = None;
+    if let (Some(received), false) = (last.as_ref(), running) {
+        let config = MISSION_CONFIG.lock(|c| c.get());
+        let mut report = Report::default();
+        match planner.load(&received.scenario, config) {
+            Ok(()) => {
+                report.text(
+                    Severity::Info,
+                    format_args!("params applied to payload {}", received.name),
+                );
+                offer_payload(LoadedPayload {
+                    scenario: received.scenario.clone(),
+                    config,
+                });
+            }
+            Err(why) => {
+                report.text(Severity::Error, format_args!("params not applied: {why}"));
+            }
+        }
+        answer = Some(report);
+    }
+    LOADING.store(false, Ordering::SeqCst);
+    answer
 }
