@@ -35,7 +35,7 @@ use link::timesync::Received as SyncReceived;
 use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
 use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, TABLE, is_origin};
 use shared::scenario::Scenario;
-use shared::scenario_wire::{MAX_ENCODED_LEN, MAX_NAME_LEN, decode_and_check};
+use shared::scenario_wire::{MAX_ENCODED_LEN, MAX_NAME_LEN, PayloadError, decode_and_check};
 use static_cell::StaticCell;
 
 /// The component metadata the FTP server serves (docs/ground-link.md#parameter-metadata),
@@ -740,15 +740,18 @@ pub struct Received {
 /// Decodes and checks a received payload description with the host's checks; stores it (in
 /// `store`, when given) and hands it to the job task to load (which then says it was
 /// accepted), or says which key is wrong.
+///
+/// The receive task's future is a static, so the decoded description (2.5 KB with its wire
+/// form) is never kept across a wait: [`hand_over`] decodes it on the stack and sends it if
+/// `TO_LOAD` has room; if the job task has not taken the last one yet, this waits for room
+/// and decodes the same bytes again.
 async fn check_payload(file: &[u8], store: &mut Option<Store>) {
-    let accepted = match decode_and_check(file) {
-        Ok((wire, scenario)) => {
-            TO_LOAD
-                .send(Received {
-                    name: wire.name,
-                    scenario,
-                })
-                .await;
+    let accepted = match hand_over(file) {
+        Ok(true) => true,
+        Ok(false) => {
+            core::future::poll_fn(|cx| TO_LOAD.poll_ready_to_send(cx)).await;
+            // This task is `TO_LOAD`'s only sender: the room is still there.
+            let _ = hand_over(file);
             true
         }
         Err(e) => {
@@ -774,6 +777,17 @@ async fn check_payload(file: &[u8], store: &mut Option<Store>) {
             ))
             .await;
     }
+}
+
+/// Decodes and checks `file`; a description that passes goes to the job task if `TO_LOAD` has
+/// room (`true`), else it is dropped (`false`: [`check_payload`] waits and comes again).
+fn hand_over(file: &[u8]) -> Result<bool, PayloadError> {
+    let (wire, scenario) = decode_and_check(file)?;
+    let received = Received {
+        name: wire.name,
+        scenario,
+    };
+    Ok(TO_LOAD.try_send(received).is_ok())
 }
 
 fn mav_severity(s: Severity) -> MavSeverity {
