@@ -916,6 +916,95 @@ impl<W: Write> Sending<W> {
         self.flush().await;
     }
 
+    /// Sends one message of the queue; `state` is the mission state last said in a
+    /// `HEARTBEAT` (a step that changes it says the new one). By reference: the task keeps
+    /// the message it took from the queue, and no copy of it, across the link's waits.
+    async fn outbound(&mut self, message: &Outbound, state: &mut MissionState) {
+        match message {
+            Outbound::Step {
+                time_us,
+                report,
+                ack: step_ack,
+                state: now,
+                actuators,
+            } => {
+                self.report(report, (time_us / 1000) as u32).await;
+                if let Some((pending, result)) = step_ack {
+                    self.encode(&ack(pending.mav_cmd, mav_result(*result)));
+                    self.flush().await;
+                }
+                if now != state {
+                    *state = *now;
+                    self.heartbeat().await;
+                }
+                if let Some(actuators) = actuators {
+                    let messages = actuators.to_messages();
+                    if let Some(status) = &messages.status {
+                        self.encode(status);
+                        self.flush().await;
+                    }
+                    self.encode(&messages.controls);
+                    self.flush().await;
+                }
+            }
+            Outbound::Report(report) => {
+                self.report(report, Instant::now().as_millis() as u32).await;
+            }
+            Outbound::Identity => self.identity().await,
+            Outbound::ComponentMetadata => self.component_metadata().await,
+            Outbound::Params { values, which } => {
+                let range = match *which {
+                    Values::None => 0..0,
+                    Values::One(i) => i..i + 1,
+                    Values::All => 0..PARAM_COUNT,
+                };
+                for i in range {
+                    if let Some(m) = value_message(values, i) {
+                        self.encode(&m);
+                        self.flush().await;
+                    }
+                }
+            }
+            Outbound::Ftp { message, to } => {
+                self.encode(&message.to_message(to.system, to.component));
+                self.flush().await;
+            }
+            Outbound::Ack { command, result } => {
+                self.encode(&ack(*command, *result));
+                self.flush().await;
+            }
+            Outbound::TimeSync { tc1, ts1 } => {
+                self.encode(&TIMESYNC_DATA {
+                    tc1: *tc1,
+                    ts1: *ts1,
+                });
+                self.flush().await;
+            }
+            Outbound::Log(LogReply::Entry(entry)) => {
+                self.encode(entry);
+                self.flush().await;
+            }
+            Outbound::Log(LogReply::Data(data)) => {
+                self.encode(data);
+                self.flush().await;
+            }
+            Outbound::Origin(origin) => {
+                self.origin = *origin;
+                self.encode(&gps_global_origin(origin));
+                self.flush().await;
+            }
+            Outbound::Home => self.home_position().await,
+            Outbound::MissionCount { to } => {
+                self.encode(&MISSION_COUNT_DATA {
+                    count: 0,
+                    target_system: to.system,
+                    target_component: to.component,
+                });
+                self.flush().await;
+            }
+        }
+    }
+
     async fn identity(&mut self) {
         let version = AUTOPILOT_VERSION_DATA {
             capabilities: link::status::capabilities(),
@@ -960,87 +1049,9 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
             Some(due) => next_beat.min(Instant::from_micros(due)),
             None => next_beat,
         };
-        match select3(OUTBOX.receive(), Timer::at(wake), TELEMETRY_CHANGED.wait()).await {
-            Either3::First(message) => match message {
-                Outbound::Step {
-                    time_us,
-                    report,
-                    ack: step_ack,
-                    state: now,
-                    actuators,
-                } => {
-                    out.report(&report, (time_us / 1000) as u32).await;
-                    if let Some((pending, result)) = step_ack {
-                        out.encode(&ack(pending.mav_cmd, mav_result(result)));
-                        out.flush().await;
-                    }
-                    if now != state {
-                        state = now;
-                        out.heartbeat().await;
-                    }
-                    if let Some(actuators) = actuators {
-                        let messages = actuators.to_messages();
-                        if let Some(status) = &messages.status {
-                            out.encode(status);
-                            out.flush().await;
-                        }
-                        out.encode(&messages.controls);
-                        out.flush().await;
-                    }
-                }
-                Outbound::Report(report) => {
-                    out.report(&report, Instant::now().as_millis() as u32).await;
-                }
-                Outbound::Identity => out.identity().await,
-                Outbound::ComponentMetadata => out.component_metadata().await,
-                Outbound::Params { values, which } => {
-                    let range = match which {
-                        Values::None => 0..0,
-                        Values::One(i) => i..i + 1,
-                        Values::All => 0..PARAM_COUNT,
-                    };
-                    for i in range {
-                        if let Some(m) = value_message(&values, i) {
-                            out.encode(&m);
-                            out.flush().await;
-                        }
-                    }
-                }
-                Outbound::Ftp { message, to } => {
-                    out.encode(&message.to_message(to.system, to.component));
-                    out.flush().await;
-                }
-                Outbound::Ack { command, result } => {
-                    out.encode(&ack(command, result));
-                    out.flush().await;
-                }
-                Outbound::TimeSync { tc1, ts1 } => {
-                    out.encode(&TIMESYNC_DATA { tc1, ts1 });
-                    out.flush().await;
-                }
-                Outbound::Log(LogReply::Entry(entry)) => {
-                    out.encode(&entry);
-                    out.flush().await;
-                }
-                Outbound::Log(LogReply::Data(data)) => {
-                    out.encode(&data);
-                    out.flush().await;
-                }
-                Outbound::Origin(origin) => {
-                    out.origin = origin;
-                    out.encode(&gps_global_origin(&origin));
-                    out.flush().await;
-                }
-                Outbound::Home => out.home_position().await,
-                Outbound::MissionCount { to } => {
-                    out.encode(&MISSION_COUNT_DATA {
-                        count: 0,
-                        target_system: to.system,
-                        target_component: to.component,
-                    });
-                    out.flush().await;
-                }
-            },
+        let event = select3(OUTBOX.receive(), Timer::at(wake), TELEMETRY_CHANGED.wait()).await;
+        match &event {
+            Either3::First(message) => out.outbound(message, &mut state).await,
             Either3::Second(()) => {
                 if Instant::now() >= next_beat {
                     out.heartbeat().await;
