@@ -176,38 +176,44 @@ async fn open_params(flash: <Selected as Board>::ParamFlash) -> (ParamService, O
     let store = match opened {
         Ok(mut store) => {
             let loaded = store.load(&mut values).await;
-            let mut r = Report::default();
-            r.text(
-                Severity::Info,
-                format_args!(
-                    "params: {} of {PARAM_COUNT} restored from storage",
-                    loaded.restored
-                ),
-            );
-            if loaded.refused > 0 {
+            // Built in a block: a report that was borrowed would be kept in the receive
+            // task's future (a static) beside the copy in the wait for the link's queue.
+            let r = {
+                let mut r = Report::default();
                 r.text(
-                    Severity::Warning,
+                    Severity::Info,
                     format_args!(
-                        "params: {} stored values out of today's ranges, defaults used",
-                        loaded.refused
+                        "params: {} of {PARAM_COUNT} restored from storage",
+                        loaded.restored
                     ),
                 );
-            }
-            if let Some(e) = loaded.error {
-                r.text(Severity::Error, format_args!("params: {e}"));
-            }
-            if GeoOrigin::from_params(&values) == GeoOrigin::from_params(&ParamValues::DEFAULT) {
-                r.text(
-                    Severity::Notice,
-                    format_args!("origin: not set; the map shows PX4's simulation home"),
-                );
-            }
-            if !<Selected as Board>::PARAM_FLASH_PERSISTENT {
-                r.text(
-                    Severity::Warning,
-                    format_args!("params: kept in RAM on this board, lost at power-off"),
-                );
-            }
+                if loaded.refused > 0 {
+                    r.text(
+                        Severity::Warning,
+                        format_args!(
+                            "params: {} stored values out of today's ranges, defaults used",
+                            loaded.refused
+                        ),
+                    );
+                }
+                if let Some(e) = loaded.error {
+                    r.text(Severity::Error, format_args!("params: {e}"));
+                }
+                if GeoOrigin::from_params(&values) == GeoOrigin::from_params(&ParamValues::DEFAULT)
+                {
+                    r.text(
+                        Severity::Notice,
+                        format_args!("origin: not set; the map shows PX4's simulation home"),
+                    );
+                }
+                if !<Selected as Board>::PARAM_FLASH_PERSISTENT {
+                    r.text(
+                        Severity::Warning,
+                        format_args!("params: kept in RAM on this board, lost at power-off"),
+                    );
+                }
+                r
+            };
             OUTBOX.send(Outbound::Report(r)).await;
             Some(store)
         }
@@ -327,21 +333,25 @@ async fn setup_signing(key: [u8; KEY_LEN], timestamp: u64, store: &mut Option<St
         s.set_key(key, timestamp, Instant::now().as_micros(), LINK_ID);
         s.enabled()
     });
-    let mut r = Report::default();
-    if on {
-        r.text(
-            Severity::Notice,
-            format_args!("signing: on; unsigned commands and parameter writes are refused"),
-        );
-    } else {
-        r.text(Severity::Notice, format_args!("signing: off"));
-    }
-    if let Err(e) = stored {
-        r.text(
-            Severity::Error,
-            format_args!("signing: key in force but not stored: {e}"),
-        );
-    }
+    // Built in a block, as in `open_params`.
+    let r = {
+        let mut r = Report::default();
+        if on {
+            r.text(
+                Severity::Notice,
+                format_args!("signing: on; unsigned commands and parameter writes are refused"),
+            );
+        } else {
+            r.text(Severity::Notice, format_args!("signing: off"));
+        }
+        if let Err(e) = stored {
+            r.text(
+                Severity::Error,
+                format_args!("signing: key in force but not stored: {e}"),
+            );
+        }
+        r
+    };
     OUTBOX.send(Outbound::Report(r)).await;
 }
 
