@@ -756,22 +756,19 @@ pub struct Received {
 /// `TO_LOAD` has room; if the job task has not taken the last one yet, this waits for room
 /// and decodes the same bytes again.
 async fn check_payload(file: &[u8], store: &mut Option<Store>) {
-    let accepted = match hand_over(file) {
-        Ok(true) => true,
-        Ok(false) => {
-            core::future::poll_fn(|cx| TO_LOAD.poll_ready_to_send(cx)).await;
-            // This task is `TO_LOAD`'s only sender: the room is still there.
-            let _ = hand_over(file);
-            true
-        }
-        Err(e) => {
-            OUTBOX
-                .send(report(
-                    Severity::Error,
-                    format_args!("payload refused: {e}"),
-                ))
-                .await;
-            false
+    let accepted = loop {
+        match hand_over(file) {
+            Ok(true) => break true,
+            Ok(false) => core::future::poll_fn(|cx| TO_LOAD.poll_ready_to_send(cx)).await,
+            Err(e) => {
+                OUTBOX
+                    .send(report(
+                        Severity::Error,
+                        format_args!("payload refused: {e}"),
+                    ))
+                    .await;
+                break false;
+            }
         }
     };
     // Stored after it went to the planner, so the description (1.4 KB) is not held across the
@@ -790,7 +787,8 @@ async fn check_payload(file: &[u8], store: &mut Option<Store>) {
 }
 
 /// Decodes and checks `file`; a description that passes goes to the job task if `TO_LOAD` has
-/// room (`true`), else it is dropped (`false`: [`check_payload`] waits and comes again).
+/// room (`true`), else it is dropped (`false`: [`check_payload`] waits for room and comes
+/// again; the receive task is `TO_LOAD`'s only sender, so once is enough).
 fn hand_over(file: &[u8]) -> Result<bool, PayloadError> {
     let (wire, scenario) = decode_and_check(file)?;
     let received = Received {
