@@ -26,6 +26,11 @@ pub struct Slots {
 }
 
 impl Slots {
+    /// The flash range the two slots take.
+    pub fn range(&self) -> Range<u32> {
+        self.start..self.start + 2 * self.slot_len
+    }
+
     /// Two slots splitting `range` (whole erase pages of `erase_size` each); `None` when the
     /// range cannot be split so.
     pub fn new(range: Range<u32>, erase_size: usize) -> Option<Self> {

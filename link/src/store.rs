@@ -87,6 +87,7 @@ pub struct ParamStore<F: NorFlash> {
     config: Range<u32>,
     buffer: [u8; BUFFER_LEN],
     payload: Option<Slots>,
+    mission: Option<Slots>,
 }
 
 /// Storage names of the signing key and timestamp (not parameter names: no parameter has
@@ -117,6 +118,7 @@ impl<F: NorFlash> ParamStore<F> {
             config: range,
             buffer: [0; BUFFER_LEN],
             payload: None,
+            mission: None,
         })
     }
 
@@ -130,6 +132,50 @@ impl<F: NorFlash> ParamStore<F> {
         }
         self.payload = Some(slots);
         Ok(self)
+    }
+
+    /// Keeps the mission's items in `range` too (two slots of whole erase pages, apart from
+    /// the parameters' and the payload description's ranges).
+    pub fn with_mission(mut self, range: Range<u32>) -> Result<Self, StoreError> {
+        let apart = |r: &Range<u32>| range.end <= r.start || r.end <= range.start;
+        let payload = self.payload.as_ref().map(Slots::range);
+        if !apart(&self.config) || payload.is_some_and(|p| !apart(&p)) {
+            return Err(StoreError::BadRange);
+        }
+        self.mission = Some(Slots::new(range, F::ERASE_SIZE).ok_or(StoreError::BadRange)?);
+        Ok(self)
+    }
+
+    /// Stores the mission's `bytes` (a power cut leaves the one before readable).
+    pub async fn save_mission(&mut self, bytes: &[u8]) -> Result<(), StoreError> {
+        let slots = self.mission.clone().ok_or(StoreError::NoRoom)?;
+        self.save_in(slots, bytes).await
+    }
+
+    /// The stored mission that passes `valid`, read into `into`: its length.
+    pub async fn load_mission(
+        &mut self,
+        into: &mut [u8],
+        valid: impl Fn(&[u8]) -> bool,
+    ) -> Result<Option<usize>, StoreError> {
+        let Some(slots) = self.mission.clone() else {
+            return Ok(None);
+        };
+        let mut flash = self.lend()?;
+        let loaded = slots.load(&mut flash, into, valid).await;
+        self.give_back(flash)?;
+        loaded.map_err(|e| StoreError::Flash(e.kind()))
+    }
+
+    async fn save_in(&mut self, slots: Slots, bytes: &[u8]) -> Result<(), StoreError> {
+        let mut flash = self.lend()?;
+        let saved = slots.save(&mut flash, bytes).await;
+        self.give_back(flash)?;
+        match saved {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(StoreError::NoRoom),
+            Err(e) => Err(StoreError::Flash(e.kind())),
+        }
     }
 
     /// The flash out of the map, for the payload slots; [`Self::give_back`] returns it.
@@ -146,14 +192,7 @@ impl<F: NorFlash> ParamStore<F> {
     /// Stores the payload description `bytes` (a power cut leaves the one before readable).
     pub async fn save_payload(&mut self, bytes: &[u8]) -> Result<(), StoreError> {
         let slots = self.payload.clone().ok_or(StoreError::NoRoom)?;
-        let mut flash = self.lend()?;
-        let saved = slots.save(&mut flash, bytes).await;
-        self.give_back(flash)?;
-        match saved {
-            Ok(true) => Ok(()),
-            Ok(false) => Err(StoreError::NoRoom),
-            Err(e) => Err(StoreError::Flash(e.kind())),
-        }
+        self.save_in(slots, bytes).await
     }
 
     /// The stored payload description that passes `valid`, read into `into`: its length.

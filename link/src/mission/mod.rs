@@ -19,6 +19,7 @@
 //! whether changes are allowed now) and sends the [`Outcome`]'s reply.
 
 pub mod item;
+pub mod stored;
 pub mod wire;
 
 use heapless::{String, Vec};
