@@ -12,7 +12,7 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
 
 1. connect (HEARTBEAT from component 1, MAV_AUTOPILOT_GENERIC), AUTOPILOT_VERSION through
    MAV_CMD_REQUEST_MESSAGE as COMMAND_LONG and COMMAND_INT (capabilities MAVLink 2, COMMAND_INT,
-   FTP, byte-wise parameter encoding; not MISSION_INT), MISSION_COUNT 0,
+   FTP, byte-wise parameter encoding, MISSION_INT), MISSION_COUNT 0 (no mission stored yet),
    telemetry (SYS_STATUS, ATTITUDE_QUATERNION, LOCAL_POSITION_NED and the robots' rail positions
    as DEBUG_FLOAT_ARRAY streamed; a stream stopped
    and restarted by MAV_CMD_SET_MESSAGE_INTERVAL, a bad interval and an unstreamed message
@@ -520,10 +520,10 @@ def first_run(args, port):
         need = (mavlink.MAV_PROTOCOL_CAPABILITY_MAVLINK2
                 | mavlink.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
                 | mavlink.MAV_PROTOCOL_CAPABILITY_FTP
-                | mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE)
-        # Not the mission protocol, nor the other parameter encoding (one of the two).
-        never = (mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_INT
-                 | mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST
+                | mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
+                | mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_INT)
+        # Not the other parameter encoding (one of the two).
+        never = (mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST
                  | mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT)
         if version.capabilities & need != need or version.capabilities & never:
             raise Failure(f"AUTOPILOT_VERSION capabilities {version.capabilities:#x}")

@@ -30,6 +30,7 @@
 
 use std::collections::VecDeque;
 
+use crate::autonomy::RouteChange;
 use embassy_futures::block_on;
 use link::MessageData;
 use link::command::{Request, ack};
@@ -39,9 +40,10 @@ use link::ftp::{FileEvent, FtpMessage, Server};
 use link::geo::{GeoOrigin, OriginError};
 use link::hil::{ImuSample, JobDeadline, MAX_ROBOTS, MocapFix, VehicleClock};
 use link::log_transfer::LogRequest;
+use link::mission::{Context as MissionContext, MissionEvent, MissionService, Outcome};
 use link::msg::{
-    AUTOPILOT_VERSION_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, MISSION_COUNT_DATA,
-    MavResult, MavSeverity, TIMESYNC_DATA,
+    AUTOPILOT_VERSION_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, MavResult, MavSeverity,
+    TIMESYNC_DATA,
 };
 use link::param::{ParamService, Values, value_message};
 use link::signing::{KEY_LEN, Signing, Verdict};
@@ -127,6 +129,9 @@ pub struct Vehicle {
     timesync: TimeSync,
     telemetry: Schedule,
     ftp: Box<Server<FILE_CAPACITY>>,
+    mission: Box<MissionService>,
+    /// Route changes for the control task (`ROUTE`, capacity 2).
+    routes: VecDeque<RouteChange>,
     params: ParamService,
     store: Option<ParamStore<MemFlash>>,
     /// `MISSION_CONFIG`.
@@ -207,6 +212,8 @@ impl Vehicle {
             timesync: TimeSync::new(),
             telemetry: Schedule::new(),
             ftp: Box::new(Server::new()),
+            mission: Box::new(MissionService::new()),
+            routes: VecDeque::with_capacity(2),
             params: ParamService::new(ParamValues::DEFAULT),
             store: None,
             config: MissionConfig::DEFAULT,
@@ -311,7 +318,12 @@ impl Vehicle {
 
     fn heartbeat_due(&mut self) {
         if self.now_us >= self.next_beat_us {
-            let beat = heartbeat(self.mission_state, self.armed, self.in_hil);
+            let beat = heartbeat(
+                self.mission_state,
+                self.autonomy.mode(),
+                self.armed,
+                self.in_hil,
+            );
             self.send(&beat);
             let request = self.timesync.request(ns(self.now_us));
             self.send(&request);
@@ -480,6 +492,23 @@ impl Vehicle {
             Inbound::Command {
                 command, request, ..
             } => match request {
+                Request::AvailableModes(index) => {
+                    let modes = &link::modes::MODES;
+                    if usize::from(index) > modes.len() {
+                        self.refuse(
+                            command,
+                            MavResult::MAV_RESULT_DENIED,
+                            "no mode of that index",
+                        );
+                    } else {
+                        self.send(&ack(command, MavResult::MAV_RESULT_ACCEPTED));
+                        for (i, mode) in modes.iter().enumerate() {
+                            if index == 0 || usize::from(index) == i + 1 {
+                                self.send(&mode.available());
+                            }
+                        }
+                    }
+                }
                 Request::Message(id) if id == AUTOPILOT_VERSION_DATA::ID => {
                     self.send(&ack(command, MavResult::MAV_RESULT_ACCEPTED));
                     self.send_identity();
@@ -640,12 +669,36 @@ impl Vehicle {
                     Err(why) => self.report_text(Severity::Warning, why),
                 }
             }
-            Inbound::MissionList(to) => {
-                self.send(&MISSION_COUNT_DATA {
-                    count: 0,
-                    target_system: to.system,
-                    target_component: to.component,
-                });
+            Inbound::Mission { message, from } => {
+                // comms.rs `handle_mission`.
+                let running = self.mission_state == MissionState::Running;
+                let locked = if !verdict.trusted() {
+                    Some(verdict.reason())
+                } else if running {
+                    Some(link::mission::RUNNING)
+                } else {
+                    None
+                };
+                let origin = self.params.origin();
+                let context = MissionContext {
+                    origin: &origin,
+                    locked,
+                };
+                let before = self.mission.items().to_vec();
+                let outcome = self.mission.handle(
+                    &message,
+                    (from.system, from.component),
+                    self.now_us,
+                    &context,
+                );
+                if locked.is_some() && !matches!(outcome.event, Some(MissionEvent::SetCurrent(_))) {
+                    assert_eq!(
+                        before,
+                        self.mission.items(),
+                        "a locked mission changed ({locked:?})"
+                    );
+                }
+                self.deliver_mission(outcome);
             }
             Inbound::Ftp { message, from } if !verdict.trusted() => {
                 self.send_ftp(&link::ftp::refusal(&message), from);
@@ -803,6 +856,7 @@ impl Vehicle {
         };
         let payload = self.payload.take();
         let pending = self.commands.pop_front();
+        let route = self.routes.pop_front();
         let input = TickInput {
             time_us: step.time_us,
             step: step.index,
@@ -821,6 +875,7 @@ impl Vehicle {
             },
             // The job task runs each load to the end before the next frame here.
             loading: false,
+            route: route.as_ref(),
             supervision: Supervision {
                 gcs_heartbeat: core::mem::take(&mut self.gcs_heartbeat),
                 // The plant's pack in HIL; off HIL the board's ADC (none on the host).
@@ -965,6 +1020,37 @@ impl Vehicle {
             ..Default::default()
         });
         self.report_text(Severity::Info, "board: fuzz (firmware 0.1.0)");
+    }
+
+    /// comms.rs `deliver_mission`: the reply, the refusal, a route change for the autonomy.
+    fn deliver_mission(&mut self, outcome: Outcome) {
+        if let Some((reply, to)) = outcome.reply {
+            reply.encode(to, &mut self.encoder, &mut self.frame);
+            self.flush();
+        }
+        if let Some(text) = &outcome.refusal {
+            self.report_text(Severity::Warning, text);
+        }
+        let change = match outcome.event {
+            Some(MissionEvent::Replaced | MissionEvent::Cleared) => {
+                let route = self
+                    .mission
+                    .route(&self.params.origin())
+                    .unwrap_or_default();
+                Some(RouteChange::Set(route))
+            }
+            Some(MissionEvent::SetCurrent(seq)) => Some(RouteChange::Current(seq)),
+            None => None,
+        };
+        if let Some(change) = change {
+            // The firmware's link task waits for room (the control task takes one a step);
+            // with no step to wait for here, the oldest is dropped: the newest is in force
+            // either way.
+            if self.routes.len() == 2 {
+                self.routes.pop_front();
+            }
+            self.routes.push_back(change);
+        }
     }
 
     fn send_ftp(&mut self, message: &FtpMessage, to: Sender) {

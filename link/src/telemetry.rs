@@ -14,9 +14,9 @@ use crate::MessageData;
 use crate::geo::GeoOrigin;
 use crate::hil::MAX_ROBOTS;
 use crate::msg::{
-    ATTITUDE_QUATERNION_DATA, DEBUG_FLOAT_ARRAY_DATA, GLOBAL_POSITION_INT_DATA,
-    GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, MavResult,
-    MavSysStatusSensor, SYS_STATUS_DATA,
+    ATTITUDE_QUATERNION_DATA, DEBUG_FLOAT_ARRAY_DATA, EXTENDED_SYS_STATE_DATA,
+    GLOBAL_POSITION_INT_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA,
+    MavLandedState, MavResult, MavSysStatusSensor, MavVtolState, SYS_STATUS_DATA,
 };
 
 /// A message the vehicle streams.
@@ -242,6 +242,8 @@ pub struct VehicleSnapshot {
     pub mode: u8,
     /// The route's progress, for `MISSION_CURRENT` and `MISSION_ITEM_REACHED`.
     pub route: RouteStatus,
+    /// `EXTENDED_SYS_STATE`'s `landed_state` (`MAV_LANDED_STATE`).
+    pub landed: u8,
 }
 
 /// Where the vehicle is along its route (docs/ground-link.md#missions).
@@ -295,7 +297,25 @@ impl VehicleSnapshot {
         battery_ok: true,
         mode: 0,
         route: RouteStatus::NONE,
+        landed: MavLandedState::MAV_LANDED_STATE_ON_GROUND as u8,
     };
+
+    /// `EXTENDED_SYS_STATE`: the landed state (MAVSDK's `landed_state` and `in_air`).
+    pub fn extended_sys_state(&self) -> EXTENDED_SYS_STATE_DATA {
+        let landed = [
+            MavLandedState::MAV_LANDED_STATE_ON_GROUND,
+            MavLandedState::MAV_LANDED_STATE_IN_AIR,
+            MavLandedState::MAV_LANDED_STATE_TAKEOFF,
+            MavLandedState::MAV_LANDED_STATE_LANDING,
+        ]
+        .into_iter()
+        .find(|s| *s as u8 == self.landed)
+        .unwrap_or(MavLandedState::MAV_LANDED_STATE_UNDEFINED);
+        EXTENDED_SYS_STATE_DATA {
+            vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
+            landed_state: landed,
+        }
+    }
 
     fn time_boot_ms(&self) -> u32 {
         (self.time_us / 1000) as u32

@@ -80,6 +80,7 @@ crc_extras!(
     crate::msg::MISSION_ITEM_REACHED_DATA,
     crate::msg::AVAILABLE_MODES_DATA,
     crate::msg::CURRENT_MODE_DATA,
+    crate::msg::EXTENDED_SYS_STATE_DATA,
     SYS_STATUS_DATA,
     ATTITUDE_QUATERNION_DATA,
     LOCAL_POSITION_NED_DATA,

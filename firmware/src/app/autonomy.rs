@@ -23,13 +23,19 @@ use link::flight_log::recorder::step_texts;
 use link::flight_log::session::MissionLog;
 use link::flight_log::stream::{LogRing, NoRing};
 pub use link::hil::{MAX_ROBOTS, MocapFix};
+use link::mission::wire::MissionProgress;
+use link::modes::FlightMode;
+use link::msg::MavLandedState;
 pub use link::status::MissionState;
 use link::status::Text;
+use link::telemetry::RouteStatus;
 use link::telemetry::VehicleSnapshot;
 use link::ulog::LogLevel;
 use shared::control::navigator::{ImuSample, MocapFix as Fix};
+use shared::control::trajectory::FlightPhase;
 use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
+use shared::flight::Route;
 use shared::mission::supervision::BatteryLevel;
 use shared::mission::{
     CommandRefusal, HardwareFaults, Mission, MissionConfig, MissionPlanner,
@@ -71,6 +77,19 @@ pub struct TickInput<'a> {
     /// The job task is loading the planner with a description or new parameters (`LOADING`):
     /// a start now is refused as temporarily rejected (the ground tries again).
     pub loading: bool,
+    /// A change of the ground station's route since the last step.
+    pub route: Option<&'a RouteChange>,
+}
+
+/// A change of the ground station's route (docs/ground-link.md#missions).
+// The route is carried whole (no allocator to box it); the channel holds two.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug, PartialEq)]
+pub enum RouteChange {
+    /// Fly this route from the next start (empty: the payload description's target).
+    Set(Route),
+    /// Fly from this item (`MISSION_SET_CURRENT`).
+    Current(u16),
 }
 
 /// How a command was taken (its `COMMAND_ACK`).
@@ -197,6 +216,8 @@ pub struct TickOutput {
 /// the mission (see `super::jobs`).
 pub struct Autonomy {
     mission: Mission,
+    /// The mode, route and landed state last worked out for the ground.
+    status: Status,
     loaded: bool,
     /// The mission's flight log.
     log: MissionLog,
@@ -206,6 +227,17 @@ impl Default for Autonomy {
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// Control steps between two workings-out of the ground's [`Status`].
+const STATUS_EVERY: u64 = 8;
+
+/// What the ground is shown of the mode, the route and the landing.
+#[derive(Clone, Copy, Debug)]
+struct Status {
+    mode: u8,
+    route: RouteStatus,
+    landed: u8,
 }
 
 /// The `STATUSTEXT` severity of a text's level.
@@ -248,6 +280,11 @@ impl Autonomy {
     pub fn new() -> Self {
         Self {
             mission: Mission::unloaded(),
+            status: Status {
+                mode: 0,
+                route: RouteStatus::NONE,
+                landed: VehicleSnapshot::START.landed,
+            },
             loaded: false,
             log: MissionLog::without_step_texts(),
         }
@@ -260,6 +297,86 @@ impl Autonomy {
             Phase::Disarmed if self.mission.abort_reason().is_none() => MissionState::Completed,
             Phase::Disarmed | Phase::Aborted => MissionState::Aborted,
             _ => MissionState::Running,
+        }
+    }
+
+    /// The flight mode ground stations show (docs/ground-link.md#flight-modes).
+    pub fn mode(&self) -> FlightMode {
+        let flight = self.mission.flight();
+        match self.mission.phase() {
+            Phase::Idle | Phase::Disarmed | Phase::Aborted => FlightMode::Ready,
+            Phase::Flying(_) if flight.is_some_and(|f| f.landing_cause().is_some()) => {
+                FlightMode::Land
+            }
+            Phase::Flying(_) if flight.is_some_and(|f| f.holding()) => FlightMode::Hold,
+            _ => FlightMode::Mission,
+        }
+    }
+
+    /// The landed state ground stations show (`EXTENDED_SYS_STATE`).
+    fn landed_state(&self) -> MavLandedState {
+        let Some(flight) = self.mission.flight().filter(|f| f.stopped().is_none()) else {
+            return MavLandedState::MAV_LANDED_STATE_ON_GROUND;
+        };
+        match self.mission.phase() {
+            Phase::Flying(FlightPhase::Takeoff) if !flight.airborne() => {
+                MavLandedState::MAV_LANDED_STATE_TAKEOFF
+            }
+            Phase::Flying(_) if !flight.airborne() => MavLandedState::MAV_LANDED_STATE_ON_GROUND,
+            Phase::Flying(FlightPhase::Land | FlightPhase::Done) => {
+                MavLandedState::MAV_LANDED_STATE_LANDING
+            }
+            Phase::Flying(_) if flight.landing_cause().is_some() => {
+                MavLandedState::MAV_LANDED_STATE_LANDING
+            }
+            Phase::Flying(_) => MavLandedState::MAV_LANDED_STATE_IN_AIR,
+            _ => MavLandedState::MAV_LANDED_STATE_ON_GROUND,
+        }
+    }
+
+    /// Where the vehicle is along its route, for `MISSION_CURRENT`.
+    fn route_status(&self, mode: FlightMode) -> RouteStatus {
+        let Some((current, reached)) = self.mission.route_progress() else {
+            return RouteStatus::NONE;
+        };
+        let last = self.mission.route().len().saturating_sub(1) as u8;
+        let progress = match self.state() {
+            MissionState::Idle => MissionProgress::NotStarted,
+            MissionState::Completed if reached == Some(last) => MissionProgress::Complete,
+            _ if mode == FlightMode::Hold => MissionProgress::Paused,
+            _ => MissionProgress::Active,
+        };
+        RouteStatus {
+            current: u16::from(current),
+            reached: reached.map(u16::from),
+            progress,
+        }
+    }
+
+    /// Puts a change of the route in force, or says why it is not.
+    fn change_route(&mut self, change: &RouteChange, report: &mut Report) {
+        match change {
+            RouteChange::Set(route) => {
+                if let Err(e) = self.mission.set_route(route) {
+                    report.text(
+                        Severity::Warning,
+                        format_args!("mission not flown this time: {e}; it is for the next start"),
+                    );
+                }
+            }
+            RouteChange::Current(item) => {
+                let item = u8::try_from(*item).unwrap_or(u8::MAX);
+                match self.mission.set_route_item(item) {
+                    Ok(()) => report.text(
+                        Severity::Info,
+                        format_args!("mission: flying from item {item}"),
+                    ),
+                    Err(e) => report.text(
+                        Severity::Warning,
+                        format_args!("mission: not flying from item {item}: {e}"),
+                    ),
+                }
+            }
         }
     }
 
@@ -281,6 +398,9 @@ impl Autonomy {
                     format_args!("payload description ignored: the mission is running"),
                 );
             }
+        }
+        if let Some(change) = input.route {
+            self.change_route(change, &mut report);
         }
         if let Some(result) = input.job.clone() {
             // Dropped by the mission when it no longer waits for it (after an abort).
@@ -373,6 +493,17 @@ impl Autonomy {
         }
         let (attitude, position) = (&out.nav.attitude, &out.nav.position);
         let q = attitude.attitude;
+        // The mode, the route's progress and the landed state, for the ground at 50 Hz (each
+        // eighth step: they cost the step about 80 instructions).
+        if input.step.is_multiple_of(STATUS_EVERY) {
+            let mode = self.mode();
+            self.status = Status {
+                mode: mode.code(),
+                route: self.route_status(mode),
+                landed: self.landed_state() as u8,
+            };
+        }
+        let status = self.status;
         let telemetry = VehicleSnapshot {
             attitude: [q.w, q.x, q.y, q.z],
             rates: [attitude.rate.x, attitude.rate.y, attitude.rate.z],
@@ -395,6 +526,9 @@ impl Autonomy {
                 .battery_volts()
                 .map_or(u16::MAX, |v| (v * 1000.0).min(65_534.0) as u16),
             battery_ok: self.mission.battery_level() == BatteryLevel::Ok,
+            mode: status.mode,
+            route: status.route,
+            landed: status.landed,
             ..VehicleSnapshot::START
         };
         TickOutput {

@@ -22,15 +22,19 @@ use link::ftp::{FileEvent, FtpMessage, Server, component_metadata};
 use link::geo::{GeoOrigin, OriginError};
 use link::hil::{Actuators, ImuSample};
 use link::log_transfer::{LogReply, LogRequest};
+use link::mission::stored::{self, MAX_STORED_LEN};
+use link::mission::wire::{MissionMessage, MissionReply};
+use link::mission::{Context as MissionContext, MissionEvent, MissionService, Outcome, Peer};
+use link::modes::{FlightMode, MODES};
 use link::msg::{
-    AUTOPILOT_VERSION_DATA, COMPONENT_METADATA_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA,
-    MISSION_COUNT_DATA, MavResult, MavSeverity, TIMESYNC_DATA,
+    AUTOPILOT_VERSION_DATA, COMPONENT_METADATA_DATA, CURRENT_MODE_DATA, GPS_GLOBAL_ORIGIN_DATA,
+    HOME_POSITION_DATA, MavResult, MavSeverity, TIMESYNC_DATA,
 };
 use link::param::{ParamRequest, ParamService, Values, value_message};
 use link::signing::{KEY_LEN, Verdict};
 use link::status::{MissionState, Text, chunks, heartbeat, named_float, named_int};
 use link::store::ParamStore;
-use link::telemetry::{Home, Stream, gps_global_origin};
+use link::telemetry::{Home, RouteStatus, Stream, VehicleSnapshot, gps_global_origin};
 use link::timesync::Received as SyncReceived;
 use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
 use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, TABLE, is_origin};
@@ -44,10 +48,12 @@ mod metadata {
     include!(concat!(env!("OUT_DIR"), "/metadata.rs"));
 }
 
+use super::autonomy::RouteChange;
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
 use super::{
-    ARMED, COMMANDS, GCS_HEARTBEAT, IN_HIL, LINK_BATTERY_MV, MISSION_CONFIG, MISSION_STATE, MOCAP,
-    OUTBOX, RELOAD, SENSOR, TELEMETRY_CHANGED, TO_LOAD, VEHICLE, signing, telemetry, timesync,
+    ARMED, COMMANDS, GCS_HEARTBEAT, IN_HIL, LINK_BATTERY_MV, MISSION_CONFIG, MISSION_ITEMS,
+    MISSION_STATE, MOCAP, OUTBOX, RELOAD, ROUTE, ROUTE_SENT, SENSOR, TELEMETRY_CHANGED, TO_LOAD,
+    VEHICLE, signing, telemetry, timesync,
 };
 use crate::board::{Board, Selected};
 
@@ -131,11 +137,17 @@ pub enum Outbound {
         /// The request's time.
         ts1: i64,
     },
-    /// `MISSION_COUNT` 0 (the vehicle plans its own mission: no items).
-    MissionCount {
-        /// To whom.
-        to: Sender,
+    /// A mission-protocol reply.
+    Mission {
+        /// The reply.
+        reply: MissionReply,
+        /// To whom (system, component).
+        to: Peer,
     },
+    /// `AVAILABLE_MODES`: the mode of this index (from 1), or every mode (0).
+    AvailableModes(u8),
+    /// `CURRENT_MODE`, on request.
+    CurrentMode,
     /// A log-protocol answer (`LOG_ENTRY`, `LOG_DATA`), from the logger task.
     Log(LogReply),
     /// The map origin in force (at start, set, or asked for): kept for the global position,
@@ -159,6 +171,8 @@ const MAX_FIX_AGE_US: u64 = 150_000;
 const FILE_CAPACITY: usize = MAX_ENCODED_LEN;
 
 static FTP: StaticCell<Server<FILE_CAPACITY>> = StaticCell::new();
+/// The mission protocol's service: the items in force and an upload's.
+static MISSION: StaticCell<MissionService> = StaticCell::new();
 
 /// A report of one text line, ready for the send task.
 pub fn report(severity: Severity, args: core::fmt::Arguments<'_>) -> Outbound {
@@ -172,7 +186,8 @@ pub fn report(severity: Severity, args: core::fmt::Arguments<'_>) -> Outbound {
 async fn open_params(flash: <Selected as Board>::ParamFlash) -> (ParamService, Option<Store>) {
     let mut values = ParamValues::DEFAULT;
     let opened = ParamStore::new(flash, <Selected as Board>::PARAM_RANGE)
-        .and_then(|s| s.with_payload(<Selected as Board>::PAYLOAD_RANGE));
+        .and_then(|s| s.with_payload(<Selected as Board>::PAYLOAD_RANGE))
+        .and_then(|s| s.with_mission(<Selected as Board>::MISSION_RANGE));
     let store = match opened {
         Ok(mut store) => {
             let loaded = store.load(&mut values).await;
@@ -238,9 +253,11 @@ pub async fn receive(
 ) {
     let mut parser = Parser::new(crc_extra);
     let ftp = FTP.init(Server::new());
+    let mission = MISSION.init(MissionService::new());
     let (mut params, mut store) = open_params(param_flash).await;
     restore_signing(&mut store).await;
     restore_payload(ftp, &mut store).await;
+    restore_mission(mission, &params.origin(), &mut store).await;
     let mut buf = [0u8; 64];
     loop {
         // A board's read error (a UART framing error) loses bytes the parser resyncs over.
@@ -251,7 +268,12 @@ pub async fn receive(
             };
             let verdict = signing(|s| s.check(frame, Instant::now().as_micros()));
             let inbound = dispatch(frame, integrity);
-            handle(inbound, verdict, ftp, &mut params, &mut store).await;
+            handle(inbound, verdict, ftp, mission, &mut params, &mut store).await;
+        }
+        // An upload's timeout, looked at whenever bytes come (in flight at least the ground
+        // station's heartbeat, once a second).
+        if let Some(outcome) = mission.poll(Instant::now().as_micros()) {
+            deliver_mission(outcome, mission, &params.origin(), &mut store).await;
         }
     }
 }
@@ -556,6 +578,7 @@ async fn handle(
     inbound: Inbound,
     verdict: Verdict,
     ftp: &mut Server<FILE_CAPACITY>,
+    mission: &mut MissionService,
     params: &mut ParamService,
     store: &mut Option<Store>,
 ) {
@@ -598,6 +621,21 @@ async fn handle(
             request,
             from,
         } => match request {
+            Request::AvailableModes(index) => {
+                if usize::from(index) > MODES.len() {
+                    let result = MavResult::MAV_RESULT_DENIED;
+                    refuse(command, result, "no mode of that index").await;
+                } else {
+                    let result = MavResult::MAV_RESULT_ACCEPTED;
+                    OUTBOX.send(Outbound::Ack { command, result }).await;
+                    OUTBOX.send(Outbound::AvailableModes(index)).await;
+                }
+            }
+            Request::Message(id) if id == CURRENT_MODE_DATA::ID => {
+                let result = MavResult::MAV_RESULT_ACCEPTED;
+                OUTBOX.send(Outbound::Ack { command, result }).await;
+                OUTBOX.send(Outbound::CurrentMode).await;
+            }
             Request::Message(id) if id == AUTOPILOT_VERSION_DATA::ID => {
                 let result = MavResult::MAV_RESULT_ACCEPTED;
                 OUTBOX.send(Outbound::Ack { command, result }).await;
@@ -688,7 +726,9 @@ async fn handle(
         Inbound::SetupSigning { key, timestamp, .. } => {
             setup_signing(key, timestamp, store).await;
         }
-        Inbound::MissionList(to) => OUTBOX.send(Outbound::MissionCount { to }).await,
+        Inbound::Mission { message, from } => {
+            handle_mission(&message, from, verdict, mission, params, store).await;
+        }
         Inbound::Log { request, .. } => handle_log(request, verdict).await,
         Inbound::SetOrigin {
             lat_e7,
@@ -737,6 +777,155 @@ async fn handle(
         }
         Inbound::Heartbeat(_) | Inbound::Ignored { .. } => {}
     }
+}
+
+/// Puts the stored mission in force, if one is stored and still makes a route with the map
+/// origin; says what it found.
+async fn restore_mission(
+    mission: &mut MissionService,
+    origin: &GeoOrigin,
+    store: &mut Option<Store>,
+) {
+    let Some(store) = store else {
+        return;
+    };
+    let mut bytes = [0u8; MAX_STORED_LEN];
+    let valid = |b: &[u8]| stored::decode(b).is_some();
+    let loaded = store.load_mission(&mut bytes, valid).await;
+    let items = match loaded {
+        Ok(Some(len)) => stored::decode(&bytes[..len]).unwrap_or_default(),
+        Ok(None) => return,
+        Err(e) => {
+            OUTBOX
+                .send(report(
+                    Severity::Error,
+                    format_args!("mission not read from storage: {e}"),
+                ))
+                .await;
+            return;
+        }
+    };
+    if items.is_empty() {
+        return;
+    }
+    match mission.restore(&items, origin) {
+        Ok(()) => {
+            offer_route(mission, origin).await;
+            OUTBOX
+                .send(report(
+                    Severity::Info,
+                    format_args!("mission of {} items restored from storage", items.len()),
+                ))
+                .await;
+        }
+        Err((i, problem)) => {
+            OUTBOX
+                .send(report(
+                    Severity::Warning,
+                    format_args!("stored mission not flown: item {i}: {problem}"),
+                ))
+                .await;
+        }
+    }
+}
+
+/// Hands the mission in force to the autonomy as a route to fly (an empty one when it cannot
+/// be flown with `origin`: the payload description's target then).
+async fn offer_route(mission: &MissionService, origin: &GeoOrigin) {
+    let route = mission.route(origin).unwrap_or_default();
+    MISSION_ITEMS.store(mission.items().len() as u16, Ordering::Relaxed);
+    ROUTE.send(RouteChange::Set(route)).await;
+    ROUTE_SENT.store(true, Ordering::Release);
+}
+
+/// A mission-protocol message: answered, and a mission replaced or cleared is handed to the
+/// autonomy and stored. Downloads need no signature; changes do, and none while the mission
+/// runs but a set-current (docs/ground-link.md#missions).
+async fn handle_mission(
+    message: &MissionMessage,
+    from: Sender,
+    verdict: Verdict,
+    mission: &mut MissionService,
+    params: &ParamService,
+    store: &mut Option<Store>,
+) {
+    let running = MISSION_STATE.load(Ordering::Relaxed) == MissionState::Running as u8;
+    let locked = if !verdict.trusted() {
+        Some(verdict.reason())
+    } else if running {
+        Some(link::mission::RUNNING)
+    } else {
+        None
+    };
+    let origin = params.origin();
+    let context = MissionContext {
+        origin: &origin,
+        locked,
+    };
+    let now = Instant::now().as_micros();
+    let outcome = mission.handle(message, (from.system, from.component), now, &context);
+    deliver_mission(outcome, mission, &origin, store).await;
+}
+
+/// Sends a mission outcome's reply and refusal; puts a new mission in force and stores it.
+async fn deliver_mission(
+    outcome: Outcome,
+    mission: &mut MissionService,
+    origin: &GeoOrigin,
+    store: &mut Option<Store>,
+) {
+    if let Some((reply, to)) = outcome.reply {
+        OUTBOX.send(Outbound::Mission { reply, to }).await;
+    }
+    if let Some(text) = &outcome.refusal {
+        OUTBOX
+            .send(report(Severity::Warning, format_args!("{text}")))
+            .await;
+    }
+    match outcome.event {
+        Some(MissionEvent::Replaced | MissionEvent::Cleared) => {
+            offer_route(mission, origin).await;
+            let count = mission.items().len();
+            let saved = save_mission(mission, store).await;
+            let mut r = Report::default();
+            if count == 0 {
+                r.text(
+                    Severity::Info,
+                    format_args!("mission cleared: the payload description's target is flown"),
+                );
+            } else {
+                r.text(
+                    Severity::Info,
+                    format_args!("mission of {count} items accepted"),
+                );
+            }
+            if let Err(e) = saved {
+                r.text(
+                    Severity::Error,
+                    format_args!("mission in force but not stored: {e}"),
+                );
+            }
+            OUTBOX.send(Outbound::Report(r)).await;
+        }
+        Some(MissionEvent::SetCurrent(seq)) => {
+            ROUTE.send(RouteChange::Current(seq)).await;
+            ROUTE_SENT.store(true, Ordering::Release);
+        }
+        None => {}
+    }
+}
+
+/// Stores the mission in force.
+async fn save_mission(
+    mission: &MissionService,
+    store: &mut Option<Store>,
+) -> Result<(), link::store::StoreError> {
+    let Some(store) = store else {
+        return Err(link::store::StoreError::Other);
+    };
+    let mut bytes = [0u8; MAX_STORED_LEN];
+    let len = stored::encode(mission.items(), &mut bytes);
+    store.save_mission(&bytes[..len]).await
 }
 
 /// A payload description that passed the checks, on its way to the planner.
@@ -826,6 +1015,16 @@ struct Sending<W> {
     origin: GeoOrigin,
     /// The take-off point.
     home: Home,
+    /// The flight mode, the route's progress and the landed state last said.
+    said: Said,
+}
+
+/// What the send task last said of the mode, the route and the landed state.
+#[derive(Clone, Copy, PartialEq)]
+struct Said {
+    mode: u8,
+    route: RouteStatus,
+    landed: u8,
 }
 
 impl<W: Write> Sending<W> {
@@ -870,13 +1069,63 @@ impl<W: Write> Sending<W> {
         let state =
             MissionState::from_custom_mode(u32::from(MISSION_STATE.load(Ordering::Relaxed)))
                 .unwrap_or(MissionState::Idle);
+        let mode = VEHICLE.lock(|v| v.get()).mode;
         let beat = heartbeat(
             state,
+            FlightMode::from_code(mode).unwrap_or(FlightMode::Ready),
             ARMED.load(Ordering::Relaxed),
             IN_HIL.load(Ordering::Relaxed),
         );
         self.encode(&beat);
         self.flush().await;
+    }
+
+    /// The mode, the route's progress and the landed state (docs/ground-link.md#missions):
+    /// each change at once (a new mode with a `HEARTBEAT` and `CURRENT_MODE`, an item reached
+    /// as `MISSION_ITEM_REACHED`), and with every heartbeat (`every_second`) the route's
+    /// `MISSION_CURRENT` and `EXTENDED_SYS_STATE`.
+    async fn mission_status(&mut self, every_second: bool) {
+        let vehicle = VEHICLE.lock(|v| v.get());
+        let now = Said {
+            mode: vehicle.mode,
+            route: vehicle.route,
+            landed: vehicle.landed,
+        };
+        let before = self.said;
+        self.said = now;
+        if now.mode != before.mode {
+            let mode = FlightMode::from_code(now.mode).unwrap_or(FlightMode::Ready);
+            self.heartbeat().await;
+            self.encode(&mode.current(mode));
+            self.flush().await;
+        }
+        if let Some(reached) = now.route.reached
+            && before.route.reached != Some(reached)
+        {
+            let first = before.route.reached.map_or(0, |r| r + 1).min(reached);
+            for seq in first..=reached {
+                link::mission::wire::encode_reached(seq, &mut self.encoder, &mut self.frame);
+                self.flush().await;
+            }
+        }
+        if every_second || now.route != before.route {
+            let total = MISSION_ITEMS.load(Ordering::Relaxed);
+            let r = now.route;
+            let in_mission = now.mode == FlightMode::Mission.code();
+            link::mission::wire::encode_current(
+                r.current,
+                total,
+                r.progress,
+                in_mission,
+                &mut self.encoder,
+                &mut self.frame,
+            );
+            self.flush().await;
+        }
+        if every_second || now.landed != before.landed {
+            self.encode(&vehicle.extended_sys_state());
+            self.flush().await;
+        }
     }
 
     /// Every telemetry stream due now, from the last control step's state.
@@ -1002,13 +1251,23 @@ impl<W: Write> Sending<W> {
                 self.flush().await;
             }
             Outbound::Home => self.home_position().await,
-            Outbound::MissionCount { to } => {
-                self.encode(&MISSION_COUNT_DATA {
-                    count: 0,
-                    target_system: to.system,
-                    target_component: to.component,
-                });
+            Outbound::Mission { reply, to } => {
+                reply.encode(*to, &mut self.encoder, &mut self.frame);
                 self.flush().await;
+            }
+            Outbound::CurrentMode => {
+                let mode = VEHICLE.lock(|v| v.get()).mode;
+                let mode = FlightMode::from_code(mode).unwrap_or(FlightMode::Ready);
+                self.encode(&mode.current(mode));
+                self.flush().await;
+            }
+            Outbound::AvailableModes(index) => {
+                for (i, mode) in MODES.iter().enumerate() {
+                    if *index == 0 || usize::from(*index) == i + 1 {
+                        self.encode(&mode.available());
+                        self.flush().await;
+                    }
+                }
             }
         }
     }
@@ -1046,6 +1305,11 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
         text_id: 0,
         origin: GeoOrigin::from_params(&ParamValues::DEFAULT),
         home: Home::START,
+        said: Said {
+            mode: FlightMode::Ready.code(),
+            route: RouteStatus::NONE,
+            landed: VehicleSnapshot::START.landed,
+        },
     };
     out.identity().await;
     let _ = out.tx.flush().await;
@@ -1059,10 +1323,14 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
         };
         let event = select3(OUTBOX.receive(), Timer::at(wake), TELEMETRY_CHANGED.wait()).await;
         match &event {
-            Either3::First(message) => out.outbound(message, &mut state).await,
+            Either3::First(message) => {
+                out.outbound(message, &mut state).await;
+                out.mission_status(false).await;
+            }
             Either3::Second(()) => {
                 if Instant::now() >= next_beat {
                     out.heartbeat().await;
+                    out.mission_status(true).await;
                     // A time-sync request with every heartbeat (as PX4 asks once a second).
                     let now_ns = Instant::now().as_micros().saturating_mul(1000) as i64;
                     out.encode(&timesync(|t| t.request(now_ns)));

@@ -23,7 +23,8 @@ use super::comms::{Outbound, SensorSample};
 use super::logger::RingEnd;
 use super::{
     ARMED, COMMANDS, GCS_HEARTBEAT, IDLE_COUNTS, IN_HIL, JOB_REQUESTS, JOB_RESULTS,
-    LINK_BATTERY_MV, LOADING, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD, SENSOR, VEHICLE,
+    LINK_BATTERY_MV, LOADING, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD, ROUTE, ROUTE_SENT, SENSOR,
+    VEHICLE,
 };
 use crate::board::{ActuatorOutputs, Board, Selected};
 use shared::mission::{HardwareFaults, Supervision};
@@ -98,6 +99,15 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             let loading = LOADING.load(Ordering::SeqCst);
             let payload = PAYLOAD.try_receive().ok();
             let pending = COMMANDS.try_receive().ok();
+            let route = if ROUTE_SENT.load(Ordering::Acquire) {
+                let change = ROUTE.try_receive().ok();
+                if ROUTE.is_empty() {
+                    ROUTE_SENT.store(false, Ordering::Release);
+                }
+                change
+            } else {
+                None
+            };
             let input = TickInput {
                 time_us: step.time_us,
                 step: step.index,
@@ -112,6 +122,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                     <Selected as Board>::hardware_faults()
                 },
                 loading,
+                route: route.as_ref(),
                 supervision: Supervision {
                     gcs_heartbeat: GCS_HEARTBEAT.swap(false, Ordering::Relaxed),
                     // In HIL the plant's pack; on a board its own measurement.

@@ -62,6 +62,15 @@ pub fn offer_payload(payload: LoadedPayload) {
     // The job task is the only sender and the channel was just emptied: this cannot be full.
     let _ = PAYLOAD.try_send(payload);
 }
+/// A change of the ground station's route (docs/ground-link.md#missions), from the link's
+/// mission service for the autonomy, in order.
+pub static ROUTE: Channel<Cs, autonomy::RouteChange, 2> = Channel::new();
+/// Set after a send to [`ROUTE`]: the control step looks in the channel only then (a load
+/// costs it two instructions, a look at the channel a critical section).
+pub static ROUTE_SENT: AtomicBool = AtomicBool::new(false);
+/// Items of the mission in force (`MISSION_CURRENT`'s `total`).
+pub static MISSION_ITEMS: core::sync::atomic::AtomicU16 = core::sync::atomic::AtomicU16::new(0);
+
 /// The mission configuration the parameters make now (set by the link task from the stored
 /// parameters and each accepted `PARAM_SET`; taken when a payload description is loaded).
 pub static MISSION_CONFIG: Mutex<Cs, Cell<MissionConfig>> =

@@ -76,6 +76,9 @@ pub trait Board: 'static {
     /// Where the payload description is kept (two slots of whole erase pages, apart from
     /// [`Board::PARAM_RANGE`]).
     const PAYLOAD_RANGE: core::ops::Range<u32>;
+    /// Where the mission's items are kept (two slots of whole erase pages, apart from the
+    /// other two ranges).
+    const MISSION_RANGE: core::ops::Range<u32>;
     /// Where the flight logs are kept ([`NoLogStorage`] on a board without a driver for it).
     type LogStorage: link::flight_log::keeper::LogStorage + Send + 'static;
     /// Bytes of the ring between the control step and the logger task (0: no flight log).

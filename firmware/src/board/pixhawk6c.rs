@@ -154,6 +154,10 @@ impl Board for Pixhawk6c {
     /// most 983 bytes).
     const PAYLOAD_RANGE: core::ops::Range<u32> =
         (8 * super::fram::PAGE) as u32..(10 * super::fram::PAGE) as u32;
+    /// The 2 KiB after the payload description's: two 1 KiB slots (a mission of 16 items is
+    /// 522 bytes).
+    const MISSION_RANGE: core::ops::Range<u32> =
+        (10 * super::fram::PAGE) as u32..(12 * super::fram::PAGE) as u32;
 
     fn cycle_count() -> u32 {
         cortex_m::peripheral::DWT::cycle_count()

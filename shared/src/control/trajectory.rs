@@ -213,7 +213,26 @@ impl FlightPlan {
         yaw: f32,
         limits: PlanLimits,
     ) -> Self {
-        let mut segments = heapless::Vec::new();
+        let mut plan = Self {
+            segments: heapless::Vec::new(),
+        };
+        plan.fill_from_route(start, ground, route, first, yaw, limits);
+        plan
+    }
+
+    /// This plan becomes [`Self::from_route`]'s, in place (a plan is 1.2 KB: the control
+    /// step fills it where it is rather than building and moving one).
+    pub fn fill_from_route(
+        &mut self,
+        start: Vec3,
+        ground: f32,
+        route: &Route,
+        first: usize,
+        yaw: f32,
+        limits: PlanLimits,
+    ) {
+        let segments = &mut self.segments;
+        segments.clear();
         let at = |p: &RoutePoint| Vec3::new(p.north, p.east, ground - p.height);
         let mut here = start;
         let mut last_item = first;
@@ -286,16 +305,23 @@ impl FlightPlan {
             let land = PlanSegment::moving(FlightPhase::Land, here, down, &limits, yaw);
             let _ = segments.push(land.of_item(last_item, false));
         }
-        Self { segments }
     }
 
     /// A landing straight down from `from` to the ground at height `ground_z` (NED z).
     pub fn landing(from: Vec3, ground_z: f32, yaw: f32, limits: PlanLimits) -> Self {
+        let mut plan = Self {
+            segments: heapless::Vec::new(),
+        };
+        plan.fill_landing(from, ground_z, yaw, limits);
+        plan
+    }
+
+    /// This plan becomes [`Self::landing`]'s, in place.
+    pub fn fill_landing(&mut self, from: Vec3, ground_z: f32, yaw: f32, limits: PlanLimits) {
         let ground = Vec3::new(from.x, from.y, ground_z);
         let land = PlanSegment::new(FlightPhase::Land, from, ground, limits.descent_speed, yaw);
-        Self {
-            segments: heapless::Vec::from_slice(&[land]).unwrap_or_default(),
-        }
+        self.segments.clear();
+        let _ = self.segments.push(land);
     }
 
     /// Segment `index`, in order; `None` past the last.

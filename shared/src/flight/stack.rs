@@ -40,6 +40,7 @@ use crate::control::vector::{Quat, Vec3};
 use crate::control::vehicle::VehicleModel;
 use crate::flight::model::FlightModel;
 use crate::flight::rotor_monitor::{MonitorInput, RotorMonitor, RotorMonitorConfig};
+use crate::flight::route::Route;
 use crate::geometry::Vec2;
 use crate::math;
 use crate::scenario::MAX_ROBOTS;
@@ -234,24 +235,12 @@ impl FlightStack {
     /// A flight of `model` from `start` (on the ground, NED) to `target` = [x, y, height
     /// above ground].
     pub fn new(config: FlightConfig, model: FlightModel, start: Vec3, target: [f32; 3]) -> Self {
-        let plan = FlightPlan::new(start, target, 0.0, config.plan);
-        Self::with_plan(config, model, start, plan)
-    }
-
-    /// A flight of `model` from `start` (on the ground, NED) along `plan` (a route's:
-    /// [`FlightPlan::from_route`]).
-    pub fn with_plan(
-        config: FlightConfig,
-        model: FlightModel,
-        start: Vec3,
-        plan: FlightPlan,
-    ) -> Self {
         Self {
             config,
             weight: model.vehicle.hover_thrust(),
             controller: FlightController::new(config.control, model.vehicle),
             mixer: model.mixer,
-            plan,
+            plan: FlightPlan::new(start, target, 0.0, config.plan),
             segment: 0,
             segment_time: 0.0,
             phase: FlightPhase::Takeoff,
@@ -440,14 +429,18 @@ impl FlightStack {
         &self.plan
     }
 
-    /// Flies `plan` from its start now (a jump along a route in flight); not once landing or
-    /// stopped. Returns whether it was taken.
-    pub fn replan(&mut self, plan: FlightPlan) -> bool {
+    /// Flies `route` from item `first` on, from `here` (NED; the take-off point before the
+    /// take-off, or in the air: a jump along the route), the plan filled in place
+    /// ([`FlightPlan::fill_from_route`]); not once landing or stopped. Returns whether it
+    /// was taken.
+    pub fn follow_route(&mut self, here: Vec3, route: &Route, first: usize) -> bool {
         if self.landing.is_some() || self.stopped.is_some() {
             return false;
         }
-        self.phase = plan.segment(0).map_or(FlightPhase::Done, |s| s.phase);
-        self.plan = plan;
+        let limits = self.config.plan;
+        self.plan
+            .fill_from_route(here, self.ground_z, route, first, 0.0, limits);
+        self.phase = self.plan.segment(0).map_or(FlightPhase::Done, |s| s.phase);
         self.segment = 0;
         self.segment_time = 0.0;
         self.after_plan = 0.0;
@@ -474,12 +467,10 @@ impl FlightStack {
             return None;
         }
         self.landing = Some(cause);
-        self.plan = FlightPlan::landing(
-            nav.position.position,
-            self.ground_z,
-            self.plan.settled().yaw,
-            self.config.plan,
-        );
+        let yaw = self.plan.settled().yaw;
+        let limits = self.config.plan;
+        self.plan
+            .fill_landing(nav.position.position, self.ground_z, yaw, limits);
         self.segment = 0;
         self.segment_time = 0.0;
         self.phase = FlightPhase::Land;

@@ -19,7 +19,7 @@
 
 use crate::control::imu_monitor::ImuMonitor;
 use crate::control::navigator::{NavState, Navigator};
-use crate::control::trajectory::{FlightPhase, FlightPlan};
+use crate::control::trajectory::FlightPhase;
 use crate::control::vector::Vec3;
 use crate::estimation::{Estimate, Status};
 use crate::flight::{
@@ -898,24 +898,19 @@ impl Mission {
         };
         let model = model?;
         let start = nav.position.position;
-        let flight = if self.route.is_empty() {
-            let Some(target) = self.scenario.flight.map(|f| f.target) else {
-                return Err(AbortReason::NoFlightTarget);
-            };
-            FlightStack::new(self.config.flight, model, start, target)
-        } else {
-            let first = usize::from(self.route_first);
-            let plan = FlightPlan::from_route(
-                start,
-                start.z,
-                &self.route,
-                first,
-                0.0,
-                self.config.flight.plan,
-            );
-            FlightStack::with_plan(self.config.flight, model, start, plan)
+        // A route's flight: built for the payload description's target (or, without one, a
+        // hover above the take-off point), then its plan filled with the route in place.
+        let target = match self.scenario.flight {
+            Some(f) => f.target,
+            None if !self.route.is_empty() => [start.x, start.y, 0.0],
+            None => return Err(AbortReason::NoFlightTarget),
         };
-        self.flight = Some(flight);
+        let flight = self
+            .flight
+            .insert(FlightStack::new(self.config.flight, model, start, target));
+        if !self.route.is_empty() {
+            flight.follow_route(start, &self.route, usize::from(self.route_first));
+        }
         self.adapter = self.estimate.map(|e| {
             let r = &self.scenario.robots;
             Adapter::new(
@@ -938,12 +933,7 @@ impl Mission {
     ) -> Option<Transition> {
         let flight = self.flight.as_mut()?;
         if let Some(item) = self.jump.take() {
-            let limits = self.config.flight.plan;
-            let here = nav.position.position;
-            let first = usize::from(item);
-            let plan =
-                FlightPlan::from_route(here, flight.ground_z(), &self.route, first, 0.0, limits);
-            flight.replan(plan);
+            flight.follow_route(nav.position.position, &self.route, usize::from(item));
         }
         let out = flight.step(nav, command, dt);
         *cascade = out.cascade;

@@ -15,8 +15,9 @@ use embedded_storage_async::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, 
 /// Erase page, bytes.
 pub const PAGE: usize = 4096;
 /// Pages of the file.
-pub const PAGES: usize = PARAM_PAGES + 2;
-/// Pages of the parameters; the two after them hold the payload description.
+pub const PAGES: usize = PARAM_PAGES + 4;
+/// Pages of the parameters; the two after them hold the payload description, the last two
+/// the mission.
 pub const PARAM_PAGES: usize = 4;
 /// Name of the host file, NUL-terminated for `SYS_OPEN`.
 const FILE_NAME: &[u8] = b"firmware-params.bin\0";
@@ -61,8 +62,11 @@ impl FileFlash {
         // SAFETY: a handle this function opened.
         let len = unsafe { syscall!(FLEN, handle) };
         if fresh || len < PAGE * PAGES {
+            // A new file is erased whole; a shorter one (from a firmware with fewer pages)
+            // grows by erased pages, what it holds kept.
+            let from = if fresh { 0 } else { len - len % CHUNK };
             let ff = [0xFFu8; CHUNK];
-            for at in (0..PAGE * PAGES).step_by(CHUNK) {
+            for at in (from..PAGE * PAGES).step_by(CHUNK) {
                 if flash.put(at, &ff).is_err() {
                     flash.handle = None;
                     break;

@@ -108,7 +108,10 @@ impl Board for QemuMps2An500 {
     const PARAM_RANGE: core::ops::Range<u32> = 0..(flash::PAGE * flash::PARAM_PAGES) as u32;
     /// The two pages after the parameters'.
     const PAYLOAD_RANGE: core::ops::Range<u32> =
-        (flash::PAGE * flash::PARAM_PAGES) as u32..(flash::PAGE * flash::PAGES) as u32;
+        (flash::PAGE * flash::PARAM_PAGES) as u32..(flash::PAGE * (flash::PARAM_PAGES + 2)) as u32;
+    /// The last two pages.
+    const MISSION_RANGE: core::ops::Range<u32> =
+        (flash::PAGE * (flash::PARAM_PAGES + 2)) as u32..(flash::PAGE * flash::PAGES) as u32;
     const PARAM_FLASH_PERSISTENT: bool = true;
 
     fn cycle_count() -> u32 {
