@@ -92,12 +92,15 @@ def free_udp_port():
 class Vehicle:
     """The firmware as a ground station sees it, with every STATUSTEXT kept."""
 
-    def __init__(self, port):
+    def __init__(self, port, dialect="common"):
         self.conn = mavutil.mavlink_connection(
             f"udpin:127.0.0.1:{port}", source_system=255, source_component=190,
-            dialect="common")
+            dialect=dialect)
         self.texts = []
         self.last_beat = 0.0
+        # Message types kept whenever they come (by type, in order), whatever is awaited.
+        self.keep = set()
+        self.kept = {}
 
     def beat(self):
         """A ground station's HEARTBEAT once a second, as QGroundControl sends it: the
@@ -113,7 +116,7 @@ class Vehicle:
         """The next message of one of `types` meeting `condition`, or None after `timeout`;
         every STATUSTEXT on the way is kept."""
         end = time.monotonic() + timeout
-        listen = list(set(types) | {"STATUSTEXT"})
+        listen = list(set(types) | {"STATUSTEXT"} | self.keep)
         while time.monotonic() < end:
             self.beat()
             m = self.conn.recv_match(type=listen, blocking=True, timeout=0.2)
@@ -121,6 +124,8 @@ class Vehicle:
                 continue
             if m.get_type() == "STATUSTEXT":
                 self.texts.append(m.text)
+            if m.get_type() in self.keep:
+                self.kept.setdefault(m.get_type(), []).append(m)
             if m.get_type() in types and (condition is None or condition(m)):
                 return m
         return None
@@ -448,8 +453,8 @@ def start_hil(args, port, extra):
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
-def connect(port, plant):
-    v = Vehicle(port)
+def connect(port, plant, dialect="common"):
+    v = Vehicle(port, dialect)
     hb = v.recv(["HEARTBEAT"], 60, lambda m: m.get_srcComponent() == 1)
     if hb is None:
         plant.kill()

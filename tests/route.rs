@@ -30,7 +30,9 @@ fn route() -> Route {
             seconds: 2.0,
         },
         RouteItem::Waypoint(point(1.0, 1.0, 0.5)),
-        RouteItem::Land { at: None },
+        RouteItem::Land {
+            at: Some(point(1.0, 1.0, 0.0)),
+        },
     ])
     .expect("a route within bounds")
 }

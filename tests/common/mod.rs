@@ -63,3 +63,42 @@ pub fn image_or_skip(test: &str) -> Option<PathBuf> {
     skip(test, &reason);
     None
 }
+
+/// Exit status of the Python checks when a package they need is missing (the one line on
+/// their stderr says which and how to install it).
+pub const PYTHON_PACKAGE_MISSING: i32 = 2;
+
+/// Runs the Python check `script` (in tests/ or examples/) against the firmware's QEMU image
+/// on rect-ex1 through `host-sim hil --gcs`; [`skip`]s `test` when QEMU, python3 or a package
+/// is missing, fails it with the script's output when a check fails, and prints what the
+/// script said when all held.
+pub fn python_check(test: &str, script: &str) {
+    let Some(elf) = image_or_skip(test) else {
+        return;
+    };
+    let output = match std::process::Command::new("python3")
+        .arg(workspace().join(script))
+        .arg("--host-sim")
+        .arg(env!("CARGO_BIN_EXE_host-sim"))
+        .arg("--elf")
+        .arg(&elf)
+        .arg("--scenario")
+        .arg(workspace().join("tests/scenarios/rect-ex1.toml"))
+        .output()
+    {
+        Ok(output) => output,
+        Err(e) => return skip(test, &format!("python3 cannot be run ({e})")),
+    };
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    if output.status.code() == Some(PYTHON_PACKAGE_MISSING) {
+        return skip(test, stderr.trim());
+    }
+    assert!(
+        output.status.success(),
+        "{test} failed ({}):\n{stdout}\n{stderr}",
+        output.status
+    );
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "{stdout}");
+}

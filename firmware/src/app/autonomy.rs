@@ -494,8 +494,9 @@ impl Autonomy {
         let (attitude, position) = (&out.nav.attitude, &out.nav.position);
         let q = attitude.attitude;
         // The mode, the route's progress and the landed state, for the ground at 50 Hz (each
-        // eighth step: they cost the step about 80 instructions).
-        if input.step.is_multiple_of(STATUS_EVERY) {
+        // eighth step: they cost the step about 80 instructions), and at every transition (the
+        // last item is reached at the touchdown, the step before the mission ends).
+        if input.step.is_multiple_of(STATUS_EVERY) || out.transition.is_some() {
             let mode = self.mode();
             self.status = Status {
                 mode: mode.code(),

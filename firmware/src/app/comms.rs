@@ -1324,8 +1324,10 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
         let event = select3(OUTBOX.receive(), Timer::at(wake), TELEMETRY_CHANGED.wait()).await;
         match &event {
             Either3::First(message) => {
-                out.outbound(message, &mut state).await;
+                // Before the message: a step's lockstep reply goes last, and after the last
+                // one (the touchdown) the plant may stop listening.
                 out.mission_status(false).await;
+                out.outbound(message, &mut state).await;
             }
             Either3::Second(()) => {
                 if Instant::now() >= next_beat {

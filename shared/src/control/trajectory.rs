@@ -273,7 +273,12 @@ impl FlightPlan {
             } else {
                 FlightPhase::Takeoff
             };
-            if let Some(t) = target {
+            // A landing where the vehicle already is needs no move to it first.
+            let close = |t: Vec3| {
+                matches!(item, RouteItem::Land { .. })
+                    && libm::hypotf(t.x - here.x, t.y - here.y) < 0.01
+            };
+            if let Some(t) = target.filter(|&t| !close(t)) {
                 push(PlanSegment::moving(phase, here, t, &limits, yaw));
                 here = t;
             }
