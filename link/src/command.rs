@@ -261,7 +261,7 @@ pub fn classify(command: impl Into<Command>) -> Request {
 
 /// The operator command that switches to `mode`: Ready is not commanded (the vehicle is in
 /// it on the ground), and a mode the vehicle does not have is refused.
-fn mode_request(mode: Option<FlightMode>) -> Request {
+pub fn mode_request(mode: Option<FlightMode>) -> Request {
     match mode {
         Some(FlightMode::Mission) => Request::Operator(OperatorCommand::Resume),
         Some(FlightMode::Hold) => Request::Operator(OperatorCommand::Hold),

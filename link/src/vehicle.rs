@@ -31,6 +31,9 @@ use crate::param::ParamRequest;
 /// Read from its payload's bytes ([`set_origin`]), its fields being deprecated.
 #[allow(deprecated, non_camel_case_types)]
 type SET_GPS_GLOBAL_ORIGIN_DATA = crate::msg::SET_GPS_GLOBAL_ORIGIN_DATA;
+/// `SET_MODE`: deprecated (2015) for `MAV_CMD_DO_SET_MODE`, still QGroundControl's.
+#[allow(deprecated, non_camel_case_types)]
+type SET_MODE_DATA = crate::msg::SET_MODE_DATA;
 /// `MISSION_REQUEST` and `MISSION_SET_CURRENT`: deprecated, still sent by older tools
 /// (read by [`crate::mission::wire`]).
 #[allow(deprecated, non_camel_case_types)]
@@ -81,6 +84,7 @@ crc_extras!(
     crate::msg::AVAILABLE_MODES_DATA,
     crate::msg::CURRENT_MODE_DATA,
     crate::msg::EXTENDED_SYS_STATE_DATA,
+    SET_MODE_DATA,
     SYS_STATUS_DATA,
     ATTITUDE_QUATERNION_DATA,
     LOCAL_POSITION_NED_DATA,
@@ -367,6 +371,22 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
                     lat_e7,
                     lon_e7,
                     alt_mm,
+                    from,
+                }
+            } else {
+                ignored
+            }
+        }
+        // `SET_MODE` (deprecated, still what QGroundControl sends from its mode menu): the
+        // mode in `custom_mode`, as `MAV_CMD_DO_SET_MODE` with PX4's numbers.
+        SET_MODE_DATA::ID => {
+            let p = frame.payload();
+            let byte = |i: usize| p.get(i).copied().unwrap_or(0);
+            let custom_mode = u32::from_le_bytes([byte(0), byte(1), byte(2), byte(3)]);
+            if for_us(byte(4), 0) {
+                Inbound::Command {
+                    command: CommandId::of(crate::msg::MavCmd::MAV_CMD_DO_SET_MODE),
+                    request: crate::command::mode_request(crate::modes::flight_mode(custom_mode)),
                     from,
                 }
             } else {
@@ -800,6 +820,19 @@ mod tests {
             through_the_wire(&missions),
             Inbound::Mission {
                 message: MissionMessage::RequestList { mission_type: 0 },
+                ..
+            }
+        ));
+        #[allow(deprecated)]
+        let hold = crate::msg::SET_MODE_DATA {
+            custom_mode: crate::modes::FlightMode::Hold.px4_custom_mode(),
+            target_system: 1,
+            base_mode: crate::msg::MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+        };
+        assert!(matches!(
+            through_the_wire(&hold),
+            Inbound::Command {
+                request: Request::Operator(OperatorCommand::Hold),
                 ..
             }
         ));

@@ -1098,6 +1098,10 @@ impl<W: Write> Sending<W> {
             self.heartbeat().await;
             self.encode(&mode.current(mode));
             self.flush().await;
+            // In words too: MAVProxy and pymavlink name PX4's modes only for a PX4 autopilot.
+            let mut text = Text::new();
+            let _ = core::fmt::write(&mut text, format_args!("mode: {}", mode.name()));
+            self.text(Severity::Info, &text).await;
         }
         if let Some(reached) = now.route.reached
             && before.route.reached != Some(reached)
