@@ -75,6 +75,8 @@ UNSUPPORTED_MAV_FRAME = getattr(mavlink, "MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRA
 ORIGIN_INT = (515007123, -1275456, 12250)
 # The default until one is set: PX4's simulation home.
 DEFAULT_ORIGIN = (473977420, 85455940, 488000)
+# How long MAVProxy is watched after its parameters came, s.
+MAVPROXY_WATCH_S = 8
 BAD_VALUES = [("MAX_TILT", 5.0, "outside"), ("MAX_TILT", float("nan"), "finite"),
               ("MIS_CONFIRM", 1.5, "whole")]
 
@@ -433,6 +435,16 @@ def mavproxy_check(args, port, parameters):
                 seen.append(line.rstrip())
                 if want in line:
                     break
+            # Then a while as a user would leave it open: MAVProxy asks for the home position
+            # every few seconds, and a refusal repeated each time would fill its console.
+            quiet_until = time.monotonic() + MAVPROXY_WATCH_S
+            stop.cancel()
+            stop = threading.Timer(MAVPROXY_WATCH_S + 5, proxy.kill)
+            stop.start()
+            for line in proxy.stdout:
+                seen.append(line.rstrip())
+                if time.monotonic() > quiet_until:
+                    break
         finally:
             stop.cancel()
             proxy.kill()
@@ -443,7 +455,12 @@ def mavproxy_check(args, port, parameters):
         raise Failure(f"MAVProxy did not see the vehicle: {seen[-5:]}")
     if not any(want in line for line in seen):
         raise Failure(f"MAVProxy did not fetch the {parameters} parameters: {seen[-5:]}")
-    print(f"MAVProxy (headless): vehicle 1:1 detected, {parameters} parameters fetched")
+    refusals = [line for line in seen if "refused" in line or "denied" in line.lower()]
+    repeated = {line for line in refusals if refusals.count(line) > 1}
+    if repeated:
+        raise Failure(f"MAVProxy's console repeats refusals: {sorted(repeated)[:3]}")
+    print(f"MAVProxy (headless): vehicle 1:1 detected, {parameters} parameters fetched, "
+          f"no refusal repeated over {MAVPROXY_WATCH_S} s")
 
 
 def start_hil(args, port, extra):

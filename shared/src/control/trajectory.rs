@@ -268,7 +268,8 @@ impl FlightPlan {
                 ));
                 here = top;
             }
-            let phase = if airborne {
+            // After the climb (if any): a move in the air is a transit.
+            let phase = if here.z < ground - 0.05 {
                 FlightPhase::Transit
             } else {
                 FlightPhase::Takeoff
@@ -429,6 +430,65 @@ mod tests {
             (touchdown - Vec3::new(0.3, 1.98, 0.0)).norm() < 5e-3,
             "lands at the target: {touchdown:?}"
         );
+    }
+
+    /// A route's plan: a climb to the first item's height, each item's move and hover, and
+    /// a landing below the last; each item's last segment marks it reached, in order; every
+    /// move within its speed limits.
+    #[test]
+    fn a_route_plan_flies_each_item_and_marks_it_reached() {
+        use crate::flight::route::{Route, RouteItem, RoutePoint};
+        let p = |north, east, height| RoutePoint {
+            north,
+            east,
+            height,
+        };
+        let route = Route::new(&[
+            RouteItem::Waypoint(p(1.0, 0.0, 0.7)),
+            RouteItem::Loiter {
+                at: None,
+                seconds: 2.0,
+            },
+            RouteItem::Waypoint(p(1.0, 1.0, 0.5)),
+        ])
+        .expect("a route");
+        let limits = PlanLimits::default();
+        let plan = FlightPlan::from_route(Vec3::ZERO, 0.0, &route, 0, 0.0, limits);
+        let phases: heapless::Vec<(FlightPhase, u8, bool), 8> = (0..8)
+            .filter_map(|i| plan.segment(i))
+            .map(|s| (s.phase, s.item, s.ends_item))
+            .collect();
+        use FlightPhase::*;
+        assert_eq!(
+            phases.as_slice(),
+            &[
+                (Takeoff, 0, false),
+                (Transit, 0, true),
+                (Hover, 1, true),
+                (Transit, 2, true),
+                (Land, 2, false)
+            ]
+        );
+        let end = plan.segment(4).expect("the landing").to;
+        assert!((end - Vec3::new(1.0, 1.0, 0.0)).norm() < 1e-6);
+        let mut t = 0.0;
+        while t < plan.duration() {
+            let v = plan.sample(t).0.velocity;
+            assert!(
+                libm::hypotf(v.x, v.y) <= limits.cruise_speed + 1e-3,
+                "at {t}"
+            );
+            assert!(v.z <= limits.descent_speed + 1e-3 && -v.z <= limits.climb_speed + 1e-3);
+            t += 0.01;
+        }
+        // From item 2 in the air: straight there, then down.
+        let here = Vec3::new(0.5, 0.0, -0.6);
+        let jump = FlightPlan::from_route(here, 0.0, &route, 2, 0.0, limits);
+        assert_eq!(
+            jump.segment(0).map(|s| (s.phase, s.item)),
+            Some((Transit, 2))
+        );
+        assert_eq!(jump.segment(0).map(|s| s.from), Some(here));
     }
 
     /// `PLN_HOVER_T` may be 0 (no hover): the hover segment then lasts no time, and its
