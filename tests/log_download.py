@@ -255,9 +255,11 @@ def erase(v, watch, storage):
 
 
 def with_plant(args, checks):
-    """Runs `checks` on a vehicle restarted on the storage."""
+    """Runs `checks` on a vehicle restarted on the storage. The plant steps the idle vehicle
+    for at most 15 minutes of its time: at full speed about a minute of the wall's, which the
+    downloads and the checks after them come close to; paced at 8 times real time it is two."""
     port = gs.free_udp_port()
-    plant = start_hil(args, port)
+    plant = start_hil(args, port, ["--speed", "8"])
     v = None
     try:
         v = gs.connect(port, plant)
@@ -359,8 +361,9 @@ def main():
     if not files:
         print(f"log download: FAILED: no log-000.ulg in {args.storage}", file=sys.stderr)
         return 1
-    # The plant steps the idle vehicle at up to 15 minutes of its time (a minute or two of the
-    # wall's): each part has a plant of its own, on the same storage.
+    # The plant steps the idle vehicle at up to 15 minutes of its time (two minutes of the
+    # wall's at 8 times real time, four at 4): each part has a plant of its own, on the same
+    # storage.
     try:
         sizes = [os.path.getsize(f) for f in files]
         with_plant(args, lambda v: pymavlink_checks(v, args, files, sizes))

@@ -209,6 +209,8 @@ pub struct TickOutput {
     /// The state estimate after the step, for telemetry (time, IMU health and load are the
     /// control task's to fill).
     pub telemetry: VehicleSnapshot,
+    /// The mode, the route's progress or the landed state in `telemetry` changed this step.
+    pub status_changed: bool,
 }
 
 /// The autonomy: the mission's tick side. Its job side, the [`MissionPlanner`], lives with
@@ -233,7 +235,7 @@ impl Default for Autonomy {
 const STATUS_EVERY: u64 = 8;
 
 /// What the ground is shown of the mode, the route and the landing.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Status {
     mode: u8,
     route: RouteStatus,
@@ -496,13 +498,16 @@ impl Autonomy {
         // The mode, the route's progress and the landed state, for the ground at 50 Hz (each
         // eighth step: they cost the step about 80 instructions), and at every transition (the
         // last item is reached at the touchdown, the step before the mission ends).
+        let mut status_changed = false;
         if input.step.is_multiple_of(STATUS_EVERY) || out.transition.is_some() {
             let mode = self.mode();
-            self.status = Status {
+            let status = Status {
                 mode: mode.code(),
                 route: self.route_status(mode),
                 landed: self.landed_state() as u8,
             };
+            status_changed = status != self.status;
+            self.status = status;
         }
         let status = self.status;
         let telemetry = VehicleSnapshot {
@@ -538,6 +543,7 @@ impl Autonomy {
             rail,
             armed: out.armed,
             telemetry,
+            status_changed,
             state: self.state(),
             ack,
             job: out.job.map(|work| JobRequest {

@@ -52,8 +52,8 @@ use super::autonomy::RouteChange;
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
 use super::{
     ARMED, COMMANDS, GCS_HEARTBEAT, IN_HIL, LINK_BATTERY_MV, MISSION_CONFIG, MISSION_ITEMS,
-    MISSION_STATE, MOCAP, OUTBOX, RELOAD, ROUTE, ROUTE_SENT, SENSOR, TELEMETRY_CHANGED, TO_LOAD,
-    VEHICLE, signing, telemetry, timesync,
+    MISSION_STATE, MOCAP, OUTBOX, RELOAD, ROUTE, ROUTE_SENT, SENSOR, STATUS_CHANGES,
+    TELEMETRY_CHANGED, TO_LOAD, VEHICLE, signing, telemetry, timesync,
 };
 use crate::board::{Board, Selected};
 
@@ -1017,6 +1017,8 @@ struct Sending<W> {
     home: Home,
     /// The flight mode, the route's progress and the landed state last said.
     said: Said,
+    /// [`STATUS_CHANGES`] when they were said.
+    status_changes: u32,
 }
 
 /// What the send task last said of the mode, the route and the landed state.
@@ -1085,6 +1087,11 @@ impl<W: Write> Sending<W> {
     /// as `MISSION_ITEM_REACHED`), and with every heartbeat (`every_second`) the route's
     /// `MISSION_CURRENT` and `EXTENDED_SYS_STATE`.
     async fn mission_status(&mut self, every_second: bool) {
+        let changes = STATUS_CHANGES.load(Ordering::Acquire);
+        if !every_second && changes == self.status_changes {
+            return;
+        }
+        self.status_changes = changes;
         let vehicle = VEHICLE.lock(|v| v.get());
         let now = Said {
             mode: vehicle.mode,
@@ -1314,6 +1321,7 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
             route: RouteStatus::NONE,
             landed: VehicleSnapshot::START.landed,
         },
+        status_changes: 0,
     };
     out.identity().await;
     let _ = out.tx.flush().await;

@@ -24,7 +24,7 @@ use super::logger::RingEnd;
 use super::{
     ARMED, COMMANDS, GCS_HEARTBEAT, IDLE_COUNTS, IN_HIL, JOB_REQUESTS, JOB_RESULTS,
     LINK_BATTERY_MV, LOADING, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD, ROUTE, ROUTE_SENT, SENSOR,
-    VEHICLE,
+    STATUS_CHANGES, VEHICLE,
 };
 use crate::board::{ActuatorOutputs, Board, Selected};
 use shared::mission::{HardwareFaults, Supervision};
@@ -184,6 +184,11 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             snapshot.imu_healthy = !imu_failed;
             snapshot.load_permille = load_permille;
             VEHICLE.lock(|v| v.set(snapshot));
+            if out.status_changed {
+                // One writer: a load and a store.
+                let changes = STATUS_CHANGES.load(Ordering::Relaxed);
+                STATUS_CHANGES.store(changes.wrapping_add(1), Ordering::Release);
+            }
             if held_counts > 0 {
                 out.report.value("job_holds", Value::Int(holds as i32));
             }
@@ -273,5 +278,6 @@ fn idle_output() -> TickOutput {
         job: None,
         report: Default::default(),
         telemetry: link::telemetry::VehicleSnapshot::START,
+        status_changed: false,
     }
 }

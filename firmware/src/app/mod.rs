@@ -68,6 +68,9 @@ pub static ROUTE: Channel<Cs, autonomy::RouteChange, 2> = Channel::new();
 /// Set after a send to [`ROUTE`]: the control step looks in the channel only then (a load
 /// costs it two instructions, a look at the channel a critical section).
 pub static ROUTE_SENT: AtomicBool = AtomicBool::new(false);
+/// Counts the control steps that changed the mode, the route's progress or the landed state
+/// in [`VEHICLE`]: the send task looks at those only when it moved.
+pub static STATUS_CHANGES: AtomicU32 = AtomicU32::new(0);
 /// Items of the mission in force (`MISSION_CURRENT`'s `total`).
 pub static MISSION_ITEMS: core::sync::atomic::AtomicU16 = core::sync::atomic::AtomicU16::new(0);
 
