@@ -496,10 +496,14 @@ impl Autonomy {
         let (attitude, position) = (&out.nav.attitude, &out.nav.position);
         let q = attitude.attitude;
         // The mode, the route's progress and the landed state, for the ground at 50 Hz (each
-        // eighth step: they cost the step about 80 instructions), and at every transition (the
-        // last item is reached at the touchdown, the step before the mission ends).
+        // eighth step: they cost the step about 80 instructions), and at the mission's end
+        // (the last item is reached at the touchdown, and the plant may stop stepping there).
+        // Not at every transition: a job's result is taken in one, the busiest steps there are.
+        let ended = out
+            .transition
+            .is_some_and(|t| matches!(t.to, Phase::Disarmed | Phase::Aborted));
         let mut status_changed = false;
-        if input.step.is_multiple_of(STATUS_EVERY) || out.transition.is_some() {
+        if input.step.is_multiple_of(STATUS_EVERY) || ended {
             let mode = self.mode();
             let status = Status {
                 mode: mode.code(),
