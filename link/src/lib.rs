@@ -15,6 +15,9 @@
 //! - [`ftp`]: MAVLink FTP: the vehicle's minimal server (one writable file, the payload
 //!   description; read-only files, the parameter metadata) and the ground side's upload.
 //! - [`log_transfer`]: MAVLink's log protocol: the flight logs listed, downloaded, erased.
+//! - [`mission`]: MAVLink's mission protocol: a ground station's route uploaded (checked,
+//!   atomic, with timeouts), downloaded, cleared, flown from an item; stored.
+//! - [`modes`]: the flight modes, in PX4's numbers and the standard modes protocol.
 //! - [`param`]: MAVLink's parameter protocol over the mission's parameter table.
 //! - [`slots`]: the payload description's two power-cut-safe slots.
 //! - [`store`]: the parameters' storage (`sequential-storage` on NOR flash), power-cut safe.
