@@ -11,44 +11,7 @@
 
 mod common;
 
-use common::{image_or_skip, skip, workspace};
-use std::process::Command;
-
-/// The test's name in what it says when skipped.
-const TEST: &str = "ground station";
-
-/// Exit status of the script when pymavlink is missing.
-const NO_PYMAVLINK: i32 = 2;
-
 #[test]
 fn a_pymavlink_ground_station_tunes_restarts_and_flies_the_firmware() {
-    let Some(elf) = image_or_skip(TEST) else {
-        return;
-    };
-    let script = workspace().join("tests/ground_station.py");
-    let output = match Command::new("python3")
-        .arg(&script)
-        .arg("--host-sim")
-        .arg(env!("CARGO_BIN_EXE_host-sim"))
-        .arg("--elf")
-        .arg(&elf)
-        .arg("--scenario")
-        .arg(workspace().join("tests/scenarios/rect-ex1.toml"))
-        .output()
-    {
-        Ok(output) => output,
-        Err(e) => return skip(TEST, &format!("python3 cannot be run ({e})")),
-    };
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    if output.status.code() == Some(NO_PYMAVLINK) {
-        return skip(TEST, stderr.trim());
-    }
-    assert!(
-        output.status.success(),
-        "the ground station failed ({}):\n{stdout}\n{stderr}",
-        output.status
-    );
-    use std::io::Write;
-    let _ = writeln!(std::io::stderr(), "{stdout}");
+    common::python_check("ground station", "tests/ground_station.py");
 }

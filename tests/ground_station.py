@@ -470,6 +470,46 @@ def start_hil(args, port, extra):
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
+def delivered(plant):
+    """The plant's report once its mission ended (`--json`), checked delivered: the
+    distance from the target, m."""
+    out, err = plant.communicate(timeout=300)
+    try:
+        report = json.loads(out)
+    except json.JSONDecodeError:
+        raise Failure(f"host-sim printed no JSON (exit {plant.returncode}): {err[-500:]}")
+    if not report["delivered"]:
+        raise Failure(f"not delivered: landed {report['final_position_error_m']:.2f} m away")
+    return report["final_position_error_m"]
+
+
+def run_against_plant(name, description, checks, extra=(), failures=(Failure,)):
+    """A check script's main: its arguments (--host-sim, --elf, --scenario), a plant on fresh
+    storage with `extra` arguments, `checks(port, plant)`, and one line saying whether all
+    held (exit 0) or what failed (exit 1; `failures` are the exceptions that say so)."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--host-sim", required=True)
+    parser.add_argument("--elf", required=True)
+    parser.add_argument("--scenario", required=True)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory(prefix=f"{name.replace(' ', '-')}-") as tmp:
+        args.storage = tmp
+        started = time.monotonic()
+        port = free_udp_port()
+        plant = start_hil(args, port, list(extra))
+        try:
+            checks(port, plant)
+        except failures as e:
+            print(f"{name}: FAILED: {e}", file=sys.stderr)
+            return 1
+        finally:
+            if plant.poll() is None:
+                plant.kill()
+                plant.communicate()
+        print(f"{name}: all checks held in {time.monotonic() - started:.0f} s")
+    return 0
+
+
 def connect(port, plant, dialect="common"):
     v = Vehicle(port, dialect)
     hb = v.recv(["HEARTBEAT"], 60, lambda m: m.get_srcComponent() == 1)

@@ -12,14 +12,11 @@
 
 mod common;
 
-use common::{image_or_skip, skip, workspace};
+use common::{image_or_skip, run_python_check, workspace};
 use std::process::Command;
 
 /// The test's name in what it says when skipped.
 const TEST: &str = "log download";
-
-/// Exit status of the script when pymavlink is missing.
-const NO_PYMAVLINK: i32 = 2;
 
 #[test]
 fn a_ground_station_lists_downloads_and_erases_the_firmwares_flight_log() {
@@ -50,32 +47,7 @@ fn a_ground_station_lists_downloads_and_erases_the_firmwares_flight_log() {
         "the flight left no log in {}",
         storage.display()
     );
-    let output = match Command::new("python3")
-        .arg(workspace().join("tests/log_download.py"))
-        .arg("--host-sim")
-        .arg(env!("CARGO_BIN_EXE_host-sim"))
-        .arg("--elf")
-        .arg(&elf)
-        .arg("--scenario")
-        .arg(&scenario)
-        .arg("--storage")
-        .arg(&storage)
-        .output()
-    {
-        Ok(output) => output,
-        Err(e) => return skip(TEST, &format!("python3 cannot be run ({e})")),
-    };
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    if output.status.code() == Some(NO_PYMAVLINK) {
-        return skip(TEST, stderr.trim());
-    }
-    assert!(
-        output.status.success(),
-        "the log download failed ({}):\n{stdout}\n{stderr}",
-        output.status
-    );
-    use std::io::Write;
-    let _ = writeln!(std::io::stderr(), "{stdout}");
+    let args = [std::ffi::OsStr::new("--storage"), storage.as_os_str()];
+    run_python_check(TEST, "tests/log_download.py", &elf, &args);
     let _ = std::fs::remove_dir_all(&storage);
 }

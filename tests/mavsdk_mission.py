@@ -15,13 +15,9 @@ Exit status 0 when everything holds; 2 with one line on stderr when MAVSDK-Pytho
 pymavlink is missing.
 """
 
-import argparse
 import asyncio
-import json
 import os
 import sys
-import tempfile
-import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -31,36 +27,13 @@ import mavsdk_mission  # noqa: E402  (exits 2 without MAVSDK-Python)
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--host-sim", required=True)
-    parser.add_argument("--elf", required=True)
-    parser.add_argument("--scenario", required=True)
-    args = parser.parse_args()
-    with tempfile.TemporaryDirectory(prefix="mavsdk-") as tmp:
-        args.storage = tmp
-        started = time.monotonic()
-        port = gs.free_udp_port()
-        plant = gs.start_hil(args, port, ["--speed", "4"])
-        try:
-            seen = asyncio.run(mavsdk_mission.fly(f"udpin://127.0.0.1:{port}", hold_s=1.0))
-            out, err = plant.communicate(timeout=300)
-            report = json.loads(out) if out.strip() else None
-            if report is None:
-                raise mavsdk_mission.Failed(f"host-sim printed no JSON: {err[-500:]}")
-            if not report["delivered"]:
-                raise mavsdk_mission.Failed(
-                    f"not delivered: landed {report['final_position_error_m']:.2f} m away")
-            print(f"delivered {report['final_position_error_m']:.3f} m from the target; "
-                  f"moved {seen['moved_while_held_m']:.3f} m while held")
-        except mavsdk_mission.Failed as e:
-            print(f"mavsdk mission: FAILED: {e}", file=sys.stderr)
-            return 1
-        finally:
-            if plant.poll() is None:
-                plant.kill()
-                plant.communicate()
-        print(f"mavsdk mission: all checks held in {time.monotonic() - started:.0f} s")
-    return 0
+    def checks(port, plant):
+        seen = asyncio.run(mavsdk_mission.fly(f"udpin://127.0.0.1:{port}", hold_s=1.0))
+        print(f"delivered {gs.delivered(plant):.3f} m from the target; "
+              f"moved {seen['moved_while_held_m']:.3f} m while held")
+
+    return gs.run_against_plant("mavsdk mission", __doc__.splitlines()[0], checks,
+                                ["--speed", "4"], (gs.Failure, mavsdk_mission.Failed))
 
 
 if __name__ == "__main__":

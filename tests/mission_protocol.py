@@ -30,12 +30,9 @@ What it checks, in order, on one run of the firmware (paced at 4x real time, so 
 Exit status 0 when everything holds; 2 with one line on stderr when pymavlink is missing.
 """
 
-import argparse
-import json
 import math
 import os
 import sys
-import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -241,42 +238,19 @@ def flight_checks(v, plant, mission):
     if reached != list(range(len(mission))):
         raise Failure(f"items reached: {reached}")
     print(f"items reached in order: {reached}")
-    out, err = plant.communicate(timeout=300)
-    try:
-        report = json.loads(out)
-    except json.JSONDecodeError:
-        raise Failure(f"host-sim printed no JSON (exit {plant.returncode}): {err[-500:]}")
-    if not report["delivered"]:
-        raise Failure(f"not delivered: landed {report['final_position_error_m']:.2f} m away")
-    print(f"delivered {report['final_position_error_m']:.3f} m from the target")
+    print(f"delivered {gs.delivered(plant):.3f} m from the target")
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--host-sim", required=True)
-    parser.add_argument("--elf", required=True)
-    parser.add_argument("--scenario", required=True)
-    args = parser.parse_args()
-    with tempfile.TemporaryDirectory(prefix="mission-protocol-") as tmp:
-        args.storage = tmp
-        started = time.monotonic()
-        port = gs.free_udp_port()
-        plant = gs.start_hil(args, port, ["--speed", "4"])
-        try:
-            # The development dialect: pymavlink 2.4.50 has the standard modes' messages
-            # only there (MAVLink moved them to common in 2024).
-            v = gs.connect(port, plant, "development")
-            mission = ground_checks(v)
-            flight_checks(v, plant, mission)
-        except Failure as e:
-            print(f"mission protocol: FAILED: {e}", file=sys.stderr)
-            return 1
-        finally:
-            if plant.poll() is None:
-                plant.kill()
-                plant.communicate()
-        print(f"mission protocol: all checks held in {time.monotonic() - started:.0f} s")
-    return 0
+    def checks(port, plant):
+        # The development dialect: pymavlink 2.4.50 has the standard modes' messages only
+        # there (MAVLink moved them to common in 2024).
+        v = gs.connect(port, plant, "development")
+        mission = ground_checks(v)
+        flight_checks(v, plant, mission)
+
+    return gs.run_against_plant("mission protocol", __doc__.splitlines()[0], checks,
+                                ["--speed", "4"])
 
 
 if __name__ == "__main__":

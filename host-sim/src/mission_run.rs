@@ -607,7 +607,7 @@ pub fn fly(
         last.1 = end - entered;
     }
     let (x, y) = match &setup.route {
-        Some(route) if !route.is_empty() => route_landing(route).unwrap_or((start.x, start.y)),
+        Some(route) if !route.is_empty() => route.landing_point().unwrap_or((start.x, start.y)),
         _ => (flight.target[0], flight.target[1]),
     };
     let landing = Vec3::new(x, y, start.z);
@@ -889,18 +889,6 @@ pub struct MissionOutcome {
     pub battery_dropped_at: Option<f32>,
     /// Lowest pack voltage at the terminals, V.
     pub min_battery_volts: f32,
-}
-
-/// Where a route lands (north, east): below its last item with a place; `None` when no item
-/// has one (it lands where it took off).
-fn route_landing(route: &shared::flight::Route) -> Option<(f32, f32)> {
-    use shared::flight::RouteItem;
-    route.items().iter().rev().find_map(|item| match item {
-        RouteItem::Waypoint(p)
-        | RouteItem::Loiter { at: Some(p), .. }
-        | RouteItem::Land { at: Some(p) } => Some((p.north, p.east)),
-        _ => None,
-    })
 }
 
 /// A flight counts as delivered within this distance of the target, m.

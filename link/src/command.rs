@@ -147,6 +147,21 @@ impl From<OperatorCommand> for shared::mission::OperatorCommand {
     }
 }
 
+/// The link's command for the mission's (as the HIL plant sends it).
+impl From<shared::mission::OperatorCommand> for OperatorCommand {
+    fn from(c: shared::mission::OperatorCommand) -> Self {
+        use shared::mission::OperatorCommand as Mission;
+        match c {
+            Mission::Start => Self::Start,
+            Mission::Abort => Self::Abort,
+            Mission::LandNow => Self::LandNow,
+            Mission::Kill => Self::Kill,
+            Mission::Hold => Self::Hold,
+            Mission::Resume => Self::Resume,
+        }
+    }
+}
+
 impl OperatorCommand {
     /// The `COMMAND_LONG` a ground station sends for it (read back by [`classify`]).
     pub fn to_command_long(self) -> COMMAND_LONG_DATA {

@@ -73,17 +73,22 @@ pub const PYTHON_PACKAGE_MISSING: i32 = 2;
 /// is missing, fails it with the script's output when a check fails, and prints what the
 /// script said when all held.
 pub fn python_check(test: &str, script: &str) {
-    let Some(elf) = image_or_skip(test) else {
-        return;
-    };
-    let output = match std::process::Command::new("python3")
+    if let Some(elf) = image_or_skip(test) {
+        run_python_check(test, script, &elf, &[]);
+    }
+}
+
+/// [`python_check`] with the image `elf` already at hand and `extra` arguments for the script.
+pub fn run_python_check(test: &str, script: &str, elf: &Path, extra: &[&std::ffi::OsStr]) {
+    let output = match Command::new("python3")
         .arg(workspace().join(script))
         .arg("--host-sim")
         .arg(env!("CARGO_BIN_EXE_host-sim"))
         .arg("--elf")
-        .arg(&elf)
+        .arg(elf)
         .arg("--scenario")
         .arg(workspace().join("tests/scenarios/rect-ex1.toml"))
+        .args(extra)
         .output()
     {
         Ok(output) => output,

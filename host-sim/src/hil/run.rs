@@ -188,7 +188,7 @@ impl Autopilot for Firmware {
         if let Some(command) = sensed.command {
             // With the ground station starting the mission, the plant's own start is not sent.
             if !(self.ground_start && command == OperatorCommand::Start) {
-                self.session.send_command(command_to_link(command))?;
+                self.session.send_command(command.into())?;
             }
         }
         let fixes: Vec<MocapFix> = sensed
@@ -263,18 +263,6 @@ impl Autopilot for Firmware {
             events,
             over: log.state.is_some_and(MissionState::is_over),
         })
-    }
-}
-
-fn command_to_link(c: OperatorCommand) -> link::command::OperatorCommand {
-    use link::command::OperatorCommand as Link;
-    match c {
-        OperatorCommand::Start => Link::Start,
-        OperatorCommand::Abort => Link::Abort,
-        OperatorCommand::LandNow => Link::LandNow,
-        OperatorCommand::Kill => Link::Kill,
-        OperatorCommand::Hold => Link::Hold,
-        OperatorCommand::Resume => Link::Resume,
     }
 }
 

@@ -245,6 +245,18 @@ impl Route {
     pub fn len(&self) -> usize {
         self.items.len()
     }
+
+    /// Where the route lands (north, east of the origin, m): below its last item with a place
+    /// ([`crate::control::trajectory::FlightPlan::from_route`] flies it so); `None` when no
+    /// item has one (it lands where it took off).
+    pub fn landing_point(&self) -> Option<(f32, f32)> {
+        self.items.iter().rev().find_map(|item| match item {
+            RouteItem::Waypoint(p)
+            | RouteItem::Loiter { at: Some(p), .. }
+            | RouteItem::Land { at: Some(p) } => Some((p.north, p.east)),
+            _ => None,
+        })
+    }
 }
 
 #[cfg(test)]

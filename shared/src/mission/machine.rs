@@ -239,6 +239,19 @@ impl Mission {
         self.held && self.flight.as_ref().is_some_and(|f| f.holding())
     }
 
+    /// Whether the flight flies its plan: taking off, moving or hovering, not landing,
+    /// nothing stopped.
+    fn cruising(&self) -> bool {
+        matches!(
+            self.phase,
+            Phase::Flying(FlightPhase::Takeoff | FlightPhase::Transit | FlightPhase::Hover)
+        ) && self.abort.is_none()
+            && self
+                .flight
+                .as_ref()
+                .is_some_and(|f| f.landing_cause().is_none() && f.stopped().is_none())
+    }
+
     fn not_running(&self) -> bool {
         matches!(self.phase, Phase::Idle | Phase::Disarmed | Phase::Aborted)
     }
@@ -532,15 +545,7 @@ impl Mission {
             self.phase,
             Phase::Idle | Phase::Disarmed | Phase::Aborted | Phase::Flying(_)
         );
-        // Whether the flight flies its plan (not yet landing, nothing stopped).
-        let cruising = matches!(
-            self.phase,
-            Phase::Flying(FlightPhase::Takeoff | FlightPhase::Transit | FlightPhase::Hover)
-        ) && self.abort.is_none()
-            && self
-                .flight
-                .as_ref()
-                .is_some_and(|f| f.landing_cause().is_none() && f.stopped().is_none());
+        let cruising = self.cruising();
         let watched = sup.gcs_action != GcsLossAction::Off;
         let mut notices = [None, None];
         let mut landing = None;
@@ -553,9 +558,7 @@ impl Mission {
                     _ if !cruising => LinkResponse::Nothing,
                     GcsLossAction::HoldThenLand => {
                         self.gcs_hold = Some(sup.gcs_hold_time);
-                        if let Some(f) = self.flight.as_mut() {
-                            f.hold_position(true);
-                        }
+                        self.apply_hold();
                         LinkResponse::Hold(sup.gcs_hold_time)
                     }
                     _ => LinkResponse::Continue,
@@ -674,15 +677,7 @@ impl Mission {
             OperatorCommand::Resume => Ok(()),
             OperatorCommand::Hold if !flying => Err(CommandRefusal::NotFlying),
             OperatorCommand::Hold => {
-                let cruising = self.abort.is_none()
-                    && self
-                        .flight
-                        .as_ref()
-                        .is_some_and(|f| f.landing_cause().is_none() && f.stopped().is_none())
-                    && !matches!(
-                        self.phase,
-                        Phase::Flying(FlightPhase::Land | FlightPhase::Done)
-                    );
+                let cruising = self.cruising();
                 // A hold before the payload has left the ground would hold it there under
                 // take-off thrust.
                 let airborne = self.flight.as_ref().is_some_and(|f| f.airborne());
