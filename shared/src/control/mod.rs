@@ -12,6 +12,7 @@
 //! - [`land_detector`]: on the ground, airborne, landed.
 //! - [`navigator`]: both estimators together, fed by the IMU and motion capture.
 //! - [`imu_monitor`]: the IMU's samples checked every tick: frozen, or wildly noisy.
+//! - [`thrust_map`]: rotor thrust to ESC command, a table a bench calibration replaces.
 
 pub mod allocation;
 pub mod attitude_estimator;
@@ -22,6 +23,7 @@ pub mod navigator;
 pub mod params;
 pub mod pid;
 pub mod position_estimator;
+pub mod thrust_map;
 pub mod trajectory;
 pub mod vector;
 pub mod vehicle;

@@ -5,6 +5,7 @@ use crate::control::allocation::MixerKind;
 use crate::estimation::EstimatorOptions;
 use crate::flight::{AdaptConfig, FlightConfig};
 use crate::liftoff_detector::LiftoffConfig;
+use crate::mission::bringup::SensorOffsets;
 use crate::mission::hardware::HardwareConfig;
 use crate::mission::supervision::SupervisionConfig;
 use crate::rail::stepper::MotionLimits;
@@ -51,6 +52,8 @@ pub struct MissionConfig {
     pub hardware: HardwareConfig,
     /// The ground link's and the battery's failsafes.
     pub supervision: SupervisionConfig,
+    /// The IMU's calibrated offsets, taken off every sample (docs/ground-link.md#bring-up-commands).
+    pub sensors: SensorOffsets,
 }
 
 impl MissionConfig {
@@ -70,6 +73,7 @@ impl MissionConfig {
         arm_time: 1.0,
         hardware: HardwareConfig::DEFAULT,
         supervision: SupervisionConfig::DEFAULT,
+        sensors: SensorOffsets::ZERO,
     };
 }
 

@@ -23,11 +23,13 @@ pub struct HardwareConfig {
     /// twice this at speed has stalled. 0 turns stall detection off; it must be tuned on the
     /// bench for the motor and the load.
     pub stall_threshold: u8,
+    /// Motor tests (`MAV_CMD_DO_MOTOR_TEST`) are allowed (`COM_MOT_TEST_EN`, PX4's name).
+    pub motor_test_enabled: bool,
 }
 
 impl HardwareConfig {
     /// DShot600, the square law, 200-step motors at 16 microsteps on a 20 mm pinion, 0.8 A
-    /// through 0.11 ohm sense resistors (the common TMC2209 boards), stall detection off.
+    /// through 0.11 ohm sense resistors (the common TMC2209 boards), stall detection off, motor tests allowed.
     pub const DEFAULT: Self = Self {
         esc_protocol: 0,
         thrust_map: [0.04, 0.16, 0.36, 0.64],
@@ -35,6 +37,7 @@ impl HardwareConfig {
         stepper_current: 0.8,
         stepper_r_sense: 0.11,
         stall_threshold: 0,
+        motor_test_enabled: true,
     };
 }
 

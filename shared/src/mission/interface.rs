@@ -3,6 +3,7 @@
 //! faults, the tick's input and output, and an IMU failure the mission acted on.
 
 use crate::control::imu_monitor::ImuFailure;
+use crate::mission::bringup::{CalibrationFailure, CalibrationKind};
 use crate::control::navigator::{ImuSample, MocapFix, NavState};
 use crate::flight::{AdaptEvent, CascadeSetpoints};
 use crate::mission::jobs::JobRequest;
@@ -26,6 +27,29 @@ pub enum OperatorCommand {
     Hold,
     /// Mission mode: before the start, start; held in flight, fly on; otherwise nothing to do.
     Resume,
+    /// The robots stand at the payload description's `initial` positions (placed at their
+    /// marks): the rail positions are known from now on (docs/ground-link.md#bring-up-commands).
+    ConfirmRails,
+    /// Move one robot along the rail, on the ground, rotors off.
+    Jog {
+        /// The robot, from 1.
+        robot: u8,
+        /// How far, um (positive: increasing arc length).
+        micrometres: i32,
+    },
+    /// An IMU calibration at rest.
+    Calibrate(CalibrationKind),
+    /// Spin some rotors at an ESC command for a while (rotors off the payload: props off).
+    MotorTest {
+        /// The first robot, from 1.
+        first: u8,
+        /// How many robots from the first.
+        count: u8,
+        /// The ESC command, thousandths of full.
+        permille: u16,
+        /// How long, ms (cut to 3 s).
+        millis: u16,
+    },
 }
 
 impl OperatorCommand {
@@ -38,7 +62,20 @@ impl OperatorCommand {
             Self::Kill => "kill",
             Self::Hold => "hold",
             Self::Resume => "mission",
+            Self::ConfirmRails => "confirm rails",
+            Self::Jog { .. } => "jog",
+            Self::Calibrate(_) => "calibrate",
+            Self::MotorTest { .. } => "motor test",
         }
+    }
+
+    /// Whether it is a bring-up command (docs/ground-link.md#bring-up-commands): only on the
+    /// ground with the rotors off, and never while the mission runs.
+    pub fn is_bench(self) -> bool {
+        matches!(
+            self,
+            Self::ConfirmRails | Self::Jog { .. } | Self::Calibrate(_) | Self::MotorTest { .. }
+        )
     }
 }
 
@@ -64,6 +101,33 @@ pub enum CommandRefusal {
         /// The filtered pack voltage, mV.
         millivolts: u32,
     },
+    /// A bring-up command while the mission runs (the vehicle may be armed).
+    MissionRunning,
+    /// The rail positions have not been confirmed since power-up or a stall.
+    RailsUnconfirmed,
+    /// A robot does not stand at its start position (it was jogged away).
+    RobotOffMark {
+        /// The robot, from 1.
+        robot: u8,
+        /// How far from its mark, mm (positive: ahead along the rail).
+        millimetres: i32,
+    },
+    /// No robot of that number.
+    NoSuchRobot {
+        /// The number asked for.
+        robot: u8,
+        /// Robots the payload description has.
+        robots: u8,
+    },
+    /// The jog would bring the robot closer than `min_spacing` to a neighbour.
+    JogTooFar {
+        /// The robot, from 1.
+        robot: u8,
+    },
+    /// Motor tests are switched off (`COM_MOT_TEST_EN` = 0).
+    MotorTestDisabled,
+    /// A calibration, motor test or jog is under way.
+    BenchBusy,
 }
 
 impl core::fmt::Display for CommandRefusal {
@@ -87,6 +151,24 @@ impl core::fmt::Display for CommandRefusal {
                     2
                 )
             ),
+            Self::MissionRunning => write!(f, "the mission is running (the vehicle may be armed)"),
+            Self::RailsUnconfirmed => write!(
+                f,
+                "rail: the robots' positions are not confirmed; place them at their marks and confirm (command 31010)"
+            ),
+            Self::RobotOffMark { robot, millimetres } => write!(
+                f,
+                "rail: robot {robot} stands {millimetres} mm from its start position; jog it back"
+            ),
+            Self::NoSuchRobot { robot, robots } => {
+                write!(f, "no robot {robot}: the payload description has {robots}")
+            }
+            Self::JogTooFar { robot } => write!(
+                f,
+                "rail: robot {robot} would come closer than min_spacing to a neighbour"
+            ),
+            Self::MotorTestDisabled => write!(f, "motor tests are off (COM_MOT_TEST_EN = 0)"),
+            Self::BenchBusy => write!(f, "a calibration, motor test or jog is under way"),
         }
     }
 }
@@ -179,6 +261,9 @@ pub struct TickOutput {
     pub reply: Option<CommandReply>,
     /// What the ground link's and the battery's supervision has to tell people this tick.
     pub notice: Option<Notice>,
+    /// A calibration that ended this tick: its kind and the offsets found (already in
+    /// force) or why it failed.
+    pub calibrated: Option<(CalibrationKind, Result<[f32; 3], CalibrationFailure>)>,
     /// The state estimate after this tick.
     pub nav: NavState,
     /// What the flight's cascade asked of the vehicle this tick: while flying with the rotors

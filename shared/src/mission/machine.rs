@@ -39,6 +39,10 @@ use crate::rail::moves::{Positions, RailMove};
 use crate::scenario::{GRAVITY, MAX_ROBOTS, Scenario};
 use crate::timing::{CONTROL_RATE_HZ, LoopMonitor, LoopStats};
 
+mod bench;
+
+use bench::Bench;
+pub use bench::MARK_TOLERANCE;
 pub use crate::mission::interface::{
     CommandRefusal, CommandReply, HardwareFaults, ImuDetection, OperatorCommand, TickInput,
     TickOutput,
@@ -92,13 +96,18 @@ pub struct Mission {
     jump: Option<u8>,
     /// The operator holds the vehicle where it is in flight.
     held: bool,
+    /// The bring-up side: the rails confirmed, a jog, a calibration, a motor test.
+    bench: Bench,
 }
 
 impl Mission {
-    /// A mission for `scenario` with the robots at their initial positions, idle.
+    /// A mission for `scenario` with the robots at their initial positions, idle, the rail
+    /// positions confirmed: the simulator places the robots there. (The flight controller
+    /// starts [`Self::unloaded`]: its rails are confirmed by the operator.)
     pub fn new(scenario: &Scenario, config: MissionConfig) -> Self {
         let mut mission = Self::UNLOADED;
         mission.load(scenario, config);
+        mission.bench.rails_confirmed = true;
         mission
     }
 
@@ -144,12 +153,17 @@ impl Mission {
             route_first: 0,
             jump: None,
             held: false,
+            bench: Bench::IDLE,
         }
     }
 
     /// In place: a fresh, idle mission for `scenario`, as [`Self::new`] builds it (the state
-    /// estimate and the loop clock carry on).
+    /// estimate and the loop clock carry on). The robots are commanded to the description's
+    /// start positions; whether their positions are known (confirmed) carries on too, since
+    /// the steppers keep count of every move.
     pub fn load(&mut self, scenario: &Scenario, config: MissionConfig) {
+        self.bench.jog = None;
+        self.bench.motor_test = None;
         self.scenario.clone_from(scenario);
         self.config = config;
         self.phase = Phase::Idle;
@@ -415,7 +429,9 @@ impl Mission {
         self.tick += 1;
         let dt = self.clock.step(input.time_us);
         self.phase_time += dt;
-        let imu_failure = self.imu_monitor.check(&input.imu);
+        // The calibrated offsets off the sample before anything reads it.
+        let imu = self.config.sensors.correct(&input.imu);
+        let imu_failure = self.imu_monitor.check(&imu);
         let started = !matches!(self.phase, Phase::Idle | Phase::Disarmed | Phase::Aborted);
         if let Some(failure) = imu_failure
             && started
@@ -430,7 +446,7 @@ impl Mission {
             // From this sample on the IMU is not to be trusted: land on motion capture.
             self.navigator.drop_imu();
         }
-        self.navigator.update(&input.imu, dt, input.time_us);
+        self.navigator.update(&imu, dt, input.time_us);
         // The fix after the sample: a fix is never newer than the tick it arrives in.
         if let Some(fix) = &input.mocap {
             self.navigator.motion_capture(fix);
@@ -505,13 +521,16 @@ impl Mission {
         if matches!(self.phase, Phase::Flying(_)) {
             self.watch_rotors(input, &nav, &thrusts, dt);
         }
-        let armed = matches!(
+        let mut armed = matches!(
             self.phase,
             Phase::Lifting | Phase::Arming | Phase::Flying(_)
         );
         if !matches!(self.phase, Phase::Lifting | Phase::Flying(_)) {
             thrusts = [0.0; MAX_ROBOTS];
         }
+        let stalled = input.faults.stalled_robots != 0;
+        let (spinning, calibrated) = self.bench_step(&input.imu, dt, stalled, &mut thrusts);
+        armed |= spinning;
         if !matches!(self.phase, Phase::Flying(_)) {
             cascade = None;
         }
@@ -525,6 +544,7 @@ impl Mission {
             job: self.outgoing.take(),
             reply,
             notice,
+            calibrated,
             nav,
             cascade,
         }
@@ -632,6 +652,11 @@ impl Mission {
             OperatorCommand::Resume if self.phase == Phase::Idle => OperatorCommand::Start,
             other => other,
         };
+        self.stop_motor_test_for(command);
+        if command.is_bench() {
+            let outcome = self.bench_command(command);
+            return (Some(CommandReply { command, outcome }), None);
+        }
         let finished = matches!(self.phase, Phase::Disarmed | Phase::Aborted);
         let flying = matches!(self.phase, Phase::Flying(_));
         let mut transition = None;
@@ -640,6 +665,17 @@ impl Mission {
             _ if finished => Err(CommandRefusal::Finished),
             OperatorCommand::Start if self.scenario.robots.count() == 0 => {
                 Err(CommandRefusal::NoPayload)
+            }
+            // The pre-arm checks of the bench: the rails known, each robot on its mark,
+            // nothing under way.
+            OperatorCommand::Start if self.phase == Phase::Idle && self.rails_ready().is_err() => {
+                Err(self
+                    .rails_ready()
+                    .err()
+                    .unwrap_or(CommandRefusal::RailsUnconfirmed))
+            }
+            OperatorCommand::Start if self.phase == Phase::Idle && self.bench_busy() => {
+                Err(CommandRefusal::BenchBusy)
             }
             OperatorCommand::Start
                 if self.phase == Phase::Idle
@@ -705,6 +741,11 @@ impl Mission {
                 Ok(())
             }
             OperatorCommand::Kill | OperatorCommand::LandNow => Ok(()),
+            // Taken above.
+            OperatorCommand::ConfirmRails
+            | OperatorCommand::Jog { .. }
+            | OperatorCommand::Calibrate(_)
+            | OperatorCommand::MotorTest { .. } => Ok(()),
         };
         (Some(CommandReply { command, outcome }), transition)
     }

@@ -3,12 +3,14 @@
 //!
 //! - [`phases`]: the phases and the reasons of each transition.
 //! - [`config`]: the mission's tuning.
+//! - [`bringup`]: the IMU's calibrations and the motor test, on the bench.
 //! - [`hardware`]: the drivers' settings (ESCs, thrust map, steppers).
 //! - [`machine`]: the tick side, stepped at 400 Hz.
 //! - [`jobs`]: the long computations the tick side hands off, and the planner that runs them.
 //! - [`params`]: the tunables as named parameters (the ground link serves them).
 //! - [`supervision`]: the ground link's and the battery's monitors.
 
+pub mod bringup;
 pub mod config;
 pub mod hardware;
 pub mod interface;

@@ -582,9 +582,12 @@ fn an_unloaded_mission_refuses_to_start_and_a_loaded_one_flies() {
     let mut planner = MissionPlanner::UNLOADED;
     planner.load(&s, MissionConfig::default()).expect("loads");
     mission.load(&s, MissionConfig::default());
+    // The flight controller's robots are placed at their marks and confirmed.
+    let out = mission.step(&world.input(2, Some(OperatorCommand::ConfirmRails)));
+    assert_eq!(out.reply.map(|r| r.outcome), Some(Ok(())));
     let mut phase = Phase::Idle;
-    for tick in 2..200_000 {
-        let command = (tick == 2).then_some(OperatorCommand::Start);
+    for tick in 3..200_000 {
+        let command = (tick == 3).then_some(OperatorCommand::Start);
         let out = mission.step(&world.input(tick, command));
         if let Some(job) = &out.job {
             assert!(mission.deliver(planner.run(job)));
@@ -871,4 +874,5 @@ fn a_rotor_reported_stopped_in_flight_is_flown_without_and_lands() {
     );
 }
 
+mod bench;
 mod supervision;

@@ -789,4 +789,64 @@ pub static TABLE: [ParamSpec; COUNT] = [
         get: |_| ORIGIN_DEFAULT_ALT,
         set: |_, _| {},
     },
+    // The IMU's calibration and the motor test (mission::bringup), PX4's names.
+    param!(
+        "CAL_GYRO0_XOFF",
+        "rad/s",
+        -0.35,
+        0.35,
+        "gyro offset on x, taken off every sample (MAV_CMD_PREFLIGHT_CALIBRATION param1 1 measures it at rest)",
+        |c| c.sensors.gyro[0]
+    ),
+    param!(
+        "CAL_GYRO0_YOFF",
+        "rad/s",
+        -0.35,
+        0.35,
+        "gyro offset on y, taken off every sample (MAV_CMD_PREFLIGHT_CALIBRATION param1 1 measures it at rest)",
+        |c| c.sensors.gyro[1]
+    ),
+    param!(
+        "CAL_GYRO0_ZOFF",
+        "rad/s",
+        -0.35,
+        0.35,
+        "gyro offset on z, taken off every sample (MAV_CMD_PREFLIGHT_CALIBRATION param1 1 measures it at rest)",
+        |c| c.sensors.gyro[2]
+    ),
+    param!(
+        "CAL_ACC0_XOFF",
+        "m/s^2",
+        -2.0,
+        2.0,
+        "accelerometer offset on x, taken off every sample (the level calibration, param5 2, measures it level at rest)",
+        |c| c.sensors.accel[0]
+    ),
+    param!(
+        "CAL_ACC0_YOFF",
+        "m/s^2",
+        -2.0,
+        2.0,
+        "accelerometer offset on y, taken off every sample (the level calibration, param5 2, measures it level at rest)",
+        |c| c.sensors.accel[1]
+    ),
+    param!(
+        "CAL_ACC0_ZOFF",
+        "m/s^2",
+        -2.0,
+        2.0,
+        "accelerometer offset on z, taken off every sample (the level calibration, param5 2, measures it level at rest)",
+        |c| c.sensors.accel[2]
+    ),
+    ParamSpec {
+        name: "COM_MOT_TEST_EN",
+        unit: "-",
+        min: 0.0,
+        max: 1.0,
+        integer: true,
+        #[cfg(feature = "docs")]
+        doc: "motor tests (MAV_CMD_DO_MOTOR_TEST) allowed: 1 yes, 0 refused",
+        get: |c| if c.hardware.motor_test_enabled { 1.0 } else { 0.0 },
+        set: |c, v| c.hardware.motor_test_enabled = v > 0.5,
+    },
 ];
