@@ -23,7 +23,8 @@
 //! - every command taken is acknowledged;
 //! - the rotors are armed only in the phases that spin them (lift, arming, flight), with
 //!   thrust only in lift and flight, every thrust a finite fraction in `[0, 1]`, every rail
-//!   setpoint finite; never armed when the heartbeat says idle, completed or aborted;
+//!   setpoint finite; never armed when the heartbeat says idle, completed or aborted, but for
+//!   a motor test (on the ground, the mission not running);
 //! - every frame sent parses back whole, its checksum (and signature) verified;
 //! - after the input, a restart finds in the store exactly the parameters, the signing key
 //!   and the payload description in force (unless the store reported an error).
@@ -136,6 +137,8 @@ pub struct Vehicle {
     store: Option<ParamStore<MemFlash>>,
     /// `MISSION_CONFIG`.
     config: MissionConfig,
+    /// `CONFIG_CHANGED`.
+    config_changed: bool,
     /// A store operation failed: a restart may legitimately find older values.
     store_failed: bool,
     /// What a restart must find in the store.
@@ -217,6 +220,7 @@ impl Vehicle {
             params: ParamService::new(ParamValues::DEFAULT),
             store: None,
             config: MissionConfig::DEFAULT,
+            config_changed: false,
             store_failed: false,
             stored_key: None,
             stored_payload: None,
@@ -347,6 +351,7 @@ impl Vehicle {
         }
         self.params = ParamService::new(values);
         self.config = self.params.values().config();
+        self.config_changed = true;
     }
 
     fn restore_signing(&mut self) {
@@ -568,6 +573,15 @@ impl Vehicle {
                 Request::Refused(result) => {
                     self.refuse(command, result, link::command::refusal(command, result));
                 }
+                // comms.rs `reboot`: the host's vehicle does not restart; refused while armed.
+                Request::Reboot => {
+                    let result = if self.armed {
+                        MavResult::MAV_RESULT_DENIED
+                    } else {
+                        MavResult::MAV_RESULT_ACCEPTED
+                    };
+                    self.send(&ack(command, result));
+                }
                 // comms.rs `command_origin`.
                 Request::SetOrigin {
                     lat_e7,
@@ -606,6 +620,7 @@ impl Vehicle {
                             self.send(&gps_global_origin(&self.params.origin()));
                         } else {
                             self.config = self.params.values().config();
+                            self.config_changed = true;
                             self.reload();
                         }
                     }
@@ -876,6 +891,9 @@ impl Vehicle {
             // The job task runs each load to the end before the next frame here.
             loading: false,
             route: route.as_ref(),
+            // The parameters' IMU offsets and hardware settings, as the firmware's control
+            // task hands them over after a change.
+            config: core::mem::take(&mut self.config_changed).then_some(self.config),
             supervision: Supervision {
                 gcs_heartbeat: core::mem::take(&mut self.gcs_heartbeat),
                 // The plant's pack in HIL; off HIL the board's ADC (none on the host).
@@ -930,6 +948,8 @@ impl Vehicle {
             });
             let result = match result {
                 CommandResult::Accepted => MavResult::MAV_RESULT_ACCEPTED,
+                CommandResult::InProgress => MavResult::MAV_RESULT_IN_PROGRESS,
+                CommandResult::Failed => MavResult::MAV_RESULT_FAILED,
                 CommandResult::TemporarilyRejected => MavResult::MAV_RESULT_TEMPORARILY_REJECTED,
                 CommandResult::Denied => MavResult::MAV_RESULT_DENIED,
             };
@@ -965,6 +985,15 @@ impl Vehicle {
         }
         let pushing = out.thrust.iter().any(|&t| t > 0.0);
         let phase = self.phase.as_str();
+        if out.motor_test {
+            assert!(out.armed, "a motor test disarmed");
+            assert_ne!(
+                out.state,
+                MissionState::Running,
+                "a motor test in the mission"
+            );
+            return;
+        }
         assert_eq!(
             out.armed,
             ARMED_PHASES.contains(&phase),

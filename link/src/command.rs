@@ -16,13 +16,20 @@
 //! | `MAV_CMD_GET_HOME_POSITION` (deprecated, MAVProxy's) | [`Request::Message`] of `HOME_POSITION` |
 //! | `MAV_CMD_SET_MESSAGE_INTERVAL` | [`Request::SetInterval`] (the link's telemetry schedule) |
 //! | `MAV_CMD_DO_SET_GLOBAL_ORIGIN` as `COMMAND_INT` in `MAV_FRAME_GLOBAL` (or its deprecated `_INT` twin) | [`Request::SetOrigin`]; as `COMMAND_LONG` refused `MAV_RESULT_COMMAND_INT_ONLY`, in another frame `MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME`, with an altitude not finite `DENIED` |
+//! | [`CONFIRM_RAILS`] (`MAV_CMD_USER_1`, 31010), param1 = 1 | [`OperatorCommand::ConfirmRails`]: the robots stand at their start marks |
+//! | [`JOG`] (`MAV_CMD_USER_2`, 31011): param1 the robot (from 1), param2 metres | [`OperatorCommand::Jog`] |
+//! | `MAV_CMD_PREFLIGHT_CALIBRATION`: param1 = 1 the gyro, param5 = 2 the level | [`OperatorCommand::Calibrate`]; the other sensors `UNSUPPORTED` |
+//! | `MAV_CMD_DO_MOTOR_TEST`: param1 the motor (from 1), param2 the throttle's type (0 percent, 1 PWM us), param3 the throttle, param4 the timeout (s), param5 the motor count | [`OperatorCommand::MotorTest`] |
+//! | `MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN`, param1 = 1 | [`Request::Reboot`] |
 //!
 //! Arming by command is refused (the mission arms itself); any other command is unsupported.
+//! The bring-up commands are docs/ground-link.md#bring-up-commands.
 
 use crate::MessageData;
 use crate::command_wire::{CommandAck, CommandId, CommandInt, CommandLong};
 use crate::modes::FlightMode;
 use crate::msg::{COMMAND_LONG_DATA, HOME_POSITION_DATA, MavCmd, MavFrame, MavResult};
+pub use shared::mission::bringup::CalibrationKind;
 
 /// A command as [`classify`] reads it, from a `COMMAND_LONG` or a `COMMAND_INT`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -31,6 +38,9 @@ pub struct Command {
     pub id: CommandId,
     /// Parameters 1 to 4 (the same in both messages).
     pub params: [f32; 4],
+    /// Parameter 5: a `COMMAND_LONG`'s, or a `COMMAND_INT`'s `x` as a number (a count or a
+    /// choice, never a position, for the commands that read it).
+    pub param5: f32,
     /// A `COMMAND_INT`'s position (parameters 5 to 7 and the frame); `None` from a
     /// `COMMAND_LONG`, whose float parameters 5 and 6 cannot hold a latitude to a centimetre.
     pub position: Option<Position>,
@@ -55,6 +65,7 @@ impl From<&CommandLong> for Command {
         Self {
             id: CommandId(c.command),
             params: [p1, p2, p3, p4],
+            param5: c.params[4],
             position: None,
         }
     }
@@ -65,6 +76,7 @@ impl From<&CommandInt> for Command {
         Self {
             id: CommandId(c.command),
             params: c.params,
+            param5: c.x as f32,
             position: Some(Position {
                 x: c.x,
                 y: c.y,
@@ -94,6 +106,15 @@ fn millimetres(m: f32) -> i32 {
 #[allow(deprecated)]
 pub const GET_HOME_POSITION: MavCmd = MavCmd::MAV_CMD_GET_HOME_POSITION;
 
+/// Confirms the rail positions (`MAV_CMD_USER_1`, 31010; param1 = 1): the robots stand at
+/// the payload description's start positions.
+pub const CONFIRM_RAILS: MavCmd = MavCmd::MAV_CMD_USER_1;
+/// Jogs a robot along the rail (`MAV_CMD_USER_2`, 31011): param1 the robot from 1, param2
+/// metres.
+pub const JOG: MavCmd = MavCmd::MAV_CMD_USER_2;
+/// Longest jog, m (a check of direction and steps per metre, not a move of the formation).
+pub const MAX_JOG: f32 = 1.0;
+
 /// Magic number of a forced disarm (MAVLink `MAV_CMD_COMPONENT_ARM_DISARM`, param2).
 pub const FORCE_DISARM_MAGIC: f32 = 21196.0;
 
@@ -112,6 +133,28 @@ pub enum OperatorCommand {
     Hold,
     /// The Mission mode: start, or fly on after a hold.
     Resume,
+    /// The robots stand at their start marks.
+    ConfirmRails,
+    /// Move a robot along the rail.
+    Jog {
+        /// The robot, from 1.
+        robot: u8,
+        /// How far, um.
+        micrometres: i32,
+    },
+    /// An IMU calibration at rest.
+    Calibrate(CalibrationKind),
+    /// Spin some rotors.
+    MotorTest {
+        /// The first robot, from 1.
+        first: u8,
+        /// How many.
+        count: u8,
+        /// The ESC command, thousandths.
+        permille: u16,
+        /// How long, ms.
+        millis: u16,
+    },
 }
 
 impl OperatorCommand {
@@ -123,6 +166,10 @@ impl OperatorCommand {
             Self::LandNow => MavCmd::MAV_CMD_NAV_LAND,
             Self::Kill => MavCmd::MAV_CMD_DO_FLIGHTTERMINATION,
             Self::Hold | Self::Resume => MavCmd::MAV_CMD_DO_PAUSE_CONTINUE,
+            Self::Calibrate(_) => MavCmd::MAV_CMD_PREFLIGHT_CALIBRATION,
+            Self::MotorTest { .. } => MavCmd::MAV_CMD_DO_MOTOR_TEST,
+            Self::ConfirmRails => CONFIRM_RAILS,
+            Self::Jog { .. } => JOG,
         }
     }
 
@@ -143,6 +190,20 @@ impl From<OperatorCommand> for shared::mission::OperatorCommand {
             OperatorCommand::Kill => Self::Kill,
             OperatorCommand::Hold => Self::Hold,
             OperatorCommand::Resume => Self::Resume,
+            OperatorCommand::ConfirmRails => Self::ConfirmRails,
+            OperatorCommand::Jog { robot, micrometres } => Self::Jog { robot, micrometres },
+            OperatorCommand::Calibrate(kind) => Self::Calibrate(kind),
+            OperatorCommand::MotorTest {
+                first,
+                count,
+                permille,
+                millis,
+            } => Self::MotorTest {
+                first,
+                count,
+                permille,
+                millis,
+            },
         }
     }
 }
@@ -158,6 +219,20 @@ impl From<shared::mission::OperatorCommand> for OperatorCommand {
             Mission::Kill => Self::Kill,
             Mission::Hold => Self::Hold,
             Mission::Resume => Self::Resume,
+            Mission::ConfirmRails => Self::ConfirmRails,
+            Mission::Jog { robot, micrometres } => Self::Jog { robot, micrometres },
+            Mission::Calibrate(kind) => Self::Calibrate(kind),
+            Mission::MotorTest {
+                first,
+                count,
+                permille,
+                millis,
+            } => Self::MotorTest {
+                first,
+                count,
+                permille,
+                millis,
+            },
         }
     }
 }
@@ -172,6 +247,28 @@ impl OperatorCommand {
             Self::Kill => command_long(MavCmd::MAV_CMD_DO_FLIGHTTERMINATION, 1.0, 0.0),
             Self::Hold => command_long(MavCmd::MAV_CMD_DO_PAUSE_CONTINUE, 0.0, 0.0),
             Self::Resume => command_long(MavCmd::MAV_CMD_DO_PAUSE_CONTINUE, 1.0, 0.0),
+            Self::ConfirmRails => command_long(CONFIRM_RAILS, 1.0, 0.0),
+            Self::Jog { robot, micrometres } => {
+                command_long(JOG, f32::from(robot), micrometres as f32 * 1e-6)
+            }
+            Self::Calibrate(CalibrationKind::Gyro) => {
+                command_long(MavCmd::MAV_CMD_PREFLIGHT_CALIBRATION, 1.0, 0.0)
+            }
+            Self::Calibrate(CalibrationKind::Level) => COMMAND_LONG_DATA {
+                param5: 2.0,
+                ..command_long(MavCmd::MAV_CMD_PREFLIGHT_CALIBRATION, 0.0, 0.0)
+            },
+            Self::MotorTest {
+                first,
+                count,
+                permille,
+                millis,
+            } => COMMAND_LONG_DATA {
+                param3: f32::from(permille) * 0.1,
+                param4: f32::from(millis) * 1e-3,
+                param5: f32::from(count),
+                ..command_long(MavCmd::MAV_CMD_DO_MOTOR_TEST, f32::from(first), 0.0)
+            },
         }
     }
 }
@@ -204,6 +301,9 @@ pub enum Request {
         /// Altitude above mean sea level, mm.
         alt_mm: i32,
     },
+    /// `MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN` with param1 = 1: restart the flight controller
+    /// (refused while armed).
+    Reboot,
     /// Refused at once with this result ([`refusal`] says why).
     Refused(MavResult),
 }
@@ -270,8 +370,83 @@ pub fn classify(command: impl Into<Command>) -> Request {
             },
         }
     } else {
+        bench_request(&command)
+    }
+}
+
+/// The bring-up commands (docs/ground-link.md#bring-up-commands), each checked for what it
+/// can be before the mission sees it; anything else is unsupported.
+fn bench_request(command: &Command) -> Request {
+    let id = command.id;
+    let [param1, param2, param3, param4] = command.params;
+    let denied = Request::Refused(MavResult::MAV_RESULT_DENIED);
+    if id.is(CONFIRM_RAILS) {
+        if param1 == 1.0 {
+            Request::Operator(OperatorCommand::ConfirmRails)
+        } else {
+            denied
+        }
+    } else if id.is(JOG) {
+        let robot = whole(param1, 1.0, 255.0);
+        match robot {
+            Some(robot) if param2.is_finite() && param2.abs() <= MAX_JOG && param2 != 0.0 => {
+                Request::Operator(OperatorCommand::Jog {
+                    robot: robot as u8,
+                    micrometres: (param2 * 1e6) as i32,
+                })
+            }
+            _ => denied,
+        }
+    } else if id.is(MavCmd::MAV_CMD_PREFLIGHT_CALIBRATION) {
+        // Param1 gyro, 2 magnetometer, 3 ground pressure, 4 radio, 5 accelerometer (1), level
+        // (2), 6 compass/motor, 7 airspeed: this vehicle has the gyro and the level.
+        let others = [param2, param3, param4].iter().any(|&p| p != 0.0);
+        if param1 == 1.0 && !others && command.param5 == 0.0 {
+            Request::Operator(OperatorCommand::Calibrate(CalibrationKind::Gyro))
+        } else if param1 == 0.0 && !others && command.param5 == 2.0 {
+            Request::Operator(OperatorCommand::Calibrate(CalibrationKind::Level))
+        } else {
+            Request::Refused(MavResult::MAV_RESULT_UNSUPPORTED)
+        }
+    } else if id.is(MavCmd::MAV_CMD_DO_MOTOR_TEST) {
+        // Throttle type 0: percent; 1: a PWM pulse, 1000 to 2000 us.
+        let command_fraction = match param2 {
+            t if t == 0.0 && (0.0..=100.0).contains(&param3) => Some(param3 * 0.01),
+            t if t == 1.0 && (1000.0..=2000.0).contains(&param3) => Some((param3 - 1000.0) * 1e-3),
+            _ => None,
+        };
+        let motor = whole(param1, 1.0, 255.0);
+        let count = if command.param5 == 0.0 {
+            Some(1.0)
+        } else {
+            whole(command.param5, 1.0, 255.0)
+        };
+        match (motor, count, command_fraction) {
+            (Some(motor), Some(count), Some(c)) if param4.is_finite() => {
+                Request::Operator(OperatorCommand::MotorTest {
+                    first: motor as u8,
+                    count: count as u8,
+                    permille: (c * 1000.0 + 0.5) as u16,
+                    millis: (param4.clamp(0.0, 60.0) * 1000.0) as u16,
+                })
+            }
+            _ => denied,
+        }
+    } else if id.is(MavCmd::MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN) {
+        if param1 == 1.0 {
+            Request::Reboot
+        } else {
+            Request::Refused(MavResult::MAV_RESULT_UNSUPPORTED)
+        }
+    } else {
         Request::Refused(MavResult::MAV_RESULT_UNSUPPORTED)
     }
+}
+
+/// `value` if it is a whole number within `[min, max]`.
+fn whole(value: f32, min: f32, max: f32) -> Option<f32> {
+    (value.is_finite() && value >= min && value <= max && value == (value as i32) as f32)
+        .then_some(value)
 }
 
 /// The operator command that switches to `mode`: Ready is not commanded (the vehicle is in
@@ -297,6 +472,19 @@ pub fn refusal(command: CommandId, result: MavResult) -> &'static str {
             "the mission arms the rotors itself, at take-off"
         }
         _ if command.is(MavCmd::MAV_CMD_DO_SET_GLOBAL_ORIGIN) => "the altitude is not a number",
+        _ if command.is(CONFIRM_RAILS) => "confirm with param1 = 1",
+        _ if command.is(JOG) => {
+            "param1 the robot (from 1), param2 the distance in metres (not 0, at most 1 m either way)"
+        }
+        _ if command.is(MavCmd::MAV_CMD_PREFLIGHT_CALIBRATION) => {
+            "this vehicle calibrates the gyro (param1 = 1) and the level (param5 = 2), one at a time"
+        }
+        _ if command.is(MavCmd::MAV_CMD_DO_MOTOR_TEST) => {
+            "param1 the motor (from 1), param2 0 with param3 0-100 % or 1 with param3 1000-2000 us, param4 the timeout (s), param5 the count"
+        }
+        _ if command.is(MavCmd::MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN) => {
+            "only a restart of the flight controller (param1 = 1)"
+        }
         _ if command.is(MavCmd::MAV_CMD_DO_SET_MODE)
             || command.is(MavCmd::MAV_CMD_DO_SET_STANDARD_MODE) =>
         {
@@ -419,5 +607,103 @@ mod tests {
                 interval_us: 20_000.0
             }
         );
+    }
+
+    #[test]
+    fn each_bring_up_command_is_read_back_from_what_a_ground_station_sends() {
+        for c in [
+            OperatorCommand::ConfirmRails,
+            OperatorCommand::Jog {
+                robot: 3,
+                micrometres: -25_000,
+            },
+            OperatorCommand::Calibrate(CalibrationKind::Gyro),
+            OperatorCommand::Calibrate(CalibrationKind::Level),
+            OperatorCommand::MotorTest {
+                first: 2,
+                count: 3,
+                permille: 150,
+                millis: 2_000,
+            },
+        ] {
+            assert_eq!(
+                classify(&c.to_command_long()),
+                Request::Operator(c),
+                "{c:?}"
+            );
+        }
+        assert_eq!(CONFIRM_RAILS as u32, 31010);
+        assert_eq!(JOG as u32, 31011);
+    }
+
+    #[test]
+    fn a_motor_test_reads_percent_or_pwm_and_refuses_the_rest() {
+        let test = |p1: f32, p2: f32, p3: f32, p4: f32, p5: f32| {
+            classify(&COMMAND_LONG_DATA {
+                param3: p3,
+                param4: p4,
+                param5: p5,
+                ..command_long(MavCmd::MAV_CMD_DO_MOTOR_TEST, p1, p2)
+            })
+        };
+        // MAVProxy's `motortest 1 0 12 2`: motor 1 at 12 % for 2 s, the count left 0 (one).
+        assert_eq!(
+            test(1.0, 0.0, 12.0, 2.0, 0.0),
+            Request::Operator(OperatorCommand::MotorTest {
+                first: 1,
+                count: 1,
+                permille: 120,
+                millis: 2_000
+            })
+        );
+        // A 1150 us pulse is 15 %.
+        assert_eq!(
+            test(4.0, 1.0, 1150.0, 1.0, 1.0),
+            Request::Operator(OperatorCommand::MotorTest {
+                first: 4,
+                count: 1,
+                permille: 150,
+                millis: 1_000
+            })
+        );
+        let denied = Request::Refused(MavResult::MAV_RESULT_DENIED);
+        assert_eq!(test(0.0, 0.0, 10.0, 1.0, 0.0), denied, "motor 0");
+        assert_eq!(test(1.5, 0.0, 10.0, 1.0, 0.0), denied, "motor 1.5");
+        assert_eq!(test(1.0, 0.0, 120.0, 1.0, 0.0), denied, "120 %");
+        assert_eq!(test(1.0, 2.0, 10.0, 1.0, 0.0), denied, "pilot throttle");
+        assert_eq!(test(1.0, 0.0, f32::NAN, 1.0, 0.0), denied, "NaN");
+        assert_eq!(test(1.0, 0.0, 10.0, f32::INFINITY, 0.0), denied, "endless");
+    }
+
+    #[test]
+    fn calibrations_jogs_and_reboots_outside_what_the_vehicle_does_are_refused() {
+        let calibration = |p1: f32, p5: f32| {
+            classify(&COMMAND_LONG_DATA {
+                param5: p5,
+                ..command_long(MavCmd::MAV_CMD_PREFLIGHT_CALIBRATION, p1, 0.0)
+            })
+        };
+        let unsupported = Request::Refused(MavResult::MAV_RESULT_UNSUPPORTED);
+        // The accelerometer's six-sided calibration, the magnetometer's, both at once.
+        assert_eq!(calibration(0.0, 1.0), unsupported);
+        assert_eq!(
+            classify(&command_long(
+                MavCmd::MAV_CMD_PREFLIGHT_CALIBRATION,
+                0.0,
+                1.0
+            )),
+            unsupported
+        );
+        assert_eq!(calibration(1.0, 2.0), unsupported);
+        let denied = Request::Refused(MavResult::MAV_RESULT_DENIED);
+        assert_eq!(classify(&command_long(JOG, 1.0, 0.0)), denied);
+        assert_eq!(classify(&command_long(JOG, 1.0, 5.0)), denied);
+        assert_eq!(classify(&command_long(JOG, 0.0, 0.1)), denied);
+        assert_eq!(classify(&command_long(JOG, 2.0, f32::NAN)), denied);
+        assert_eq!(classify(&command_long(CONFIRM_RAILS, 0.0, 0.0)), denied);
+        let reboot = MavCmd::MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN;
+        assert_eq!(classify(&command_long(reboot, 1.0, 0.0)), Request::Reboot);
+        assert_eq!(classify(&command_long(reboot, 2.0, 0.0)), unsupported);
+        assert_eq!(classify(&command_long(reboot, 3.0, 0.0)), unsupported);
     }
 }

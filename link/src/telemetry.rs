@@ -1,7 +1,9 @@
 //! Telemetry at set rates: `SYS_STATUS`, `ATTITUDE_QUATERNION`,
 //! `LOCAL_POSITION_NED`, each robot's rail position (`DEBUG_FLOAT_ARRAY` named `rail`: the
-//! formation once the robots have moved to it) and `GLOBAL_POSITION_INT` (through the map
-//! origin, docs/ground-link.md#the-map-origin), each on its own interval that a ground station
+//! formation once the robots have moved to it; not a number until the positions are
+//! confirmed), `GLOBAL_POSITION_INT` (through the map origin,
+//! docs/ground-link.md#the-map-origin) and the ESC outputs (`ACTUATOR_OUTPUT_STATUS`, and
+//! `SERVO_OUTPUT_RAW` for MAVProxy: docs/ground-link.md#bring-up-commands), each on its own interval that a ground station
 //! sets with `MAV_CMD_SET_MESSAGE_INTERVAL` (or asks for once with `MAV_CMD_REQUEST_MESSAGE`),
 //! as MAVLink's message interval protocol has it; the messages built from a
 //! [`VehicleSnapshot`], the vehicle's state after its last control step; and the take-off
@@ -14,10 +16,12 @@ use crate::MessageData;
 use crate::geo::GeoOrigin;
 use crate::hil::MAX_ROBOTS;
 use crate::msg::{
-    ATTITUDE_QUATERNION_DATA, DEBUG_FLOAT_ARRAY_DATA, EXTENDED_SYS_STATE_DATA,
-    GLOBAL_POSITION_INT_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA,
-    MavLandedState, MavResult, MavSysStatusSensor, MavVtolState, SYS_STATUS_DATA,
+    ACTUATOR_OUTPUT_STATUS_DATA, ATTITUDE_QUATERNION_DATA, DEBUG_FLOAT_ARRAY_DATA,
+    EXTENDED_SYS_STATE_DATA, GLOBAL_POSITION_INT_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA,
+    LOCAL_POSITION_NED_DATA, MavLandedState, MavResult, MavSysStatusSensor, MavVtolState,
+    SERVO_OUTPUT_RAW_DATA, SYS_STATUS_DATA,
 };
+use shared::control::thrust_map::ThrustMap;
 
 /// A message the vehicle streams.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,10 +36,14 @@ pub enum Stream {
     RailPositions = 3,
     /// `GLOBAL_POSITION_INT`: the local position through the map origin.
     GlobalPositionInt = 4,
+    /// `SERVO_OUTPUT_RAW`: the first eight ESC outputs as pulses (MAVProxy's view).
+    ServoOutputRaw = 5,
+    /// `ACTUATOR_OUTPUT_STATUS`: every ESC output, fractions of full command.
+    ActuatorOutputStatus = 6,
 }
 
 /// How many streams there are.
-pub const STREAMS: usize = 5;
+pub const STREAMS: usize = 7;
 /// `array_id` of the rail positions' `DEBUG_FLOAT_ARRAY`.
 pub const RAIL_ARRAY_ID: u16 = 1;
 /// `name` of the rail positions' `DEBUG_FLOAT_ARRAY`.
@@ -49,6 +57,8 @@ impl Stream {
         Stream::LocalPositionNed,
         Stream::RailPositions,
         Stream::GlobalPositionInt,
+        Stream::ServoOutputRaw,
+        Stream::ActuatorOutputStatus,
     ];
 
     /// The MAVLink message id.
@@ -59,6 +69,8 @@ impl Stream {
             Self::LocalPositionNed => LOCAL_POSITION_NED_DATA::ID,
             Self::RailPositions => DEBUG_FLOAT_ARRAY_DATA::ID,
             Self::GlobalPositionInt => GLOBAL_POSITION_INT_DATA::ID,
+            Self::ServoOutputRaw => SERVO_OUTPUT_RAW_DATA::ID,
+            Self::ActuatorOutputStatus => ACTUATOR_OUTPUT_STATUS_DATA::ID,
         }
     }
 
@@ -68,12 +80,13 @@ impl Stream {
     }
 
     /// The interval at start and after a request for the default (interval 0), us: 1 Hz for
-    /// the status, 2 Hz for the rail positions, 5 Hz for the global position (a map's), 10 Hz
-    /// for attitude and local position.
+    /// the status, 2 Hz for the rail positions, 4 Hz for the ESC outputs, 5 Hz for the global
+    /// position (a map's), 10 Hz for attitude and local position.
     pub const fn default_interval_us(self) -> u32 {
         match self {
             Self::SysStatus => 1_000_000,
             Self::RailPositions => 500_000,
+            Self::ServoOutputRaw | Self::ActuatorOutputStatus => 250_000,
             Self::GlobalPositionInt => 200_000,
             Self::AttitudeQuaternion | Self::LocalPositionNed => 100_000,
         }
@@ -113,6 +126,8 @@ impl Schedule {
                 Stream::LocalPositionNed.default_interval_us(),
                 Stream::RailPositions.default_interval_us(),
                 Stream::GlobalPositionInt.default_interval_us(),
+                Stream::ServoOutputRaw.default_interval_us(),
+                Stream::ActuatorOutputStatus.default_interval_us(),
             ],
             next_us: [0; STREAMS],
             once: 0,
@@ -229,8 +244,11 @@ pub struct VehicleSnapshot {
     pub armed: bool,
     /// Robots in use.
     pub robots: u8,
-    /// Each robot's commanded position along the rail, arc length, m.
+    /// Each robot's commanded position along the rail, arc length, m (not a number until the
+    /// positions are confirmed).
     pub rail: [f32; MAX_ROBOTS],
+    /// Each robot's rotor thrust command, fraction of its maximum (zero unless armed).
+    pub thrust: [f32; MAX_ROBOTS],
     /// The control loop's load: the worst step since the last `SYS_STATUS`, in thousandths
     /// of the step's period.
     pub load_permille: u16,
@@ -292,6 +310,7 @@ impl VehicleSnapshot {
         armed: false,
         robots: 0,
         rail: [0.0; MAX_ROBOTS],
+        thrust: [0.0; MAX_ROBOTS],
         load_permille: 0,
         battery_mv: u16::MAX,
         battery_ok: true,
@@ -408,6 +427,56 @@ impl VehicleSnapshot {
             name: RAIL_ARRAY_NAME.into(),
         };
         (array, data, 4 * robots)
+    }
+
+    /// Each robot's ESC command, fraction of full, through the thrust map `map` (zero when
+    /// disarmed).
+    pub fn esc_commands(&self, map: &ThrustMap) -> [f32; MAX_ROBOTS] {
+        let robots = usize::from(self.robots).min(MAX_ROBOTS);
+        let mut commands = [0.0; MAX_ROBOTS];
+        if self.armed {
+            for (c, &t) in commands.iter_mut().zip(&self.thrust[..robots]) {
+                *c = map.command(t);
+            }
+        }
+        commands
+    }
+
+    /// `ACTUATOR_OUTPUT_STATUS`: each robot's ESC command through `map`, fraction of full
+    /// (`active`: a bit per robot in use).
+    pub fn actuator_output_status(&self, map: &ThrustMap) -> ACTUATOR_OUTPUT_STATUS_DATA {
+        let robots = usize::from(self.robots).min(MAX_ROBOTS);
+        let commands = self.esc_commands(map);
+        let mut actuator = [0.0f32; 32];
+        actuator[..MAX_ROBOTS].copy_from_slice(&commands);
+        ACTUATOR_OUTPUT_STATUS_DATA {
+            time_usec: self.time_us,
+            active: if robots >= 32 {
+                u32::MAX
+            } else {
+                (1u32 << robots) - 1
+            },
+            actuator,
+        }
+    }
+
+    /// `SERVO_OUTPUT_RAW`: the first eight robots' ESC commands through `map` as the pulses
+    /// a PWM ESC would get, 1000 us (stopped) to 2000 us (full).
+    pub fn servo_output_raw(&self, map: &ThrustMap) -> SERVO_OUTPUT_RAW_DATA {
+        let c = self.esc_commands(map);
+        let us = |j: usize| 1000 + (c[j].clamp(0.0, 1.0) * 1000.0 + 0.5) as u16;
+        SERVO_OUTPUT_RAW_DATA {
+            time_usec: self.time_us as u32,
+            servo1_raw: us(0),
+            servo2_raw: us(1),
+            servo3_raw: us(2),
+            servo4_raw: us(3),
+            servo5_raw: us(4),
+            servo6_raw: us(5),
+            servo7_raw: us(6),
+            servo8_raw: us(7),
+            port: 0,
+        }
     }
 
     /// `LOCAL_POSITION_NED`.

@@ -36,11 +36,13 @@ use shared::control::trajectory::FlightPhase;
 use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
 use shared::flight::Route;
+use shared::mission::bringup::{CalibrationFailure, CalibrationKind};
 use shared::mission::supervision::BatteryLevel;
 use shared::mission::{
     CommandRefusal, HardwareFaults, Mission, MissionConfig, MissionPlanner,
     OperatorCommand as Command, Phase, Reason, Supervision, TickInput as MissionInput,
 };
+use shared::numbers::Fixed;
 use shared::scenario::Scenario;
 
 /// One IMU sample, body frame (FRD).
@@ -79,6 +81,9 @@ pub struct TickInput<'a> {
     pub loading: bool,
     /// A change of the ground station's route since the last step.
     pub route: Option<&'a RouteChange>,
+    /// The parameters changed since the last step: the IMU's offsets and the hardware
+    /// settings of this configuration go in force now, with or without a payload.
+    pub config: Option<MissionConfig>,
 }
 
 /// A change of the ground station's route (docs/ground-link.md#missions).
@@ -97,6 +102,10 @@ pub enum RouteChange {
 pub enum CommandResult {
     /// Carried out.
     Accepted,
+    /// Begun; a second acknowledgement says how it ended (a calibration).
+    InProgress,
+    /// Begun and failed (a calibration: a text says why).
+    Failed,
     /// Not now (for example: already running).
     TemporarilyRejected,
     /// Not allowed (for example: start without a payload description).
@@ -198,6 +207,8 @@ pub struct TickOutput {
     pub rail: [f32; MAX_ROBOTS],
     /// The rotors may turn.
     pub armed: bool,
+    /// A motor test spins rotors (armed on the ground, the mission not running).
+    pub motor_test: bool,
     /// Where the mission stands.
     pub state: MissionState,
     /// The acknowledgement of this step's command.
@@ -211,6 +222,9 @@ pub struct TickOutput {
     pub telemetry: VehicleSnapshot,
     /// The mode, the route's progress or the landed state in `telemetry` changed this step.
     pub status_changed: bool,
+    /// A calibration ended this step: how (its command's second acknowledgement), and the
+    /// offsets to store as parameters when it succeeded.
+    pub calibrated: Option<(CommandResult, Option<(CalibrationKind, [f32; 3])>)>,
 }
 
 /// The autonomy: the mission's tick side. Its job side, the [`MissionPlanner`], lives with
@@ -404,6 +418,9 @@ impl Autonomy {
         if let Some(change) = input.route {
             self.change_route(change, &mut report);
         }
+        if let Some(config) = &input.config {
+            self.mission.configure_bench(config);
+        }
         if let Some(result) = input.job.clone() {
             // Dropped by the mission when it no longer waits for it (after an abort).
             self.mission.deliver(result);
@@ -436,8 +453,13 @@ impl Autonomy {
         } else {
             command.zip(out.reply).map(|(given, reply)| {
                 let result = match reply.outcome {
+                    Ok(()) if matches!(given, OperatorCommand::Calibrate(_)) => {
+                        CommandResult::InProgress
+                    }
                     Ok(()) => CommandResult::Accepted,
-                    Err(CommandRefusal::AlreadyStarted) => CommandResult::TemporarilyRejected,
+                    Err(CommandRefusal::AlreadyStarted | CommandRefusal::BenchBusy) => {
+                        CommandResult::TemporarilyRejected
+                    }
                     Err(_) => CommandResult::Denied,
                 };
                 (given, result)
@@ -445,6 +467,9 @@ impl Autonomy {
         };
         // What the step says to people (the log keeps the same texts).
         step_texts(&out, &mut |level, text| report.text(severity(level), text));
+        let calibrated = out
+            .calibrated
+            .map(|(kind, result)| calibration_report(kind, result, &mut report));
         if let Some(t) = out.transition {
             match t.reason {
                 Reason::PairChosen { group, .. } => {
@@ -493,6 +518,11 @@ impl Autonomy {
             thrust[j] = (out.thrusts[j] / max_thrust).clamp(0.0, 1.0);
             rail[j] = out.robots[j];
         }
+        // The ground is told the positions only once they are known.
+        let mut shown_rail = rail;
+        if !self.mission.rails_confirmed() {
+            shown_rail = [f32::NAN; MAX_ROBOTS];
+        }
         let (attitude, position) = (&out.nav.attitude, &out.nav.position);
         let q = attitude.attitude;
         // The mode, the route's progress and the landed state, for the ground at 50 Hz (each
@@ -530,7 +560,8 @@ impl Autonomy {
             position_valid: position.valid,
             armed: out.armed,
             robots: robots as u8,
-            rail,
+            rail: shown_rail,
+            thrust,
             battery_mv: self
                 .mission
                 .battery_volts()
@@ -546,8 +577,10 @@ impl Autonomy {
             thrust,
             rail,
             armed: out.armed,
+            motor_test: self.mission.motor_testing(),
             telemetry,
             status_changed,
+            calibrated,
             state: self.state(),
             ack,
             job: out.job.map(|work| JobRequest {
@@ -555,6 +588,41 @@ impl Autonomy {
                 work,
             }),
             report,
+        }
+    }
+}
+
+/// Says how a calibration ended (a text for people) and gives its second acknowledgement and
+/// the offsets to store.
+fn calibration_report(
+    kind: CalibrationKind,
+    result: Result<[f32; 3], CalibrationFailure>,
+    report: &mut Report,
+) -> (CommandResult, Option<(CalibrationKind, [f32; 3])>) {
+    let name = kind.name();
+    match result {
+        Ok(o) => {
+            let unit = match kind {
+                CalibrationKind::Gyro => "rad/s",
+                CalibrationKind::Level => "m/s^2",
+            };
+            report.text(
+                Severity::Info,
+                format_args!(
+                    "calibration: {name} done: offsets {} {} {} {unit}",
+                    Fixed(o[0], 4),
+                    Fixed(o[1], 4),
+                    Fixed(o[2], 4)
+                ),
+            );
+            (CommandResult::Accepted, Some((kind, o)))
+        }
+        Err(why) => {
+            report.text(
+                Severity::Error,
+                format_args!("calibration: {name} failed: {why}"),
+            );
+            (CommandResult::Failed, None)
         }
     }
 }

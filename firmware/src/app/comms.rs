@@ -37,6 +37,8 @@ use link::store::ParamStore;
 use link::telemetry::{Home, RouteStatus, Stream, VehicleSnapshot, gps_global_origin};
 use link::timesync::Received as SyncReceived;
 use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
+use shared::control::thrust_map::ThrustMap;
+use shared::mission::bringup::CalibrationKind;
 use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, TABLE, is_origin};
 use shared::scenario::Scenario;
 use shared::scenario_wire::{MAX_ENCODED_LEN, MAX_NAME_LEN, PayloadError, decode_and_check};
@@ -51,9 +53,9 @@ mod metadata {
 use super::autonomy::RouteChange;
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
 use super::{
-    ARMED, COMMANDS, GCS_HEARTBEAT, IN_HIL, LINK_BATTERY_MV, MISSION_CONFIG, MISSION_ITEMS,
-    MISSION_STATE, MOCAP, OUTBOX, RELOAD, ROUTE, ROUTE_SENT, SENSOR, STATUS_CHANGES,
-    TELEMETRY_CHANGED, TO_LOAD, VEHICLE, signing, telemetry, timesync,
+    ARMED, CALIBRATED, COMMANDS, CONFIG_CHANGED, GCS_HEARTBEAT, IN_HIL, LINK_BATTERY_MV,
+    MISSION_CONFIG, MISSION_ITEMS, MISSION_STATE, MOCAP, OUTBOX, RELOAD, ROUTE, ROUTE_SENT, SENSOR,
+    STATUS_CHANGES, TELEMETRY_CHANGED, TO_LOAD, VEHICLE, signing, telemetry, timesync,
 };
 use crate::board::{Board, Selected};
 
@@ -98,6 +100,8 @@ pub enum Outbound {
         report: Report,
         /// The step's command and how it was taken.
         ack: Option<(PendingCommand, CommandResult)>,
+        /// A command begun earlier (a calibration) that ended this step, and how.
+        done: Option<(PendingCommand, CommandResult)>,
         /// The mission state after the step.
         state: MissionState,
         /// In HIL: the actuator commands for the plant.
@@ -241,6 +245,7 @@ async fn open_params(flash: <Selected as Board>::ParamFlash) -> (ParamService, O
     };
     let service = ParamService::new(values);
     MISSION_CONFIG.lock(|c| c.set(service.values().config()));
+    CONFIG_CHANGED.store(true, Ordering::Release);
     announce_origin(&service).await;
     (service, store)
 }
@@ -275,7 +280,50 @@ pub async fn receive(
         if let Some(outcome) = mission.poll(Instant::now().as_micros()) {
             deliver_mission(outcome, mission, &params.origin(), &mut store).await;
         }
+        // A calibration's offsets, looked at whenever bytes come (as the upload's timeout).
+        if let Ok((kind, offsets)) = CALIBRATED.try_receive() {
+            store_calibration(kind, offsets, &mut params, &mut store).await;
+        }
     }
+}
+
+/// Sets a calibration's offsets as their parameters (`CAL_GYRO0_*OFF` or `CAL_ACC0_*OFF`),
+/// stores them and sends their `PARAM_VALUE`s (the mission has them in force already).
+async fn store_calibration(
+    kind: CalibrationKind,
+    offsets: [f32; 3],
+    params: &mut ParamService,
+    store: &mut Option<Store>,
+) {
+    let names = match kind {
+        CalibrationKind::Gyro => ["CAL_GYRO0_XOFF", "CAL_GYRO0_YOFF", "CAL_GYRO0_ZOFF"],
+        CalibrationKind::Level => ["CAL_ACC0_XOFF", "CAL_ACC0_YOFF", "CAL_ACC0_ZOFF"],
+    };
+    for (name, value) in names.into_iter().zip(offsets) {
+        let mut id = [0u8; shared::mission::params::NAME_LEN];
+        id[..name.len()].copy_from_slice(name.as_bytes());
+        let answer = params.handle(&ParamRequest::Set { name: id, value }, None);
+        if let Some((index, value)) = answer.changed
+            && let Some(store) = store
+            && let Err(e) = store.save(index, value).await
+        {
+            OUTBOX
+                .send(report(
+                    Severity::Error,
+                    format_args!("param {name} in force but not stored: {e}"),
+                ))
+                .await;
+        }
+        if answer.values != Values::None {
+            OUTBOX
+                .send(Outbound::Params {
+                    values: params.values().clone(),
+                    which: answer.values,
+                })
+                .await;
+        }
+    }
+    MISSION_CONFIG.lock(|c| c.set(params.values().config()));
 }
 
 /// Loads the stored payload description, if one is stored and passes the checks, as if it had
@@ -377,6 +425,28 @@ async fn setup_signing(key: [u8; KEY_LEN], timestamp: u64, store: &mut Option<St
     OUTBOX.send(Outbound::Report(r)).await;
 }
 
+/// `MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN`: refused while armed or while the mission runs;
+/// otherwise acknowledged, said, and the processor reset once both are out.
+async fn reboot(command: CommandId) {
+    let running = MISSION_STATE.load(Ordering::Relaxed) == MissionState::Running as u8;
+    if ARMED.load(Ordering::Relaxed) || running {
+        let why = "refused: the vehicle is armed or the mission is running";
+        refuse(command, MavResult::MAV_RESULT_DENIED, why).await;
+        return;
+    }
+    let result = MavResult::MAV_RESULT_ACCEPTED;
+    OUTBOX.send(Outbound::Ack { command, result }).await;
+    OUTBOX
+        .send(report(
+            Severity::Notice,
+            format_args!("rebooting the flight controller"),
+        ))
+        .await;
+    // Time for the send task to put both on the wire (a few hundred bytes).
+    Timer::after(Duration::from_millis(200)).await;
+    cortex_m::peripheral::SCB::sys_reset();
+}
+
 /// Answers a parameter request, puts a changed value in force and stores it. The value is
 /// stored before its `PARAM_VALUE` goes out, so a ground station that saw the answer may cut
 /// the power.
@@ -413,6 +483,7 @@ async fn handle_param(
         } else {
             // In force now for the loaded payload (the mission is not running) and the next.
             MISSION_CONFIG.lock(|c| c.set(params.values().config()));
+            CONFIG_CHANGED.store(true, Ordering::Release);
             RELOAD.signal(());
         }
     }
@@ -721,6 +792,7 @@ async fn handle(
             Request::Refused(result) => {
                 refuse(command, result, link::command::refusal(command, result)).await;
             }
+            Request::Reboot => reboot(command).await,
         },
         Inbound::Param { request, .. } => handle_param(request, verdict, params, store).await,
         Inbound::SetupSigning { key, timestamp, .. } => {
@@ -1000,6 +1072,8 @@ fn mav_severity(s: Severity) -> MavSeverity {
 fn mav_result(r: CommandResult) -> MavResult {
     match r {
         CommandResult::Accepted => MavResult::MAV_RESULT_ACCEPTED,
+        CommandResult::InProgress => MavResult::MAV_RESULT_IN_PROGRESS,
+        CommandResult::Failed => MavResult::MAV_RESULT_FAILED,
         CommandResult::TemporarilyRejected => MavResult::MAV_RESULT_TEMPORARILY_REJECTED,
         CommandResult::Denied => MavResult::MAV_RESULT_DENIED,
     }
@@ -1158,6 +1232,15 @@ impl<W: Write> Sending<W> {
                     self.encoder
                         .encode_extended(&array, &data[..len], &mut self.frame);
                 }
+                Stream::ServoOutputRaw | Stream::ActuatorOutputStatus => {
+                    let table = MISSION_CONFIG.lock(|c| c.get().hardware.thrust_map);
+                    let map = ThrustMap::new(table).unwrap_or_default();
+                    if stream == Stream::ServoOutputRaw {
+                        self.encode(&vehicle.servo_output_raw(&map));
+                    } else {
+                        self.encode(&vehicle.actuator_output_status(&map));
+                    }
+                }
                 Stream::GlobalPositionInt => match vehicle.global_position_int(&self.origin) {
                     Some(m) => self.encode(&m),
                     // An unusable origin (said at start): nothing to send.
@@ -1193,11 +1276,12 @@ impl<W: Write> Sending<W> {
                 time_us,
                 report,
                 ack: step_ack,
+                done,
                 state: now,
                 actuators,
             } => {
                 self.report(report, (time_us / 1000) as u32).await;
-                if let Some((pending, result)) = step_ack {
+                for (pending, result) in step_ack.iter().chain(done) {
                     self.encode(&ack(pending.mav_cmd, mav_result(*result)));
                     self.flush().await;
                 }

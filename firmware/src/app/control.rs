@@ -22,9 +22,9 @@ use super::autonomy::{Autonomy, CommandResult, JobResult, Severity, TickInput, T
 use super::comms::{Outbound, SensorSample};
 use super::logger::RingEnd;
 use super::{
-    ARMED, COMMANDS, GCS_HEARTBEAT, IDLE_COUNTS, IN_HIL, JOB_REQUESTS, JOB_RESULTS,
-    LINK_BATTERY_MV, LOADING, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD, ROUTE, ROUTE_SENT, SENSOR,
-    STATUS_CHANGES, VEHICLE,
+    ARMED, CALIBRATED, COMMANDS, CONFIG_CHANGED, GCS_HEARTBEAT, IDLE_COUNTS, IN_HIL, JOB_REQUESTS,
+    JOB_RESULTS, LINK_BATTERY_MV, LOADING, MISSION_CONFIG, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD,
+    ROUTE, ROUTE_SENT, SENSOR, STATUS_CHANGES, VEHICLE,
 };
 use crate::board::{ActuatorOutputs, Board, Selected};
 use shared::mission::{HardwareFaults, Supervision};
@@ -51,6 +51,8 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
     // The flight log's end of the ring (this task is its only writer).
     // The flight log's end of the ring (this task is its only writer).
     let mut log_ring = RingEnd::new();
+    // The calibration under way: its command, for the acknowledgement of its end.
+    let mut calibrating: Option<super::comms::PendingCommand> = None;
     loop {
         let sample: SensorSample = SENSOR.receive().await;
         let start = <Selected as Board>::cycle_count();
@@ -123,6 +125,13 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 },
                 loading,
                 route: route.as_ref(),
+                // The flag first: parameters set after it are in the configuration read.
+                config: if CONFIG_CHANGED.load(Ordering::Acquire) {
+                    CONFIG_CHANGED.store(false, Ordering::Release);
+                    Some(MISSION_CONFIG.lock(|c| c.get()))
+                } else {
+                    None
+                },
                 supervision: Supervision {
                     gcs_heartbeat: GCS_HEARTBEAT.swap(false, Ordering::Relaxed),
                     // In HIL the plant's pack; on a board its own measurement.
@@ -222,17 +231,31 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 rail: out.rail,
                 armed: out.armed,
             };
+            // A calibration's first acknowledgement says in progress; its end says how.
+            let mut done = None;
+            if let Some((result, offsets)) = out.calibrated {
+                if let Some(offsets) = offsets {
+                    // The receive task stores them; one calibration at a time, so room.
+                    let _ = CALIBRATED.try_send(offsets);
+                }
+                done = calibrating.take().map(|p| (p, result));
+            }
+            let ack = pending.map(|p| {
+                (
+                    p,
+                    out.ack
+                        .map_or(CommandResult::Accepted, |(_, result)| result),
+                )
+            });
+            if let Some((p, CommandResult::InProgress)) = ack {
+                calibrating = Some(p);
+            }
             Outbound::Step {
                 time_us: step.time_us,
                 report: out.report,
                 // Every command is acknowledged; one the autonomy took without a word is accepted.
-                ack: pending.map(|p| {
-                    (
-                        p,
-                        out.ack
-                            .map_or(CommandResult::Accepted, |(_, result)| result),
-                    )
-                }),
+                ack,
+                done,
                 state: out.state,
                 actuators: sample.hil.then_some(actuators),
             }
@@ -273,11 +296,13 @@ fn idle_output() -> TickOutput {
         thrust: [0.0; link::hil::MAX_ROBOTS],
         rail: [0.0; link::hil::MAX_ROBOTS],
         armed: false,
+        motor_test: false,
         state: super::autonomy::MissionState::Idle,
         ack: None,
         job: None,
         report: Default::default(),
         telemetry: link::telemetry::VehicleSnapshot::START,
         status_changed: false,
+        calibrated: None,
     }
 }

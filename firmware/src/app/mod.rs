@@ -79,6 +79,16 @@ pub static MISSION_ITEMS: core::sync::atomic::AtomicU16 = core::sync::atomic::At
 pub static MISSION_CONFIG: Mutex<Cs, Cell<MissionConfig>> =
     Mutex::new(Cell::new(MissionConfig::DEFAULT));
 
+/// The parameters changed (at start, or a `PARAM_SET`): the control step puts the IMU's
+/// offsets and the hardware settings of [`MISSION_CONFIG`] in force (a load and a store each
+/// step; the configuration is read only when set).
+pub static CONFIG_CHANGED: AtomicBool = AtomicBool::new(false);
+
+/// A calibration's offsets, from the control task for the receive task to store as
+/// parameters (docs/ground-link.md#bring-up-commands).
+pub static CALIBRATED: Channel<Cs, (shared::mission::bringup::CalibrationKind, [f32; 3]), 1> =
+    Channel::new();
+
 /// A parameter changed: the job task loads the last payload description again with the new
 /// configuration (when the mission is not running).
 pub static RELOAD: Signal<Cs, ()> = Signal::new();

@@ -130,7 +130,14 @@ impl core::fmt::Display for CalibrationFailure {
                 axis_name(axis),
                 Fixed(spread, 3),
                 if gyro { "rad/s" } else { "m/s^2" },
-                Fixed(if gyro { MAX_GYRO_SPREAD } else { MAX_ACCEL_SPREAD }, 3),
+                Fixed(
+                    if gyro {
+                        MAX_GYRO_SPREAD
+                    } else {
+                        MAX_ACCEL_SPREAD
+                    },
+                    3
+                ),
             ),
             Self::NotAtRest { magnitude } => write!(
                 f,
@@ -318,7 +325,11 @@ mod tests {
         for i in 0..CALIBRATION_SAMPLES {
             let mut n = |s: f32| s * noise(&mut state);
             let s = sample(
-                [gyro[0] + n(gyro_noise), gyro[1] + n(gyro_noise), gyro[2] + n(gyro_noise)],
+                [
+                    gyro[0] + n(gyro_noise),
+                    gyro[1] + n(gyro_noise),
+                    gyro[2] + n(gyro_noise),
+                ],
                 [
                     accel[0] + n(accel_noise),
                     accel[1] + n(accel_noise),
@@ -368,7 +379,13 @@ mod tests {
     #[test]
     fn a_vehicle_that_moves_fails_the_calibration() {
         // Turned back and forth by hand: the gyro's y axis swings by 0.2 rad/s.
-        let err = run(CalibrationKind::Gyro, [0.0; 3], [0.0, 0.0, -GRAVITY], 0.0, 0.0);
+        let err = run(
+            CalibrationKind::Gyro,
+            [0.0; 3],
+            [0.0, 0.0, -GRAVITY],
+            0.0,
+            0.0,
+        );
         assert!(err.is_ok());
         let mut cal = ImuCalibration::new(CalibrationKind::Gyro);
         let mut result = None;
@@ -385,7 +402,13 @@ mod tests {
             other => panic!("{other:?}"),
         }
         // Carried: the accelerometer shakes.
-        let shaken = run(CalibrationKind::Gyro, [0.0; 3], [0.0, 0.0, -GRAVITY], 0.0, 2.0);
+        let shaken = run(
+            CalibrationKind::Gyro,
+            [0.0; 3],
+            [0.0, 0.0, -GRAVITY],
+            0.0,
+            2.0,
+        );
         assert!(
             matches!(shaken, Err(CalibrationFailure::Moving { gyro: false, .. })),
             "{shaken:?}"
@@ -395,7 +418,13 @@ mod tests {
     #[test]
     fn offsets_no_bias_explains_fail() {
         // A steady turn at 1 rad/s is not a bias.
-        let turning = run(CalibrationKind::Gyro, [0.0, 0.0, 1.0], [0.0, 0.0, -GRAVITY], 0.0, 0.0);
+        let turning = run(
+            CalibrationKind::Gyro,
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -GRAVITY],
+            0.0,
+            0.0,
+        );
         assert_eq!(
             turning,
             Err(CalibrationFailure::OffsetTooLarge {
@@ -413,7 +442,10 @@ mod tests {
             0.0,
         );
         assert!(
-            matches!(tilted, Err(CalibrationFailure::OffsetTooLarge { axis: 0, .. })),
+            matches!(
+                tilted,
+                Err(CalibrationFailure::OffsetTooLarge { axis: 0, .. })
+            ),
             "{tilted:?}"
         );
         // In free fall (or accelerating): not at rest.

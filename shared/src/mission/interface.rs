@@ -3,9 +3,9 @@
 //! faults, the tick's input and output, and an IMU failure the mission acted on.
 
 use crate::control::imu_monitor::ImuFailure;
-use crate::mission::bringup::{CalibrationFailure, CalibrationKind};
 use crate::control::navigator::{ImuSample, MocapFix, NavState};
 use crate::flight::{AdaptEvent, CascadeSetpoints};
+use crate::mission::bringup::{CalibrationFailure, CalibrationKind};
 use crate::mission::jobs::JobRequest;
 use crate::mission::phases::{AbortReason, Phase, Transition};
 use crate::mission::supervision::{Notice, Supervision};

@@ -41,12 +41,12 @@ use crate::timing::{CONTROL_RATE_HZ, LoopMonitor, LoopStats};
 
 mod bench;
 
-use bench::Bench;
-pub use bench::MARK_TOLERANCE;
 pub use crate::mission::interface::{
     CommandRefusal, CommandReply, HardwareFaults, ImuDetection, OperatorCommand, TickInput,
     TickOutput,
 };
+use bench::Bench;
+pub use bench::MARK_TOLERANCE;
 
 /// A job asked for and not yet taken.
 #[derive(Clone, Debug)]

@@ -177,8 +177,17 @@ fn a_motor_test_spins_the_rotors_asked_for_until_its_time_or_another_command() {
     assert!(out.armed);
     // 20 % command on the square law: 4 % of full thrust, robot 2's rotor alone.
     let max = s.robots.max_thrust;
-    assert!((out.thrusts[1] - 0.04 * max).abs() < 1e-4, "{:?}", out.thrusts);
-    assert!(out.thrusts.iter().enumerate().all(|(j, &t)| j == 1 || t == 0.0));
+    assert!(
+        (out.thrusts[1] - 0.04 * max).abs() < 1e-4,
+        "{:?}",
+        out.thrusts
+    );
+    assert!(
+        out.thrusts
+            .iter()
+            .enumerate()
+            .all(|(j, &t)| j == 1 || t == 0.0)
+    );
     // Stopped at 0.5 s.
     let mut spinning = 1;
     for tick in 2..400 {

@@ -846,7 +846,13 @@ pub static TABLE: [ParamSpec; COUNT] = [
         integer: true,
         #[cfg(feature = "docs")]
         doc: "motor tests (MAV_CMD_DO_MOTOR_TEST) allowed: 1 yes, 0 refused",
-        get: |c| if c.hardware.motor_test_enabled { 1.0 } else { 0.0 },
+        get: |c| {
+            if c.hardware.motor_test_enabled {
+                1.0
+            } else {
+                0.0
+            }
+        },
         set: |c, v| c.hardware.motor_test_enabled = v > 0.5,
     },
 ];
