@@ -67,6 +67,8 @@ fn linked_world(scenario: &Scenario) -> World {
 enum Action {
     /// `MAV_CMD_MISSION_START`.
     Start,
+    /// `MAV_CMD_USER_1` with param1 = 1: the robots stand at their marks.
+    ConfirmRails,
     /// `MAV_CMD_NAV_LAND`.
     Land,
     /// `MAV_CMD_COMPONENT_ARM_DISARM` with param1 = 1 (arm).
@@ -93,6 +95,7 @@ impl Action {
     fn command_long(self) -> Option<COMMAND_LONG_DATA> {
         let (cmd, p1, p2) = match self {
             Self::Start => (MavCmd::MAV_CMD_MISSION_START, 0.0, 0.0),
+            Self::ConfirmRails => (link::command::CONFIRM_RAILS, 1.0, 0.0),
             Self::Land => (MavCmd::MAV_CMD_NAV_LAND, 0.0, 0.0),
             Self::Arm => (MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0),
             Self::Disarm => (MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 0.0, 0.0),
@@ -778,9 +781,12 @@ fn a_restart_in_any_phase_comes_up_disarmed_and_never_arms_by_itself() {
                 "{context}: {phase:?}"
             );
             assert!(v.seen.reloads >= 1, "{context}: the stored payload loaded");
-            // After one more restart, a start (and only a start) arms it: the check above
+            // After one more restart, a start (and only a start) arms it, once the rails are
+            // confirmed again (a restart forgets where the robots stand): the check above
             // could see arming.
             v.restart(0);
+            v.step(true).unwrap();
+            v.act(Action::ConfirmRails, 0).unwrap();
             v.step(true).unwrap();
             v.act(Action::Start, 0).unwrap();
             let mut armed_again = false;
