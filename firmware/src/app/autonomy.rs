@@ -196,6 +196,9 @@ pub fn run_job(planner: &mut MissionPlanner, work: &shared::mission::JobRequest)
     planner.run(work)
 }
 
+/// A calibration's offsets, for the parameters of its kind.
+pub type Offsets = (CalibrationKind, [f32; 3]);
+
 /// What one control step commands and reports.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TickOutput {
@@ -224,7 +227,7 @@ pub struct TickOutput {
     pub status_changed: bool,
     /// A calibration ended this step: how (its command's second acknowledgement), and the
     /// offsets to store as parameters when it succeeded.
-    pub calibrated: Option<(CommandResult, Option<(CalibrationKind, [f32; 3])>)>,
+    pub calibrated: Option<(CommandResult, Option<Offsets>)>,
 }
 
 /// The autonomy: the mission's tick side. Its job side, the [`MissionPlanner`], lives with
@@ -598,7 +601,7 @@ fn calibration_report(
     kind: CalibrationKind,
     result: Result<[f32; 3], CalibrationFailure>,
     report: &mut Report,
-) -> (CommandResult, Option<(CalibrationKind, [f32; 3])>) {
+) -> (CommandResult, Option<Offsets>) {
     let name = kind.name();
     match result {
         Ok(o) => {
