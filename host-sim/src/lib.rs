@@ -7,6 +7,7 @@
 // `is_multiple_of` in code written for 1.85 (the harness). Allowed until that code adopts it.
 #![allow(clippy::manual_is_multiple_of)]
 
+pub mod bench_csv;
 pub mod cli;
 pub mod commands;
 pub mod estimate_report;
