@@ -24,5 +24,6 @@ pub mod monte_carlo;
 pub mod plant;
 pub mod report;
 pub mod scenario_file;
+pub mod thrust_calibration;
 pub mod trial_trace;
 pub mod ulog_read;
