@@ -1,5 +1,6 @@
 //! Reading a bench measurement file: a CSV table with a header row, from which a calibration
-//! takes the columns it names, as numbers, each with the line it came from.
+//! takes the columns it names, as numbers, each with the line it came from
+//! (docs/formats.md#thrust-bench-files).
 //!
 //! The header is matched by name, ignoring case and surrounding spaces; columns may come in any
 //! order and others are ignored. Lines starting with `#` are comments; empty lines and rows

@@ -46,6 +46,9 @@ pub enum Command {
     Params(commands::params::ParamsArgs),
     /// The one-page mission summary drawn from a flight log (ULog), saying what it lacks.
     Plot(commands::plot::PlotArgs),
+    /// Bench measurements made into the vehicle's parameters (`calibrate thrust`: the thrust
+    /// map from a motor sweep).
+    Calibrate(commands::calibrate::CalibrateArgs),
 }
 
 /// Options every command takes.
@@ -59,8 +62,8 @@ pub struct Common {
     pub json: bool,
 }
 
-/// Exit code of a bad input: a scenario or flag value that breaks a rule, a file that cannot
-/// be read.
+/// Exit code of a bad input: a scenario or flag value that breaks a rule, a bench file a
+/// calibration cannot use, a file that cannot be read.
 pub const EXIT_BAD_INPUT: u8 = 1;
 /// Exit code of a command line clap cannot parse (clap's own).
 pub const EXIT_USAGE: u8 = 2;
@@ -137,6 +140,7 @@ where
         Command::Hil(args) => commands::hil::run(&args),
         Command::Params(args) => commands::params::run(&args),
         Command::Plot(args) => commands::plot::run(&args),
+        Command::Calibrate(args) => commands::calibrate::run(&args),
     }
     .map_err(CliError::Failed)
 }

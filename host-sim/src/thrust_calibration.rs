@@ -1,6 +1,8 @@
 //! The thrust map from a motor bench sweep: readings of a load cell at ESC commands become the
 //! firmware's parameters `THR_MAP_20` .. `THR_MAP_80`, the thrust at 20, 40, 60 and 80 %
-//! command as a fraction of full thrust (`drivers::thrust_map`).
+//! command as a fraction of full thrust (`drivers::thrust_map`;
+//! docs/commands.md#calibrating-the-thrust-map says how to take the sweep and what each check
+//! is for).
 //!
 //! The method, in order:
 //! 1. Readings at command 0 (motor stopped) are the load cell's zero: their mean, the tare, is

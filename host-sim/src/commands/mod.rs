@@ -1,5 +1,6 @@
 //! One module per `host-sim` command: argument types, the run, and its report.
 
+pub mod calibrate;
 pub mod estimate;
 pub mod fly;
 pub mod formation;
