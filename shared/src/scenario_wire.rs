@@ -36,6 +36,8 @@
 use heapless::{String, Vec};
 
 use crate::geometry::{MAX_VERTICES, PolygonError, Vec2};
+// The file's CRC-32 (zlib's), shared with the other files the vehicle checks.
+use crate::mission::params::metadata::crc32;
 use crate::scenario::{
     EstimationSetup, FlightSetup, FormationSetup, MAX_CANDIDATES, MAX_ROBOTS, Problem, RobotsInput,
     Scenario, ScenarioError, ScenarioInput,
@@ -65,9 +67,6 @@ pub const MAX_ENCODED_LEN: usize = 4
     + 4
     + (1 + 16)
     + 4;
-
-const CRC32: crc::Crc<u32, crc::NoTable> =
-    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
 
 /// Why bytes are not an encoded scenario.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -347,7 +346,7 @@ pub fn encode(name: &str, input: &ScenarioInput<'_>, out: &mut [u8]) -> Result<u
             w.f32(flight.disturbance_torque)?;
         }
     }
-    let crc = CRC32.checksum(&w.out[..w.len]);
+    let crc = crc32(&w.out[..w.len]);
     w.bytes(&crc.to_le_bytes())?;
     Ok(w.len)
 }
@@ -484,7 +483,7 @@ pub fn decode(bytes: &[u8]) -> Result<WireScenario, WireError> {
     let mut stored = [0; 4];
     stored.copy_from_slice(&bytes[body_len..]);
     let stored = u32::from_le_bytes(stored);
-    let computed = CRC32.checksum(&bytes[..body_len]);
+    let computed = crc32(&bytes[..body_len]);
     if stored != computed {
         return Err(WireError::ChecksumMismatch { stored, computed });
     }
@@ -646,7 +645,7 @@ mod tests {
         let at = 4 + 1 + 2 + 33 + 33;
         assert_eq!(file[at], 12);
         file[at] = 200;
-        let crc = CRC32.checksum(&file[..n - 4]);
+        let crc = crc32(&file[..n - 4]);
         file[n - 4..n].copy_from_slice(&crc.to_le_bytes());
         match decode(&file[..n]) {
             Err(WireError::Oversized(e)) => {
@@ -675,7 +674,7 @@ mod tests {
         // One extra byte before a recomputed checksum.
         let mut longer = [0u8; MAX_ENCODED_LEN + 1];
         longer[..n - 4].copy_from_slice(&buf[..n - 4]);
-        let crc = CRC32.checksum(&longer[..n - 3]);
+        let crc = crc32(&longer[..n - 3]);
         longer[n - 3..n + 1].copy_from_slice(&crc.to_le_bytes());
         assert_eq!(
             decode(&longer[..n + 1]),
@@ -728,7 +727,7 @@ mod fuzz {
             // A valid checksum over random contents reaches every field reader.
             let mut file = std::vec::Vec::from(&b"RTSC\x01"[..]);
             file.extend_from_slice(&body);
-            let crc = CRC32.checksum(&file);
+            let crc = crc32(&file);
             file.extend_from_slice(&crc.to_le_bytes());
             let _ = decode_and_check(&file);
         }

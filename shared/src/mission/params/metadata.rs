@@ -20,7 +20,10 @@ pub const PARAMETER_PATH: &str = "/comp_param.json";
 pub const PARAMETER_URI: &str = "mftp:///comp_param.json";
 
 /// CRC-32 of a metadata file as the general file and `COMPONENT_METADATA` carry it (zlib's
-/// CRC-32, ISO-HDLC).
+/// CRC-32, ISO-HDLC). The same CRC guards the payload description file
+/// ([`crate::scenario_wire`]) and the stored mission: one function, never inlined, so the
+/// flight controller links the loop once rather than at each caller.
+#[inline(never)]
 pub fn crc32(bytes: &[u8]) -> u32 {
     const CRC32: crc::Crc<u32, crc::NoTable> =
         crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
