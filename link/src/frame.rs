@@ -310,18 +310,31 @@ impl Encoder {
         let header = 1 + V2_HEADER;
         // A payload is at most 255 bytes and the frame buffer holds 255 after the header.
         let payload = &mut out.bytes[header..header + 255];
-        let mut len = message.ser(MavlinkVersion::V2, payload).min(255);
+        // The base fields whole, as MAVLink 1 lays them out: the crate's `ser` differs between
+        // the versions only in cutting MAVLink 2's trailing zeros (there are no extension
+        // fields without its `mav2-message-extensions` feature, which the workspace leaves
+        // off). The cut is made once, in `finish`, rather than by a copy of the loop in every
+        // message type's `ser`; so is everything else that does not depend on the type.
+        let len = message.ser(MavlinkVersion::V1, payload).min(255);
+        self.finish(M::ID, M::EXTRA_CRC, len, extensions, out);
+    }
+
+    /// Appends `extensions` to the `len` bytes of base fields in `out`'s payload, cuts the
+    /// trailing zeros and writes the header and the checksum around it.
+    #[inline(never)]
+    fn finish(&mut self, id: u32, crc_extra: u8, len: usize, extensions: &[u8], out: &mut Frame) {
+        let header = 1 + V2_HEADER;
+        let payload = &mut out.bytes[header..header + 255];
+        let mut len = len;
         if !extensions.is_empty() {
-            let base = M::ENCODED_LEN.min(255);
-            payload[len..base].fill(0);
-            let end = (base + extensions.len()).min(255);
-            payload[base..end].copy_from_slice(&extensions[..end - base]);
+            let end = (len + extensions.len()).min(255);
+            payload[len..end].copy_from_slice(&extensions[..end - len]);
             len = end;
-            while len > 1 && payload[len - 1] == 0 {
-                len -= 1;
-            }
         }
-        let id = M::ID.to_le_bytes();
+        while len > 1 && payload[len - 1] == 0 {
+            len -= 1;
+        }
+        let id = id.to_le_bytes();
         out.bytes[..header].copy_from_slice(&[
             STX_V2,
             len as u8,
@@ -334,7 +347,7 @@ impl Encoder {
             id[1],
             id[2],
         ]);
-        let crc = calculate_crc(&out.bytes[1..header + len], M::EXTRA_CRC);
+        let crc = calculate_crc(&out.bytes[1..header + len], crc_extra);
         out.bytes[header + len..header + len + 2].copy_from_slice(&crc.to_le_bytes());
         out.len = header + len + 2;
         self.sequence = self.sequence.wrapping_add(1);
@@ -390,6 +403,29 @@ mod tests {
             }
         }
         assert_eq!(seen, [0, 1]);
+    }
+
+    #[test]
+    fn payloads_are_the_crates_mavlink_2_payloads() {
+        // The encoder cuts the trailing zeros itself (`Encoder::finish`); the bytes must be
+        // the crate's MAVLink 2 `ser`, whatever the payload ends with.
+        fn check<M: MessageData>(m: &M) {
+            let mut crate_bytes = [0u8; 255];
+            let n = m.ser(MavlinkVersion::V2, &mut crate_bytes);
+            let frame = encoded(m, &mut Encoder::new(1, 1));
+            let header = 1 + V2_HEADER;
+            assert_eq!(frame[1] as usize, n);
+            assert_eq!(&frame[header..header + n], &crate_bytes[..n]);
+        }
+        check(&HEARTBEAT_DATA::default());
+        check(&HIL_SENSOR_DATA {
+            time_usec: 1,
+            ..Default::default()
+        });
+        check(&STATUSTEXT_DATA {
+            text: "hello".into(),
+            ..Default::default()
+        });
     }
 
     #[test]
