@@ -7,8 +7,9 @@
 //!
 //! It also writes the component metadata the vehicle serves over MAVLink FTP
 //! (docs/ground-link.md#parameter-metadata) from the parameter table itself (`shared`, with
-//! its descriptions, is a build dependency): `comp_param.json`, `comp_general.json` and
-//! `metadata.rs` (the files as `link::ftp::ReadOnlyFile`s, the general file's CRC-32).
+//! its descriptions, is a build dependency): `comp_param.json.xz` (the parameter file,
+//! xz-compressed: 3 KB of flash instead of 15), `comp_general.json` and `metadata.rs` (the
+//! files as `link::ftp::ReadOnlyFile`s, the general file's CRC-32).
 
 use std::{env, fs, path::PathBuf};
 
@@ -61,16 +62,19 @@ fn write_metadata(out: &std::path::Path, qemu: bool) {
         "Pixhawk 6C"
     };
     let version = env::var("CARGO_PKG_VERSION").expect("set by cargo");
+    let compressed = xz(parameters.as_bytes());
     let mut general = String::new();
+    // The CRC of the file as served (compressed): what a ground station caches it by.
     metadata::general_json(
         &mut general,
         model,
         &version,
         metadata::PARAMETER_URI,
-        metadata::crc32(parameters.as_bytes()),
+        metadata::crc32(&compressed),
     )
     .expect("writing to a String");
     fs::write(out.join("comp_param.json"), &parameters).expect("OUT_DIR is writable");
+    fs::write(out.join("comp_param.json.xz"), &compressed).expect("OUT_DIR is writable");
     fs::write(out.join("comp_general.json"), &general).expect("OUT_DIR is writable");
     let code = format!(
         "/// The component metadata files, generated from the parameter table at build time.\n\
@@ -78,7 +82,7 @@ fn write_metadata(out: &std::path::Path, qemu: bool) {
          link::ftp::ReadOnlyFile {{ path: {general_path:?}, \
          contents: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/comp_general.json\")) }},\n\
          link::ftp::ReadOnlyFile {{ path: {param_path:?}, \
-         contents: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/comp_param.json\")) }},\n];\n\
+         contents: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/comp_param.json.xz\")) }},\n];\n\
          /// CRC-32 of the general metadata file (`COMPONENT_METADATA`'s `file_crc`).\n\
          pub const GENERAL_CRC: u32 = {crc:#010x};\n",
         general_path = metadata::GENERAL_PATH,
@@ -86,4 +90,27 @@ fn write_metadata(out: &std::path::Path, qemu: bool) {
         crc = metadata::crc32(general.as_bytes()),
     );
     fs::write(out.join("metadata.rs"), code).expect("OUT_DIR is writable");
+}
+
+/// `json` as an `.xz` file (the MAVLink component metadata protocol's compression, which
+/// ground stations must read): one LZMA2 block, a CRC-32 check (XZ Embedded, QGroundControl's
+/// decoder, always has it; CRC-64 is optional there) and a 64 KiB dictionary, more than the
+/// file needs and little for a decoder to allocate. Read back before it is used.
+fn xz(json: &[u8]) -> Vec<u8> {
+    use lzma_rust2::{CheckType, XzOptions, XzReader, XzWriter};
+    use std::io::{Read, Write};
+    let mut options = XzOptions::with_preset(9);
+    options.lzma_options.dict_size = 64 << 10;
+    options.set_check_sum_type(CheckType::Crc32);
+    let mut writer = XzWriter::new(Vec::new(), options).expect("valid options");
+    writer.write_all(json).expect("writing to a Vec");
+    let compressed = writer.finish().expect("writing to a Vec");
+    // The stream header's flags: the check is CRC-32.
+    assert_eq!(compressed[6..8], [0x00, 0x01]);
+    let mut back = Vec::new();
+    XzReader::new(compressed.as_slice(), false)
+        .read_to_end(&mut back)
+        .expect("the stream just written");
+    assert!(back == json, "the xz stream decompresses to the file");
+    compressed
 }

@@ -24,7 +24,7 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
    TIMESYNC answered and asked,
    every parameter (count and indices consistent, read back by name and by index), the
    parameter metadata read over MAVLink FTP as QGroundControl reads it (the general file, the
-   parameter file of its CRC-32 naming every parameter), arming
+   parameter file of its CRC-32, xz-compressed, naming every parameter), arming
    refused with its COMMAND_ACK and a STATUSTEXT, bad values refused (PARAM_VALUE with the old
    value and a STATUSTEXT), MAVLink 2 signing set up (SETUP_SIGNING): the vehicle's frames
    signed, an unsigned start and an unsigned parameter write refused, one good value set
@@ -43,6 +43,7 @@ Exit status 0 when everything holds; 2 with one line on stderr when pymavlink is
 
 import argparse
 import json
+import lzma
 import math
 import os
 import shutil
@@ -559,15 +560,23 @@ def metadata_checks(v, param_count):
     general = json.loads(ftp_read(v, "/comp_general.json"))
     entry = next(m for m in general["metadataTypes"] if m["type"] == 1)
     uri = entry["uri"]
-    body = ftp_read(v, uri.replace("mftp://", ""))
-    if zlib.crc32(body) != entry["fileCrc"]:
-        raise Failure(f"{uri}: CRC-32 {zlib.crc32(body)} against the general file's "
+    served = ftp_read(v, uri.replace("mftp://", ""))
+    # The CRC is of the file as served; a name ending in .xz is decompressed, as
+    # QGroundControl does.
+    if zlib.crc32(served) != entry["fileCrc"]:
+        raise Failure(f"{uri}: CRC-32 {zlib.crc32(served)} against the general file's "
                       f"{entry['fileCrc']}")
+    if not uri.endswith(".json.xz"):
+        raise Failure(f"{uri}: the parameter file is served xz-compressed")
+    try:
+        body = lzma.decompress(served, format=lzma.FORMAT_XZ)
+    except lzma.LZMAError as e:
+        raise Failure(f"{uri}: not an xz file ({e})")
     names = [p["name"] for p in json.loads(body)["parameters"]]
     if len(names) != param_count:
         raise Failure(f"{uri} lists {len(names)} parameters; the vehicle has {param_count}")
-    print(f"parameter metadata over FTP: {uri}, {len(body)} bytes, its CRC-32 as the general "
-          f"file says, {len(names)} parameters")
+    print(f"parameter metadata over FTP: {uri}, {len(served)} bytes ({len(body)} decompressed), "
+          f"its CRC-32 as the general file says, {len(names)} parameters")
 
 
 def first_run(args, port):

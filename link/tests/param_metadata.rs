@@ -1,26 +1,32 @@
 //! The parameter metadata (docs/ground-link.md#parameter-metadata): the files the firmware's
 //! build script writes from the parameter table parse as JSON, name every parameter with its
-//! type, default and range, and the general file points at the parameter file with its
-//! CRC-32; both come back whole through the vehicle's FTP server.
+//! type, default and range, and the general file points at the parameter file (served
+//! xz-compressed) with the CRC-32 of the file as served; both come back whole through the
+//! vehicle's FTP server, and the parameter file decompresses to the JSON.
 
 use link::ftp::{ErrorCode, FtpMessage, Opcode, ReadOnlyFile, Server};
 use serde_json::Value;
 use shared::mission::params::{TABLE, metadata};
 
-/// The files as the build script makes them (for the Pixhawk).
-fn files() -> (String, String) {
+/// The files as the build script makes them (for the Pixhawk): the general file, the
+/// parameter file's JSON and the parameter file as served, compressed. (The build script's
+/// encoder compresses; this one, lzma-rs's, only stores the bytes in an xz stream, which is
+/// all these tests need.)
+fn files() -> (String, String, Vec<u8>) {
     let mut parameters = String::new();
     metadata::parameter_json(&mut parameters).expect("writing to a String");
+    let mut compressed = Vec::new();
+    lzma_rs::xz_compress(&mut parameters.as_bytes(), &mut compressed).expect("writing to a Vec");
     let mut general = String::new();
     metadata::general_json(
         &mut general,
         "Pixhawk 6C",
         "0.1.0",
         metadata::PARAMETER_URI,
-        metadata::crc32(parameters.as_bytes()),
+        metadata::crc32(&compressed),
     )
     .expect("writing to a String");
-    (general, parameters)
+    (general, parameters, compressed)
 }
 
 /// Whether the JSON number reads back as exactly `b` (the shortest decimal of an f32 does).
@@ -30,7 +36,7 @@ fn close(a: &Value, b: f32) -> bool {
 
 #[test]
 fn the_parameter_file_lists_every_parameter_as_the_table_has_it() {
-    let (_, parameters) = files();
+    let (_, parameters, _) = files();
     let json: Value = serde_json::from_str(&parameters).expect("valid JSON");
     assert_eq!(json["version"], 1, "QGroundControl reads version 1 only");
     let list = json["parameters"].as_array().expect("a parameters array");
@@ -88,7 +94,7 @@ fn the_parameter_file_lists_every_parameter_as_the_table_has_it() {
 
 #[test]
 fn the_general_file_points_at_the_parameter_file_with_its_crc() {
-    let (general, parameters) = files();
+    let (general, _, compressed) = files();
     let json: Value = serde_json::from_str(&general).expect("valid JSON");
     assert_eq!(json["version"], 1);
     let types = json["metadataTypes"].as_array().expect("metadataTypes");
@@ -97,7 +103,8 @@ fn the_general_file_points_at_the_parameter_file_with_its_crc() {
     assert_eq!(types[0]["uri"], metadata::PARAMETER_URI);
     assert_eq!(
         types[0]["fileCrc"].as_u64(),
-        Some(u64::from(metadata::crc32(parameters.as_bytes())))
+        Some(u64::from(metadata::crc32(&compressed))),
+        "the CRC of the file as served"
     );
     // zlib's CRC-32 (what QGroundControl and PX4 compute).
     assert_eq!(metadata::crc32(b"123456789"), 0xcbf4_3926);
@@ -109,6 +116,10 @@ fn the_general_file_points_at_the_parameter_file_with_its_crc() {
         metadata::PARAMETER_URI.strip_prefix("mftp://"),
         Some(metadata::PARAMETER_PATH)
     );
+    // Ground stations decompress by the name (QGroundControl and MAVSDK: one ending in
+    // `.xz`); the general file stays plain JSON.
+    assert!(metadata::PARAMETER_URI.ends_with(".json.xz"));
+    assert!(metadata::GENERAL_URI.ends_with(".json"));
 }
 
 /// Reads `path` through `server` as QGroundControl does: `OpenFileRO`, `BurstReadFile`s from
@@ -148,9 +159,9 @@ fn download(server: &mut Server<16>, files: &[ReadOnlyFile], path: &str) -> Vec<
 
 #[test]
 fn both_files_come_whole_through_the_ftp_server() {
-    let (general, parameters) = files();
+    let (general, json, compressed) = files();
     let general: &'static str = general.leak();
-    let parameters: &'static str = parameters.leak();
+    let parameters: &'static [u8] = compressed.leak();
     let files = [
         ReadOnlyFile {
             path: metadata::GENERAL_PATH,
@@ -158,7 +169,7 @@ fn both_files_come_whole_through_the_ftp_server() {
         },
         ReadOnlyFile {
             path: metadata::PARAMETER_PATH,
-            contents: parameters.as_bytes(),
+            contents: parameters,
         },
     ];
     let mut server = Server::<16>::new();
@@ -166,10 +177,11 @@ fn both_files_come_whole_through_the_ftp_server() {
         download(&mut server, &files, metadata::GENERAL_PATH),
         general.as_bytes()
     );
-    assert_eq!(
-        download(&mut server, &files, metadata::PARAMETER_PATH),
-        parameters.as_bytes()
-    );
+    let served = download(&mut server, &files, metadata::PARAMETER_PATH);
+    assert_eq!(served, parameters);
+    let mut decompressed = Vec::new();
+    lzma_rs::xz_decompress(&mut served.as_slice(), &mut decompressed).expect("an xz stream");
+    assert_eq!(decompressed, json.as_bytes());
     println!(
         "general file {} bytes, parameter file {} bytes",
         general.len(),

@@ -14,10 +14,12 @@ use core::fmt::{self, Write};
 pub const GENERAL_PATH: &str = "/comp_general.json";
 /// `COMPONENT_METADATA`'s `uri`: the general file on this component (`mftp://` and the path).
 pub const GENERAL_URI: &str = "mftp:///comp_general.json";
-/// Where the vehicle serves the parameter metadata file over MAVLink FTP.
-pub const PARAMETER_PATH: &str = "/comp_param.json";
+/// Where the vehicle serves the parameter metadata file over MAVLink FTP: the JSON of
+/// [`parameter_json`] compressed with xz (the protocol's compression; ground stations
+/// decompress a file whose name ends in `.xz`).
+pub const PARAMETER_PATH: &str = "/comp_param.json.xz";
 /// The parameter file's URI, as the general file gives it.
-pub const PARAMETER_URI: &str = "mftp:///comp_param.json";
+pub const PARAMETER_URI: &str = "mftp:///comp_param.json.xz";
 
 /// CRC-32 of a metadata file as the general file and `COMPONENT_METADATA` carry it (zlib's
 /// CRC-32, ISO-HDLC). The same CRC guards the payload description file
