@@ -910,4 +910,36 @@ mod tests {
             (473_977_420, 85_455_940, 488_000)
         );
     }
+
+    #[test]
+    fn the_esc_outputs_are_the_thrust_maps_commands_and_stopped_when_disarmed() {
+        let mut snap = VehicleSnapshot::START;
+        snap.robots = 3;
+        snap.armed = true;
+        // The square law: 4 % and 16 % of full thrust are 20 % and 40 % command.
+        snap.thrust[..3].copy_from_slice(&[0.04, 0.16, 0.0]);
+        let map = ThrustMap::SQUARE;
+        let status = snap.actuator_output_status(&map);
+        assert_eq!(status.active, 0b111);
+        assert!((status.actuator[0] - 0.2).abs() < 1e-5);
+        assert!((status.actuator[1] - 0.4).abs() < 1e-5);
+        assert_eq!(status.actuator[2], 0.0);
+        let raw = snap.servo_output_raw(&map);
+        assert_eq!(
+            (raw.servo1_raw, raw.servo2_raw, raw.servo3_raw),
+            (1200, 1400, 1000)
+        );
+        assert_eq!(raw.servo8_raw, 1000);
+        snap.armed = false;
+        assert!(
+            snap.actuator_output_status(&map)
+                .actuator
+                .iter()
+                .all(|&a| a == 0.0)
+        );
+        assert_eq!(snap.servo_output_raw(&map).servo1_raw, 1000);
+        for stream in [Stream::ServoOutputRaw, Stream::ActuatorOutputStatus] {
+            assert_eq!(Stream::of_message(stream.message_id()), Some(stream));
+        }
+    }
 }
