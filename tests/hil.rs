@@ -67,7 +67,11 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
     for name in ["rect-ex1", "L-sim1"] {
         let loaded = scenario_file::load(&workspace().join(format!("tests/scenarios/{name}.toml")))
             .expect("scenario");
-        let setup = MissionSetup::default();
+        // As the plant does: the rails confirmed with the first step, the start with the next.
+        let setup = MissionSetup {
+            confirm_rails: true,
+            ..MissionSetup::default()
+        };
         let host_started = Instant::now();
         let (host, _) =
             mission_run::run(&loaded.scenario, &setup, &mut |_, _, _| {}).expect("host mission");

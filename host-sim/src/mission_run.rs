@@ -45,6 +45,12 @@ pub struct MissionSetup {
     pub config: MissionConfig,
     /// Failure injection: motion capture stops this long after take-off began, s.
     pub mocap_lost_after_takeoff: Option<f32>,
+    /// The operator confirms the rail positions (the robots stand at their marks) with the
+    /// first tick, and the start goes with the second: an autopilot takes one command a tick.
+    /// The firmware needs it (its rails are unconfirmed at power-up; `hil` sets it unless
+    /// `--unconfirmed-rails`); `shared`'s mission in process has them confirmed already, so
+    /// there it only puts the start a tick later (as a HIL run has it).
+    pub confirm_rails: bool,
     /// Operator commands after the start: (seconds after take-off began, command).
     pub commands: Vec<(f32, OperatorCommand)>,
     /// Stop after this much simulated time, s (at most [`MISSION_TIME_LIMIT`]).
@@ -67,6 +73,9 @@ pub struct MissionSetup {
     pub log: Option<PathBuf>,
     /// A ground station's route to fly instead of the scenario's target.
     pub route: Option<shared::flight::Route>,
+    /// The gyro's constant bias, rad/s per body axis, in place of the one drawn from the seed
+    /// (`hil --gyro-bias`).
+    pub gyro_bias: Option<Vec3>,
 }
 
 /// A rotor that stops: from `after` seconds after take-off began, robot `robot`'s rotor
@@ -196,6 +205,7 @@ impl Default for MissionSetup {
             map_error: 1.0,
             config: MissionConfig::default(),
             mocap_lost_after_takeoff: None,
+            confirm_rails: false,
             commands: Vec::new(),
             time_limit: MISSION_TIME_LIMIT,
             load_shift: None,
@@ -206,6 +216,7 @@ impl Default for MissionSetup {
             rotors_out: Vec::new(),
             log: None,
             route: None,
+            gyro_bias: None,
         }
     }
 }
@@ -371,6 +382,9 @@ pub fn fly(
         disturbance_phase: [0.4 + setup.seed as f32 % 3.0, 1.9],
     });
     let mut sensors = Sensors::new(setup.seed);
+    if let Some(bias) = setup.gyro_bias {
+        sensors = sensors.with_gyro_bias(bias);
+    }
     let dt = 1.0 / CONTROL_HZ as f32;
     let physics_per_tick = (dt / PHYSICS_DT).round() as usize;
     let n = robots.count();
@@ -386,7 +400,13 @@ pub fn fly(
     let mut mocap_lost_at = f32::INFINITY;
     let mut takeoff_at = f32::INFINITY;
     let mut next_command = 0usize;
-    let mut command = Some(OperatorCommand::Start);
+    // The set-up's commands, one a tick: the rails confirmed (when asked for), the start.
+    let mut setup_commands: Vec<OperatorCommand> = if setup.confirm_rails {
+        vec![OperatorCommand::Start, OperatorCommand::ConfirmRails]
+    } else {
+        vec![OperatorCommand::Start]
+    };
+    let mut command = setup_commands.pop();
     let mut group = 0usize;
     let mut shift_from = truth.com;
     let mut stall = setup.stepper_stall.map(StepperStall::new);
@@ -450,6 +470,9 @@ pub fn fly(
         let mocap = sensors
             .mocap(&truth_now, plant.time_us())
             .filter(|_| t < mocap_lost_at);
+        if command.is_none() {
+            command = setup_commands.pop();
+        }
         if command.is_none()
             && let Some(&(after, c)) = setup.commands.get(next_command)
             && t >= takeoff_at + after

@@ -430,7 +430,7 @@ async fn setup_signing(key: [u8; KEY_LEN], timestamp: u64, store: &mut Option<St
 async fn reboot(command: CommandId) {
     let running = MISSION_STATE.load(Ordering::Relaxed) == MissionState::Running as u8;
     if ARMED.load(Ordering::Relaxed) || running {
-        let why = "refused: the vehicle is armed or the mission is running";
+        let why = "the vehicle is armed or the mission is running";
         refuse(command, MavResult::MAV_RESULT_DENIED, why).await;
         return;
     }

@@ -17,7 +17,7 @@ use clap::{ArgGroup, Args};
 use link::status::MissionState;
 use serde_json::json;
 
-use crate::cli::{Outcome, check_map_error, check_range};
+use crate::cli::{Outcome, check_map_error, check_range, triple};
 use crate::hil::gcs::GcsBridge;
 use crate::hil::qemu::{Qemu, QemuLink};
 use crate::hil::run::{HilOutcome, HilSetup, run as run_hil};
@@ -25,6 +25,7 @@ use crate::hil::session::LoggedText;
 use crate::hil::transport::{Endpoint, Link};
 use crate::inject::{Fault, Injection};
 use crate::mission_run::MISSION_TIME_LIMIT;
+use crate::plant::sensors::MAX_GIVEN_GYRO_BIAS;
 use crate::report::print_json;
 use crate::say;
 use crate::scenario_file;
@@ -90,6 +91,15 @@ pub struct HilArgs {
     /// the idle vehicle until it starts (parameters may be changed meanwhile).
     #[arg(long, requires = "gcs")]
     pub ground_start: bool,
+    /// Leave the rail positions unconfirmed: the plant does not send MAV_CMD_USER_1 (31010)
+    /// after the upload, so the firmware refuses a start until a ground station confirms them.
+    #[arg(long)]
+    pub unconfirmed_rails: bool,
+    /// The simulated gyro's constant bias, rad/s about the body's x, y and z, each at most 0.5
+    /// either way (default: drawn from the seed, about 0.01 per axis): what a gyro calibration
+    /// should find.
+    #[arg(long, value_name = "X,Y,Z", value_parser = triple, allow_hyphen_values = true)]
+    pub gyro_bias: Option<[f64; 3]>,
     /// Sign what the plant sends (the payload upload, commands) with this MAVLink 2 signing
     /// key, 64 hexadecimal digits: for a vehicle whose signing is on.
     #[arg(long, value_name = "HEX", value_parser = parse_signing_key)]
@@ -151,6 +161,14 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
             )
         })
         .transpose()?;
+    let gyro_bias = args
+        .gyro_bias
+        .map(|bias| -> Result<[f32; 3]> {
+            let max = f64::from(MAX_GIVEN_GYRO_BIAS);
+            let axis = |v: f64| check_range("--gyro-bias", v, (-max, false), max, "rad/s");
+            Ok([axis(bias[0])?, axis(bias[1])?, axis(bias[2])?])
+        })
+        .transpose()?;
     let reply_timeout = check_range(
         "--reply-timeout",
         args.reply_timeout,
@@ -179,6 +197,8 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
         map_error,
         mocap_lost_after_takeoff: mocap_lost_after,
         ground_start: args.ground_start,
+        confirm_rails: !args.unconfirmed_rails,
+        gyro_bias,
     };
     let json = args.json;
     let on_text: Box<dyn FnMut(&LoggedText) + Send> = Box::new(move |t: &LoggedText| {
@@ -261,6 +281,9 @@ pub fn to_json(scenario: &str, o: &HilOutcome) -> serde_json::Value {
         // The last value of each name the firmware sent (NAMED_VALUE_FLOAT/INT).
         "values": o.log.values.iter().map(|v| (v.name.clone(), json!(v.value))).collect::<serde_json::Map<String, serde_json::Value>>(),
         "statustexts": o.log.texts.iter().map(|t| json!({"step": t.step, "text": t.text})).collect::<Vec<_>>(),
+        // Each restart after a reboot the firmware acknowledged: the step it acknowledged at
+        // and the step its new boot first answered.
+        "restarts": o.log.restarts.iter().map(|r| json!({"acknowledged_at_step": r.acknowledged_at_step, "back_at_step": r.back_at_step})).collect::<Vec<_>>(),
     })
 }
 
@@ -295,6 +318,13 @@ fn print_summary(o: &HilOutcome) -> Result<()> {
         };
         say!(
             "processor busy per control step (the step, the link, the jobs): {mean:.0} {unit} on average, {worst:.0} in the busiest second"
+        )?;
+    }
+    for r in &o.log.restarts {
+        say!(
+            "the firmware rebooted: acknowledged at step {}, back at step {}",
+            r.acknowledged_at_step,
+            r.back_at_step
         )?;
     }
     if let Some(e) = o.estimate {

@@ -2,27 +2,41 @@
 //! ([`crate::mission_run::fly`]), in lockstep.
 //!
 //! Before the loop: the firmware says who it is and takes the payload description over
-//! MAVLink FTP. Each control step (400 Hz): the motion-capture fix due and the IMU sample go
-//! out; the plant then waits for the firmware's actuator commands stamped with that sample's
-//! time, applies them (rotor thrust = fraction x the robots' maximum; each robot moved to its
-//! commanded rail position) and advances its physics by one step. Nothing advances without
+//! MAVLink FTP. The firmware takes operator commands in its control steps, one a step, so the
+//! rest of the set-up rides the first steps (the plant loop hands them, see
+//! [`MissionSetup::confirm_rails`]): the rail positions confirmed with the first
+//! (`MAV_CMD_USER_1`: the robots stand at the description's start positions; not with
+//! `--unconfirmed-rails`), the start with the next (not with `--ground-start`), each of which
+//! must be accepted with the step that takes it. Each control step (400 Hz): the
+//! motion-capture fix due and the IMU sample go out; the plant then waits for the firmware's
+//! actuator commands stamped with that sample's time, applies them (rotor thrust = fraction x
+//! the robots' maximum; each robot moved to its commanded rail position) and advances its
+//! physics by one step. Nothing advances without
 //! the firmware's reply, so a run is the same however fast QEMU or the link is. `--speed X`
 //! only slows the loop down to X times real time.
 //!
 //! The run ends when the firmware's heartbeat says its mission is over, when the payload tips
 //! past 45 degrees, or at the time limit.
+//!
+//! A reboot a ground station asks for on the ground (`MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN`)
+//! restarts the firmware under QEMU (a system reset reboots the guest); the session sends the
+//! step's sample again until the new boot takes it ([`super::session`]), and the set-up is done
+//! again: the payload description uploaded unless the firmware restored it from its storage,
+//! the rails confirmed.
 
+use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use anyhow::{Result, bail};
+use link::command::OperatorCommand as LinkCommand;
 use link::hil::{ImuSample, MocapFix};
-use link::msg::{MavCmd, MavResult};
+use link::msg::{MavCmd, MavResult, MavSeverity};
 use link::status::{MissionState, PHASE_PREFIX};
 use shared::mission::OperatorCommand;
 use shared::scenario_wire::{MAX_ENCODED_LEN, encode_scenario};
 
 use super::gcs::GcsBridge;
-use super::session::{FirmwareLog, LoggedText, Session};
+use super::session::{FirmwareLog, LoggedText, Restart, Session};
 use super::transport::{ByteCounts, Link};
 use crate::inject::Injection;
 use crate::mission_run::{
@@ -32,6 +46,9 @@ use crate::scenario_file::LoadedScenario;
 
 /// Plant steps between two `BATTERY_STATUS` (10 Hz, as PX4's battery status goes out).
 const BATTERY_EVERY: u64 = 40;
+
+/// How long the firmware may take to say whether it takes a payload description.
+const PAYLOAD_TIMEOUT: Duration = Duration::from_secs(20);
 
 /// One run's set-up.
 #[derive(Clone, Debug)]
@@ -53,6 +70,13 @@ pub struct HilSetup {
     /// The ground station (through `gcs`) starts the mission, not the plant: the plant
     /// uploads the payload and steps the idle vehicle until the firmware reports it running.
     pub ground_start: bool,
+    /// The plant confirms the rail positions (`MAV_CMD_USER_1`) with the first step, as an
+    /// operator who placed the robots at their marks; `false` leaves it to a ground station
+    /// (`--unconfirmed-rails`).
+    pub confirm_rails: bool,
+    /// The gyro's constant bias, rad/s per body axis, in place of the one drawn from the seed
+    /// (`--gyro-bias`).
+    pub gyro_bias: Option<[f32; 3]>,
     /// Failure injection in the plant, as `mission --inject` (`crate::inject`): rotors that
     /// stop, a load that shifts, a frozen or noisy IMU (in the `HIL_SENSOR` samples), motion
     /// capture lost, the ground link lost (the plant's heartbeat stops and nothing from a
@@ -70,6 +94,8 @@ impl Default for HilSetup {
             gcs: None,
             map_error: 1.0,
             ground_start: false,
+            confirm_rails: true,
+            gyro_bias: None,
             mocap_lost_after_takeoff: None,
             injections: Vec::new(),
         }
@@ -114,6 +140,15 @@ pub struct HilOutcome {
     pub phases: Vec<(String, f64)>,
     /// Everything the firmware said.
     pub log: FirmwareLog,
+}
+
+/// A command of the plant's own set-up that must be accepted with the step that takes it.
+#[derive(Clone, Copy, Debug)]
+struct Awaited {
+    command: LinkCommand,
+    /// Acknowledgements and texts logged before it went.
+    acks_before: usize,
+    texts_before: usize,
 }
 
 impl HilOutcome {
@@ -172,6 +207,60 @@ struct Firmware {
     values_seen: usize,
     was_running: bool,
     ground_start: bool,
+    /// Commands to send, one a step (the firmware takes one a step).
+    queue: VecDeque<LinkCommand>,
+    /// The set-up command sent with this step, whose acceptance is checked after it.
+    awaited: Option<Awaited>,
+    confirm_rails: bool,
+    /// The payload description's wire form (uploaded again after a restart that lost it).
+    payload: Vec<u8>,
+    restarts_seen: usize,
+}
+
+impl Firmware {
+    /// Checks that the firmware accepted `awaited` with the step just done.
+    fn check_accepted(&self, awaited: Awaited) -> Result<()> {
+        let log = self.session.log();
+        let cmd = awaited.command.mav_cmd();
+        let what = match awaited.command {
+            LinkCommand::Start => "the mission start",
+            LinkCommand::ConfirmRails => "the rail confirmation (MAV_CMD_USER_1, param1 = 1)",
+            _ => "a command of the plant's",
+        };
+        match log.acks[awaited.acks_before..]
+            .iter()
+            .find(|(c, _)| *c == cmd)
+            .map(|(_, r)| *r)
+        {
+            Some(MavResult::MAV_RESULT_ACCEPTED) => Ok(()),
+            Some(result) => {
+                let why = said_since(log, awaited.texts_before)
+                    .or_else(|| last_error(log))
+                    .unwrap_or_default();
+                bail!("the firmware refused {what} ({result:?}){why}")
+            }
+            None => bail!("the firmware did not acknowledge {cmd:?} with the step that took it"),
+        }
+    }
+
+    /// The set-up again after the firmware restarted: the payload description (unless it
+    /// restored its own from storage) and the rails confirmed with the next step.
+    fn set_up_again(&mut self, restart: Restart) -> Result<()> {
+        let restored = self.session.log().texts[restart.texts_before..]
+            .iter()
+            .any(|t| t.text.contains("restored from storage"));
+        if restored {
+            let end = Instant::now() + PAYLOAD_TIMEOUT;
+            self.session.payload_verdict(restart.texts_before, end)?;
+        } else {
+            self.session
+                .upload_payload(&self.payload, PAYLOAD_TIMEOUT)?;
+        }
+        if self.confirm_rails {
+            self.queue.push_front(LinkCommand::ConfirmRails);
+        }
+        Ok(())
+    }
 }
 
 impl Autopilot for Firmware {
@@ -188,8 +277,19 @@ impl Autopilot for Firmware {
         if let Some(command) = sensed.command {
             // With the ground station starting the mission, the plant's own start is not sent.
             if !(self.ground_start && command == OperatorCommand::Start) {
-                self.session.send_command(command.into())?;
+                self.queue.push_back(command.into());
             }
+        }
+        if let Some(command) = self.queue.pop_front() {
+            if matches!(command, LinkCommand::Start | LinkCommand::ConfirmRails) {
+                let log = self.session.log();
+                self.awaited = Some(Awaited {
+                    command,
+                    acks_before: log.acks.len(),
+                    texts_before: log.texts.len(),
+                });
+            }
+            self.session.send_command(command)?;
         }
         let fixes: Vec<MocapFix> = sensed
             .mocap
@@ -209,17 +309,12 @@ impl Autopilot for Firmware {
         let reply = self
             .session
             .step(&sample, &fixes, self.robots, self.reply_timeout)?;
-        if self.session.steps() == 1 && !self.ground_start {
-            match self.session.log().ack_of(MavCmd::MAV_CMD_MISSION_START) {
-                Some(MavResult::MAV_RESULT_ACCEPTED) => {}
-                Some(result) => {
-                    let why = last_error(self.session.log()).unwrap_or_default();
-                    bail!("the firmware refused the mission start ({result:?}){why}");
-                }
-                None => bail!(
-                    "the firmware did not acknowledge MAV_CMD_MISSION_START with its first step"
-                ),
-            }
+        if let Some(awaited) = self.awaited.take() {
+            self.check_accepted(awaited)?;
+        }
+        if let Some(&restart) = self.session.log().restarts.get(self.restarts_seen) {
+            self.restarts_seen += 1;
+            self.set_up_again(restart)?;
         }
         let log = self.session.log();
         let mut events = Vec::new();
@@ -292,7 +387,7 @@ pub fn run(
             scenario.path.display()
         )
     })?;
-    session.upload_payload(&file[..len], Duration::from_secs(20))?;
+    session.upload_payload(&file[..len], PAYLOAD_TIMEOUT)?;
 
     let mut autopilot = Firmware {
         session,
@@ -304,6 +399,11 @@ pub fn run(
         values_seen: 0,
         was_running: false,
         ground_start: setup.ground_start,
+        queue: VecDeque::new(),
+        awaited: None,
+        confirm_rails: setup.confirm_rails,
+        payload: file[..len].to_vec(),
+        restarts_seen: 0,
     };
     autopilot.texts_seen = autopilot.session.log().texts.len();
     autopilot.values_seen = autopilot.session.log().values.len();
@@ -314,6 +414,11 @@ pub fn run(
             map_error: setup.map_error,
             mocap_lost_after_takeoff: setup.mocap_lost_after_takeoff,
             time_limit: setup.duration_s.map_or(MISSION_TIME_LIMIT, |d| d as f32),
+            // The rails confirmed with the first step, the start with the second.
+            confirm_rails: setup.confirm_rails,
+            gyro_bias: setup
+                .gyro_bias
+                .map(|[x, y, z]| shared::control::vector::Vec3::new(x, y, z)),
             ..MissionSetup::default()
         },
     );
@@ -367,6 +472,16 @@ pub fn run(
         lifts: record.lifts,
         log,
     })
+}
+
+/// What the firmware said since its text `texts_before` at warning or worse (a refusal's
+/// reason), as `": TEXT"` (the last).
+fn said_since(log: &FirmwareLog, texts_before: usize) -> Option<String> {
+    log.texts[texts_before.min(log.texts.len())..]
+        .iter()
+        .rev()
+        .find(|t| (t.severity as u8) <= MavSeverity::MAV_SEVERITY_WARNING as u8)
+        .map(|t| format!(": {}", t.text))
 }
 
 /// The firmware's last error text, as `": TEXT"`.

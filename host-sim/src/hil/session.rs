@@ -2,7 +2,12 @@
 //! description over MAVLink FTP, the start command, and the lockstep steps, with everything
 //! the firmware says along the way (texts, values, acknowledgements, heartbeats) logged.
 //!
-//! Every wait has a deadline and ends in an error saying what did not come.
+//! Every wait has a deadline and ends in an error saying what did not come. One wait is
+//! longer: once the firmware has acknowledged a reboot (`MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN`,
+//! from a ground station), a step that gets no reply within a second is sent again each
+//! second, for at most [`REBOOT_TIME`] more: the firmware restarted meanwhile, and the first
+//! sample its new boot takes starts its clock over (the plant's time runs on). The restart is
+//! logged ([`FirmwareLog::restarts`]).
 
 use std::time::{Duration, Instant};
 
@@ -59,6 +64,22 @@ pub struct FirmwareLog {
     pub state: Option<MissionState>,
     /// Heartbeats received.
     pub heartbeats: u32,
+    /// Each restart of the firmware after a reboot it acknowledged, in order.
+    pub restarts: Vec<Restart>,
+}
+
+/// A restart of the firmware (a reboot it acknowledged, then silence, then a reply to a
+/// sample sent again).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Restart {
+    /// Lockstep steps done when the firmware acknowledged the reboot.
+    pub acknowledged_at_step: u64,
+    /// Its texts before the reboot's acknowledgement ([`FirmwareLog::texts`]`[..texts_before]`):
+    /// what it says after its new boot follows.
+    pub texts_before: usize,
+    /// Lockstep steps done when it replied again (the step it replied to is the first of its
+    /// new boot).
+    pub back_at_step: u64,
 }
 
 impl FirmwareLog {
@@ -90,10 +111,17 @@ pub struct Session {
     gcs: Option<GcsBridge>,
     steps: u64,
     on_text: Box<dyn FnMut(&LoggedText) + Send>,
+    /// The firmware acknowledged a reboot (steps done then, texts then) and has not come back
+    /// yet.
+    rebooting: Option<(u64, usize)>,
 }
 
 /// Time between resends of a request that got no answer.
 const RESEND: Duration = Duration::from_millis(1000);
+
+/// Longest a firmware may take to come back after a reboot it acknowledged, beyond the step's
+/// own timeout.
+pub const REBOOT_TIME: Duration = Duration::from_secs(30);
 
 impl Session {
     /// A session over `link`; `gcs` (optional) gets every non-HIL frame, and `on_text` sees
@@ -111,6 +139,7 @@ impl Session {
             gcs,
             steps: 0,
             on_text,
+            rebooting: None,
         }
     }
 
@@ -134,9 +163,13 @@ impl Session {
         let Some((frame, integrity)) = self.link.receive(deadline)? else {
             return Ok(None);
         };
-        let id = frame.message_id();
-        let hil = id == HIL_ACTUATOR_CONTROLS_DATA::ID || id == ACTUATOR_OUTPUT_STATUS_DATA::ID;
-        if let (Some(gcs), false) = (&self.gcs, hil) {
+        // The lockstep replies stay here. ACTUATOR_OUTPUT_STATUS goes to the ground too: the
+        // firmware streams it for the ground station, and the one of a step past 8 robots is
+        // of no harm there.
+        if let (Some(gcs), false) = (
+            &self.gcs,
+            frame.message_id() == HIL_ACTUATOR_CONTROLS_DATA::ID,
+        ) {
             gcs.to_ground(frame.bytes());
         }
         if integrity == Integrity::Verified {
@@ -166,6 +199,11 @@ impl Session {
         } else if let Some(v) = frame.decode::<NAMED_VALUE_INT_DATA>() {
             self.value(v.name.to_str().unwrap_or("?"), f64::from(v.value));
         } else if let Some(a) = frame.decode::<COMMAND_ACK_DATA>() {
+            if a.command == MavCmd::MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN
+                && a.result == MavResult::MAV_RESULT_ACCEPTED
+            {
+                self.rebooting = Some((self.steps, self.log.texts.len()));
+            }
             self.log.acks.push((a.command, a.result));
         } else if let Some(h) = frame.decode::<HEARTBEAT_DATA>()
             && frame.system_id() == link::VEHICLE_SYSTEM_ID
@@ -241,12 +279,21 @@ impl Session {
                 );
             }
         }
+        self.payload_verdict(texts_before, end)
+    }
+
+    /// Waits until `end` for the firmware's verdict on a payload description among its texts
+    /// from `texts_before` on (`payload NAME accepted: ...` or `payload refused: ...`): `Ok`
+    /// with its text when accepted, an error with its reason when refused. A description
+    /// restored from storage at boot gets the same verdict.
+    pub fn payload_verdict(&mut self, texts_before: usize, end: Instant) -> Result<String> {
+        let waited = end.saturating_duration_since(Instant::now());
         loop {
-            if let Some(t) = self.log.texts[texts_before..]
+            if let Some(t) = self.log.texts[texts_before.min(self.log.texts.len())..]
                 .iter()
-                .find(|t| t.text.starts_with("payload "))
+                .find(|t| is_payload_verdict(&t.text))
             {
-                if t.text.starts_with("payload refused") {
+                if !t.text.contains(" accepted") {
                     bail!("the firmware refused the payload description: {}", t.text);
                 }
                 return Ok(t.text.clone());
@@ -254,7 +301,7 @@ impl Session {
             if self.next(end)?.is_none() {
                 bail!(
                     "the firmware did not say whether it accepted the payload description within {} s",
-                    timeout.as_secs()
+                    waited.as_secs()
                 );
             }
         }
@@ -298,27 +345,80 @@ impl Session {
         self.link.batch(&imu.to_message());
         self.link.send_batch()?;
         self.matcher.sent(imu.time_us);
-        let deadline = Instant::now() + timeout;
+        let sent = Instant::now();
+        let mut resend_at = sent + RESEND;
+        let mut resent = false;
         loop {
-            let Some(frame) = self.next(deadline)? else {
+            // After a reboot the firmware acknowledged, a second with no reply means it is
+            // restarting (its telemetry may have come meanwhile): the sample goes again each
+            // second until its new boot takes one.
+            let rebooting = self.rebooting.is_some();
+            let allowed = if rebooting {
+                timeout + REBOOT_TIME
+            } else {
+                timeout
+            };
+            let end = sent + allowed;
+            let frame = self.next(if rebooting { resend_at.min(end) } else { end })?;
+            let now = Instant::now();
+            if rebooting && now >= resend_at && now < end {
+                for fix in fixes {
+                    self.link.batch(&fix.to_message());
+                }
+                self.link.batch(&imu.to_message());
+                self.link.send_batch()?;
+                resent = true;
+                resend_at = now + RESEND;
+            }
+            let Some(frame) = frame else {
+                if now < end {
+                    continue;
+                }
+                let after_reboot = if rebooting {
+                    " after the reboot it acknowledged: it did not come back"
+                } else {
+                    ": the firmware stalled or the link is down"
+                };
                 bail!(
-                    "lockstep: no HIL_ACTUATOR_CONTROLS for the step at t = {:.4} s (step {}) within {:.1} s: the firmware stalled or the link is down",
+                    "lockstep: no HIL_ACTUATOR_CONTROLS for the step at t = {:.4} s (step {}) within {:.1} s{after_reboot}",
                     imu.time_us as f64 * 1e-6,
                     self.steps,
-                    timeout.as_secs_f64()
+                    sent.elapsed().as_secs_f64()
                 );
             };
             if let Some(status) = frame.decode::<ACTUATOR_OUTPUT_STATUS_DATA>() {
-                self.matcher.on_status(&status);
+                // Only the step's own status carries the rail channels (bits from MAX_ROBOTS
+                // in `active`); the one streamed for the ground station, of the same time,
+                // has the robots' ESC commands alone.
+                if status.active >> link::hil::MAX_ROBOTS != 0 {
+                    self.matcher.on_status(&status);
+                }
             } else if let Some(controls) = frame.decode::<HIL_ACTUATOR_CONTROLS_DATA>()
                 && let Reply::Commands(commands) = self
                     .matcher
                     .on_controls(&controls, robots)
                     .map_err(|e| anyhow!("lockstep: {e}"))?
             {
+                if resent && let Some((acknowledged_at_step, texts_before)) = self.rebooting.take()
+                {
+                    self.log.restarts.push(Restart {
+                        acknowledged_at_step,
+                        texts_before,
+                        back_at_step: self.steps,
+                    });
+                }
                 self.steps += 1;
                 return Ok(commands);
             }
         }
     }
+}
+
+/// Whether `text` is the firmware's verdict on a payload description: `payload NAME
+/// accepted: ...`, `payload refused: ...` or `payload upload refused: ...` (not `payload
+/// description restored from storage` and the like, said before a verdict).
+fn is_payload_verdict(text: &str) -> bool {
+    text.starts_with("payload refused")
+        || text.starts_with("payload upload refused")
+        || (text.starts_with("payload ") && text.contains(" accepted"))
 }

@@ -1,7 +1,8 @@
 //! The sensors of the simulated vehicle, seeded and reproducible (docs/system.md#hardware):
 //! an IMU at the payload frame's origin and a motion-capture system.
 //!
-//! - IMU: gyro with a constant bias and white noise; accelerometer reading the specific force
+//! - IMU: gyro with a constant bias (drawn from the seed, or given: `hil --gyro-bias`) and
+//!   white noise; accelerometer reading the specific force
 //!   (acceleration minus gravity) in the body frame, with white noise. Sampled at the control
 //!   rate; its acceleration is the origin's velocity change over the sample period. Its output
 //!   lags [`IMU_DELAY_SAMPLES`] samples (the sensor's filter and transfer): part of the delay
@@ -24,6 +25,10 @@ use crate::plant::TrueState;
 pub const GYRO_NOISE: f32 = 0.005;
 /// Gyro bias magnitude per axis, rad/s.
 pub const GYRO_BIAS: f32 = 0.01;
+/// Largest gyro bias that may be given (`hil --gyro-bias`), rad/s per axis: far above any MEMS
+/// gyro's. (The firmware's gyro calibration refuses offsets past 0.35 rad/s, so a bias between
+/// the two tries that refusal.)
+pub const MAX_GIVEN_GYRO_BIAS: f32 = 0.5;
 /// Accelerometer white noise, m/s^2 (1 sigma).
 pub const ACCEL_NOISE: f32 = 0.05;
 /// IMU output delay, samples (5 ms at 400 Hz).
@@ -94,6 +99,18 @@ impl Sensors {
         }
     }
 
+    /// The same sensors with the gyro's constant bias `bias` (rad/s, body axes) in place of the
+    /// one drawn from the seed; the noise streams stay those of the seed.
+    pub fn with_gyro_bias(mut self, bias: Vec3) -> Self {
+        self.gyro_bias = bias;
+        self
+    }
+
+    /// The gyro's constant bias, rad/s.
+    pub fn gyro_bias(&self) -> Vec3 {
+        self.gyro_bias
+    }
+
     /// An IMU sample of `truth`, `dt` seconds after the previous one.
     pub fn imu(&mut self, truth: &TrueState, dt: f32) -> ImuSample {
         let acceleration = match self.last_velocity.replace(truth.velocity) {
@@ -147,5 +164,37 @@ impl Sensors {
         } else {
             None
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at_rest() -> TrueState {
+        TrueState {
+            position: Vec3::ZERO,
+            velocity: Vec3::ZERO,
+            attitude: Quat::IDENTITY,
+            rate: Vec3::ZERO,
+        }
+    }
+
+    #[test]
+    fn a_given_gyro_bias_replaces_the_seeded_one_and_keeps_the_noise() {
+        let bias = Vec3::new(0.02, -0.015, 0.01);
+        let mut seeded = Sensors::new(7);
+        let mut given = Sensors::new(7).with_gyro_bias(bias);
+        assert_eq!(given.gyro_bias(), bias);
+        let (n, dt) = (4000, 1.0 / 400.0);
+        let mut mean = Vec3::ZERO;
+        for _ in 0..n {
+            let (a, b) = (seeded.imu(&at_rest(), dt), given.imu(&at_rest(), dt));
+            // The same noise: the two differ by the biases alone.
+            let d = (b.gyro - a.gyro) - (bias - seeded.gyro_bias());
+            assert!(d.norm() < 1e-6, "{d:?}");
+            mean += b.gyro * (1.0 / n as f32);
+        }
+        assert!((mean - bias).norm() < 3e-4, "mean gyro at rest {mean:?}");
     }
 }

@@ -225,3 +225,37 @@ fn a_motor_test_spins_the_rotors_asked_for_until_its_time_or_another_command() {
         Err(CommandRefusal::NoSuchRobot { .. })
     ));
 }
+
+#[test]
+fn a_robot_jogged_back_past_the_rails_start_is_off_its_mark_by_the_short_way() {
+    let s = straight_up_scenario(3.5);
+    let world = World::new(&s);
+    let mut mission = on_the_bench(&s);
+    let back = OperatorCommand::Jog {
+        robot: 1,
+        micrometres: -20_000,
+    };
+    assert_eq!(reply(&mut mission, &world, 1, back), Ok(()));
+    for tick in 2..2_000 {
+        mission.step(&world.input(tick, None));
+    }
+    assert_eq!(
+        reply(&mut mission, &world, 2_000, OperatorCommand::ConfirmRails),
+        Err(CommandRefusal::RobotOffMark {
+            robot: 1,
+            millimetres: -20
+        })
+    );
+    let forward = OperatorCommand::Jog {
+        robot: 1,
+        micrometres: 20_000,
+    };
+    assert_eq!(reply(&mut mission, &world, 2_001, forward), Ok(()));
+    for tick in 2_002..4_000 {
+        mission.step(&world.input(tick, None));
+    }
+    assert_eq!(
+        reply(&mut mission, &world, 4_000, OperatorCommand::ConfirmRails),
+        Ok(())
+    );
+}

@@ -92,8 +92,16 @@ impl Mission {
     /// Each robot at its start position, or the first that is not.
     fn robots_on_marks(&self) -> Result<(), CommandRefusal> {
         let initial = &self.scenario.robots.initial;
+        let rail = &self.scenario.payload.rail;
+        let half = 0.5 * rail.perimeter();
         for (j, (&at, &mark)) in self.robots.iter().zip(initial.iter()).enumerate() {
-            let off = at - mark;
+            // The shorter way round: a robot at 0 jogged back stands at the perimeter's end.
+            let ahead = rail.forward_gap(mark, at);
+            let off = if ahead > half {
+                ahead - 2.0 * half
+            } else {
+                ahead
+            };
             if off.abs() > MARK_TOLERANCE {
                 return Err(CommandRefusal::RobotOffMark {
                     robot: j as u8 + 1,
@@ -168,10 +176,8 @@ impl Mission {
             });
         }
         let rail = &self.scenario.payload.rail;
-        let perimeter = rail.perimeter();
         let mut target = self.robots.clone();
-        let moved = target[j] + metres;
-        target[j] = moved - math::floor(moved / perimeter) * perimeter;
+        target[j] = rail.wrap(target[j] + metres);
         let spacing = self.scenario.robots.min_spacing;
         let rail_move = RailMove::plan(
             rail,
