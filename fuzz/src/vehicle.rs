@@ -893,7 +893,7 @@ impl Vehicle {
             route: route.as_ref(),
             // The parameters' IMU offsets and hardware settings, as the firmware's control
             // task hands them over after a change.
-            config: core::mem::take(&mut self.config_changed).then_some(self.config),
+            bench: core::mem::take(&mut self.config_changed).then(|| (&self.config).into()),
             supervision: Supervision {
                 gcs_heartbeat: core::mem::take(&mut self.gcs_heartbeat),
                 // The plant's pack in HIL; off HIL the board's ADC (none on the host).

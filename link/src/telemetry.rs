@@ -244,9 +244,11 @@ pub struct VehicleSnapshot {
     pub armed: bool,
     /// Robots in use.
     pub robots: u8,
-    /// Each robot's commanded position along the rail, arc length, m (not a number until the
-    /// positions are confirmed).
+    /// Each robot's commanded position along the rail, arc length, m.
     pub rail: [f32; MAX_ROBOTS],
+    /// The rail positions are known (confirmed by the operator): until then the ground is
+    /// sent not a number for each.
+    pub rail_known: bool,
     /// Each robot's rotor thrust command, fraction of its maximum (zero unless armed).
     pub thrust: [f32; MAX_ROBOTS],
     /// The control loop's load: the worst step since the last `SYS_STATUS`, in thousandths
@@ -310,6 +312,7 @@ impl VehicleSnapshot {
         armed: false,
         robots: 0,
         rail: [0.0; MAX_ROBOTS],
+        rail_known: false,
         thrust: [0.0; MAX_ROBOTS],
         load_permille: 0,
         battery_mv: u16::MAX,
@@ -414,11 +417,13 @@ impl VehicleSnapshot {
     }
 
     /// `DEBUG_FLOAT_ARRAY` `rail` and its `data` (an extension field: its bytes, to send
-    /// with `Encoder::encode_extended`), one arc length per robot in use.
+    /// with `Encoder::encode_extended`), one arc length per robot in use (not a number while
+    /// the positions are not known).
     pub fn rail_positions(&self) -> (DEBUG_FLOAT_ARRAY_DATA, [u8; 4 * MAX_ROBOTS], usize) {
         let robots = usize::from(self.robots).min(MAX_ROBOTS);
         let mut data = [0u8; 4 * MAX_ROBOTS];
-        for (j, s) in self.rail[..robots].iter().enumerate() {
+        for (j, &s) in self.rail[..robots].iter().enumerate() {
+            let s = if self.rail_known { s } else { f32::NAN };
             data[4 * j..4 * j + 4].copy_from_slice(&s.to_le_bytes());
         }
         let array = DEBUG_FLOAT_ARRAY_DATA {
@@ -748,6 +753,7 @@ mod tests {
             rail: [
                 0.5, 1.25, 2.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0, 9.0,
             ],
+            rail_known: true,
             load_permille: 1500,
             battery_mv: u16::MAX,
             battery_ok: true,
@@ -764,6 +770,17 @@ mod tests {
             .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
             .collect();
         assert_eq!(arcs, [0.5, 1.25, 2.0]);
+        // Not confirmed: not a number for each robot.
+        let unknown = VehicleSnapshot {
+            rail_known: false,
+            ..snap
+        };
+        let (_, data, len) = unknown.rail_positions();
+        assert!(
+            data[..len]
+                .chunks(4)
+                .all(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]).is_nan())
+        );
         let q = snap.attitude_quaternion();
         assert_eq!(q.time_boot_ms, 12_345);
         assert_eq!([q.q1, q.q2, q.q3, q.q4], snap.attitude);

@@ -36,7 +36,7 @@ use shared::control::trajectory::FlightPhase;
 use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
 use shared::flight::Route;
-use shared::mission::bringup::{CalibrationFailure, CalibrationKind};
+use shared::mission::bringup::{BenchConfig, CalibrationFailure, CalibrationKind};
 use shared::mission::supervision::BatteryLevel;
 use shared::mission::{
     CommandRefusal, HardwareFaults, Mission, MissionConfig, MissionPlanner,
@@ -82,8 +82,8 @@ pub struct TickInput<'a> {
     /// A change of the ground station's route since the last step.
     pub route: Option<&'a RouteChange>,
     /// The parameters changed since the last step: the IMU's offsets and the hardware
-    /// settings of this configuration go in force now, with or without a payload.
-    pub config: Option<MissionConfig>,
+    /// settings go in force now, with or without a payload.
+    pub bench: Option<BenchConfig>,
 }
 
 /// A change of the ground station's route (docs/ground-link.md#missions).
@@ -421,7 +421,7 @@ impl Autonomy {
         if let Some(change) = input.route {
             self.change_route(change, &mut report);
         }
-        if let Some(config) = &input.config {
+        if let Some(config) = &input.bench {
             self.mission.configure_bench(config);
         }
         if let Some(result) = input.job.clone() {
@@ -521,11 +521,7 @@ impl Autonomy {
             thrust[j] = (out.thrusts[j] / max_thrust).clamp(0.0, 1.0);
             rail[j] = out.robots[j];
         }
-        // The ground is told the positions only once they are known.
-        let mut shown_rail = rail;
-        if !self.mission.rails_confirmed() {
-            shown_rail = [f32::NAN; MAX_ROBOTS];
-        }
+
         let (attitude, position) = (&out.nav.attitude, &out.nav.position);
         let q = attitude.attitude;
         // The mode, the route's progress and the landed state, for the ground at 50 Hz (each
@@ -563,7 +559,8 @@ impl Autonomy {
             position_valid: position.valid,
             armed: out.armed,
             robots: robots as u8,
-            rail: shown_rail,
+            rail,
+            rail_known: self.mission.rails_confirmed(),
             thrust,
             battery_mv: self
                 .mission

@@ -53,9 +53,9 @@ mod metadata {
 use super::autonomy::RouteChange;
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
 use super::{
-    ARMED, CALIBRATED, COMMANDS, CONFIG_CHANGED, GCS_HEARTBEAT, IN_HIL, LINK_BATTERY_MV,
-    MISSION_CONFIG, MISSION_ITEMS, MISSION_STATE, MOCAP, OUTBOX, RELOAD, ROUTE, ROUTE_SENT, SENSOR,
-    STATUS_CHANGES, TELEMETRY_CHANGED, TO_LOAD, VEHICLE, signing, telemetry, timesync,
+    ARMED, CALIBRATED, COMMANDS, GCS_HEARTBEAT, IN_HIL, LINK_BATTERY_MV, MISSION_CONFIG,
+    MISSION_ITEMS, MISSION_STATE, MOCAP, OUTBOX, RELOAD, ROUTE, ROUTE_SENT, SENSOR, STATUS_CHANGES,
+    TELEMETRY_CHANGED, TO_LOAD, VEHICLE, signing, telemetry, timesync,
 };
 use crate::board::{Board, Selected};
 
@@ -244,8 +244,7 @@ async fn open_params(flash: <Selected as Board>::ParamFlash) -> (ParamService, O
         }
     };
     let service = ParamService::new(values);
-    MISSION_CONFIG.lock(|c| c.set(service.values().config()));
-    CONFIG_CHANGED.store(true, Ordering::Release);
+    super::set_config(service.values().config());
     announce_origin(&service).await;
     (service, store)
 }
@@ -482,8 +481,7 @@ async fn handle_param(
             announce_origin(params).await;
         } else {
             // In force now for the loaded payload (the mission is not running) and the next.
-            MISSION_CONFIG.lock(|c| c.set(params.values().config()));
-            CONFIG_CHANGED.store(true, Ordering::Release);
+            super::set_config(params.values().config());
             RELOAD.signal(());
         }
     }

@@ -22,8 +22,8 @@ use super::autonomy::{Autonomy, CommandResult, JobResult, Severity, TickInput, T
 use super::comms::{Outbound, SensorSample};
 use super::logger::RingEnd;
 use super::{
-    ARMED, CALIBRATED, COMMANDS, CONFIG_CHANGED, GCS_HEARTBEAT, IDLE_COUNTS, IN_HIL, JOB_REQUESTS,
-    JOB_RESULTS, LINK_BATTERY_MV, LOADING, MISSION_CONFIG, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD,
+    ARMED, BENCH_CONFIG, CALIBRATED, COMMANDS, CONFIG_CHANGED, GCS_HEARTBEAT, IDLE_COUNTS, IN_HIL,
+    JOB_REQUESTS, JOB_RESULTS, LINK_BATTERY_MV, LOADING, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD,
     ROUTE, ROUTE_SENT, SENSOR, STATUS_CHANGES, VEHICLE,
 };
 use crate::board::{ActuatorOutputs, Board, Selected};
@@ -126,9 +126,9 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 loading,
                 route: route.as_ref(),
                 // The flag first: parameters set after it are in the configuration read.
-                config: if CONFIG_CHANGED.load(Ordering::Acquire) {
+                bench: if CONFIG_CHANGED.load(Ordering::Acquire) {
                     CONFIG_CHANGED.store(false, Ordering::Release);
-                    Some(MISSION_CONFIG.lock(|c| c.get()))
+                    Some(BENCH_CONFIG.lock(|c| c.get()))
                 } else {
                     None
                 },

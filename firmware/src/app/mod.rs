@@ -79,10 +79,25 @@ pub static MISSION_ITEMS: core::sync::atomic::AtomicU16 = core::sync::atomic::At
 pub static MISSION_CONFIG: Mutex<Cs, Cell<MissionConfig>> =
     Mutex::new(Cell::new(MissionConfig::DEFAULT));
 
-/// The parameters changed (at start, or a `PARAM_SET`): the control step puts the IMU's
-/// offsets and the hardware settings of [`MISSION_CONFIG`] in force (a load and a store each
-/// step; the configuration is read only when set).
+/// The parameters changed (at start, or a `PARAM_SET`): the control step puts
+/// [`BENCH_CONFIG`] in force (a load each step; the settings are read only when set).
 pub static CONFIG_CHANGED: AtomicBool = AtomicBool::new(false);
+
+/// The part of [`MISSION_CONFIG`] the mission takes without a payload description: the IMU's
+/// offsets and the hardware settings (small: the control step copies it).
+pub static BENCH_CONFIG: Mutex<Cs, Cell<shared::mission::bringup::BenchConfig>> =
+    Mutex::new(Cell::new(shared::mission::bringup::BenchConfig {
+        sensors: shared::mission::bringup::SensorOffsets::ZERO,
+        hardware: shared::mission::HardwareConfig::DEFAULT,
+    }));
+
+/// Puts `config` in force for the next payload description, and its bench part for the
+/// control step now.
+pub fn set_config(config: MissionConfig) {
+    MISSION_CONFIG.lock(|c| c.set(config));
+    BENCH_CONFIG.lock(|c| c.set((&config).into()));
+    CONFIG_CHANGED.store(true, Ordering::Release);
+}
 
 /// A calibration's offsets, from the control task for the receive task to store as
 /// parameters (docs/ground-link.md#bring-up-commands).

@@ -64,6 +64,25 @@ impl Default for SensorOffsets {
     }
 }
 
+/// The parameters the bench needs with or without a payload description: the IMU's offsets
+/// and the hardware settings (the motor test's thrust map and switch).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BenchConfig {
+    /// The IMU's offsets.
+    pub sensors: SensorOffsets,
+    /// The drivers' settings.
+    pub hardware: crate::mission::HardwareConfig,
+}
+
+impl From<&crate::mission::MissionConfig> for BenchConfig {
+    fn from(c: &crate::mission::MissionConfig) -> Self {
+        Self {
+            sensors: c.sensors,
+            hardware: c.hardware,
+        }
+    }
+}
+
 /// Which calibration (`MAV_CMD_PREFLIGHT_CALIBRATION`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CalibrationKind {

@@ -529,8 +529,13 @@ impl Mission {
             thrusts = [0.0; MAX_ROBOTS];
         }
         let stalled = input.faults.stalled_robots != 0;
-        let (spinning, calibrated) = self.bench_step(&input.imu, dt, stalled, &mut thrusts);
-        armed |= spinning;
+        let mut calibrated = None;
+        // Nothing on the bench in flight: one look.
+        if stalled || self.bench_busy() {
+            let spinning;
+            (spinning, calibrated) = self.bench_step(&input.imu, dt, stalled, &mut thrusts);
+            armed |= spinning;
+        }
         if !matches!(self.phase, Phase::Flying(_)) {
             cascade = None;
         }

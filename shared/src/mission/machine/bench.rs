@@ -7,7 +7,7 @@ use crate::control::navigator::ImuSample;
 use crate::control::thrust_map::ThrustMap;
 use crate::math;
 use crate::mission::bringup::{
-    CalibrationFailure, CalibrationKind, ImuCalibration, MotorTest, SensorOffsets,
+    BenchConfig, CalibrationFailure, CalibrationKind, ImuCalibration, MotorTest, SensorOffsets,
 };
 use crate::mission::interface::{CommandRefusal, OperatorCommand};
 use crate::rail::moves::{Positions, RailMove};
@@ -45,6 +45,7 @@ impl Bench {
         motor_test: None,
     };
 
+    #[inline]
     pub(super) fn busy(&self) -> bool {
         self.jog.is_some() || self.calibration.is_some() || self.motor_test.is_some()
     }
@@ -57,6 +58,7 @@ impl Mission {
     }
 
     /// A jog, a calibration or a motor test is under way.
+    #[inline]
     pub(super) fn bench_busy(&self) -> bool {
         self.bench.busy()
     }
@@ -74,7 +76,7 @@ impl Mission {
     /// Puts the parameters' IMU offsets and hardware settings in force without a payload
     /// description (the rest of `config` is taken when one is loaded). Not while the mission
     /// runs: a new offset in flight would step the attitude.
-    pub fn configure_bench(&mut self, config: &super::MissionConfig) {
+    pub fn configure_bench(&mut self, config: &BenchConfig) {
         if self.not_running() {
             self.config.sensors = config.sensors;
             self.config.hardware = config.hardware;
