@@ -21,7 +21,9 @@ use link::flight_log::topics::Topic;
 use shared::mission::params::TABLE;
 
 /// Flies rect-ex1 with its log written to a fresh file; the mission's outcome and the log.
-fn fly_logged(name: &str) -> (mission_run::MissionOutcome, PathBuf) {
+/// `confirm_rails`: the rails confirmed with the first step and the start with the next, as
+/// the HIL plant does.
+fn fly_logged(name: &str, confirm_rails: bool) -> (mission_run::MissionOutcome, PathBuf) {
     let dir = std::env::temp_dir().join(format!("flight-log-test-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("a temporary folder");
     let path = dir.join("rect-ex1.ulg");
@@ -29,6 +31,7 @@ fn fly_logged(name: &str) -> (mission_run::MissionOutcome, PathBuf) {
         scenario_file::load(&workspace().join("tests/scenarios/rect-ex1.toml")).expect("loads");
     let setup = MissionSetup {
         log: Some(path.clone()),
+        confirm_rails,
         ..MissionSetup::default()
     };
     let (outcome, _) =
@@ -72,7 +75,7 @@ fn u64_at(b: &[u8], at: usize) -> u64 {
 
 #[test]
 fn the_mission_log_is_ulog_with_every_topic_parameter_lift_and_phase() {
-    let (outcome, path) = fly_logged("structure");
+    let (outcome, path) = fly_logged("structure", false);
     let bytes = std::fs::read(&path).expect("the log was written");
     let all = messages(&bytes);
     assert_eq!(all[0].kind, b'B', "the flag bits come first");
@@ -196,7 +199,7 @@ fn the_mission_log_is_ulog_with_every_topic_parameter_lift_and_phase() {
 
 #[test]
 fn pyulog_opens_the_mission_log() {
-    let (_, path) = fly_logged("pyulog");
+    let (_, path) = fly_logged("pyulog", false);
     match pyulog_check(&path) {
         Ok(report) => {
             use std::io::Write;
@@ -247,7 +250,7 @@ fn the_firmware_in_the_loop_keeps_the_simulators_log_in_its_storage() {
     let Some(elf) = image_or_skip("flight log in the loop") else {
         return;
     };
-    let (_, host_log) = fly_logged("hil");
+    let (_, host_log) = fly_logged("hil", true);
     let storage = host_log.with_file_name("storage");
     let _ = std::fs::remove_dir_all(&storage);
     let output = Command::new(env!("CARGO_BIN_EXE_host-sim"))

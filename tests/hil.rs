@@ -430,7 +430,14 @@ fn the_firmware_answers_a_stopped_rotor_and_a_low_battery_in_the_loop() {
         .collect();
     let (host, _) = mission_run::run(
         &loaded.scenario,
-        &host_sim::inject::apply(&injections, MissionSetup::default()),
+        // As the plant does: the rails confirmed with the first step, the start with the next.
+        &host_sim::inject::apply(
+            &injections,
+            MissionSetup {
+                confirm_rails: true,
+                ..MissionSetup::default()
+            },
+        ),
         &mut |_, _, _| {},
     )
     .expect("host mission");
