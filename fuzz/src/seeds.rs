@@ -184,6 +184,34 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
             one(&OperatorCommand::LandNow.to_command_long()),
         ),
         (
+            "command-confirm-rails",
+            one(&OperatorCommand::ConfirmRails.to_command_long()),
+        ),
+        (
+            "command-jog",
+            one(&OperatorCommand::Jog {
+                robot: 2,
+                micrometres: 20_000,
+            }
+            .to_command_long()),
+        ),
+        (
+            "command-calibrate-gyro",
+            one(
+                &OperatorCommand::Calibrate(link::command::CalibrationKind::Gyro).to_command_long(),
+            ),
+        ),
+        (
+            "command-motor-test",
+            one(&OperatorCommand::MotorTest {
+                first: 1,
+                count: 2,
+                permille: 100,
+                millis: 1_000,
+            }
+            .to_command_long()),
+        ),
+        (
             "command-kill",
             one(&OperatorCommand::Kill.to_command_long()),
         ),
@@ -328,6 +356,7 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
     let mut g = Ground::new(None);
     g.upload(&rect)
         .send(&link::vehicle::gcs_heartbeat())
+        .send(&OperatorCommand::ConfirmRails.to_command_long())
         .send(&OperatorCommand::Start.to_command_long())
         .hil_steps(TICK_US, 40);
     seeds.push(("session-upload-start-hil", input(Options::default(), &g)));
@@ -335,6 +364,7 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
     let mut g = Ground::new(Some(SEED_KEY));
     g.upload(&rect)
         .send(&link::vehicle::gcs_heartbeat())
+        .send(&OperatorCommand::ConfirmRails.to_command_long())
         .send(&OperatorCommand::Start.to_command_long())
         .hil_steps(TICK_US, 40)
         .send(&OperatorCommand::Abort.to_command_long());
@@ -354,6 +384,7 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
     };
     let mut g = Ground::new(None);
     g.send(&link::vehicle::gcs_heartbeat())
+        .send(&OperatorCommand::ConfirmRails.to_command_long())
         .send(&OperatorCommand::Start.to_command_long());
     for _ in 0..80 {
         g.send(&link::vehicle::gcs_heartbeat());
@@ -364,6 +395,7 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
     let mut g = Ground::new(None);
     g.upload(&rect)
         .send(&link::vehicle::gcs_heartbeat())
+        .send(&OperatorCommand::ConfirmRails.to_command_long())
         .send(&OperatorCommand::Start.to_command_long());
     for _ in 0..40 {
         g.send(&link::vehicle::gcs_heartbeat());
@@ -379,6 +411,7 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
     // A parameter write and a kill while running.
     let mut g = Ground::new(None);
     g.send(&link::vehicle::gcs_heartbeat())
+        .send(&OperatorCommand::ConfirmRails.to_command_long())
         .send(&OperatorCommand::Start.to_command_long())
         .send(&link::vehicle::gcs_heartbeat())
         .send(&PARAM_SET_DATA {
@@ -413,6 +446,7 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
     raw.extend(bad);
     g.bytes.clear();
     g.send(&link::vehicle::gcs_heartbeat())
+        .send(&OperatorCommand::ConfirmRails.to_command_long())
         .send(&OperatorCommand::Start.to_command_long());
     raw.extend(&g.bytes);
     seeds.push(("raw-garbage-and-frames", raw));
