@@ -67,6 +67,8 @@ mavlink = mavutil.mavlink
 CHECKS_PARAM = "MIS_CHECKS_T"
 CHECKS_VALUE = 2.0
 # The MAVLink 2 signing key the ground station sets up (test only).
+# MAV_CMD_USER_1 with param1 = 1: the robots stand at their marks (docs/ground-link.md).
+CONFIRM_RAILS = 31010
 SIGNING_KEY = bytes(range(1, 33))
 # The map origin the ground station sets (SET_GPS_GLOBAL_ORIGIN): 1e-7 degrees, mm.
 ORIGIN = (-338688123, 1512093456, 58250)
@@ -680,6 +682,12 @@ def second_run(args, port):
         # The vehicle loads the description into its planner after it accepted it, and a start
         # meanwhile is TEMPORARILY_REJECTED (with a STATUSTEXT): the command protocol's answer
         # to try again, which a ground station does.
+        # A restart forgets where the robots stand: the operator confirms the rails again (the
+        # plant confirms them too, as its set-up, but a ground station may be quicker).
+        confirm = v.command(CONFIRM_RAILS, 1)
+        if confirm.result != mavlink.MAV_RESULT_ACCEPTED:
+            raise Failure(f"the rails' confirmation acknowledged {confirm.result} "
+                          f"(last texts: {v.texts[-3:]})")
         deadline = time.time() + 20
         while True:
             ack = v.command(mavlink.MAV_CMD_MISSION_START)
@@ -687,7 +695,7 @@ def second_run(args, port):
                 break
             time.sleep(0.2)
         if ack.result != mavlink.MAV_RESULT_ACCEPTED:
-            raise Failure(f"MISSION_START acknowledged {ack.result}")
+            raise Failure(f"MISSION_START acknowledged {ack.result} (last texts: {v.texts[-3:]})")
         v.text_matching("phase: preflight-checks", 20)
         answer = v.param_set("MAX_TILT", 0.3)
         if answer.param_value == 0.3:
