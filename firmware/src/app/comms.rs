@@ -302,16 +302,8 @@ async fn store_calibration(
         let mut id = [0u8; shared::mission::params::NAME_LEN];
         id[..name.len()].copy_from_slice(name.as_bytes());
         let answer = params.handle(&ParamRequest::Set { name: id, value }, None);
-        if let Some((index, value)) = answer.changed
-            && let Some(store) = store
-            && let Err(e) = store.save(index, value).await
-        {
-            OUTBOX
-                .send(report(
-                    Severity::Error,
-                    format_args!("param {name} in force but not stored: {e}"),
-                ))
-                .await;
+        if let Some((index, value)) = answer.changed {
+            save_param(store, index, value).await;
         }
         if answer.values != Values::None {
             OUTBOX
@@ -446,6 +438,22 @@ async fn reboot(command: CommandId) {
     cortex_m::peripheral::SCB::sys_reset();
 }
 
+/// Stores parameter `index` as `value`, already in force; says so when it cannot be stored.
+async fn save_param(store: &mut Option<Store>, index: usize, value: f32) {
+    let stored = match store {
+        Some(store) => store.save(index, value).await,
+        None => Err(link::store::StoreError::Other),
+    };
+    if let Err(e) = stored {
+        OUTBOX
+            .send(report(
+                Severity::Error,
+                format_args!("param {} in force but not stored: {e}", TABLE[index].name),
+            ))
+            .await;
+    }
+}
+
 /// Answers a parameter request, puts a changed value in force and stores it. The value is
 /// stored before its `PARAM_VALUE` goes out, so a ground station that saw the answer may cut
 /// the power.
@@ -465,18 +473,7 @@ async fn handle_param(
     };
     let answer = params.handle(&request, refuse_changes);
     if let Some((index, value)) = answer.changed {
-        let stored = match store {
-            Some(store) => store.save(index, value).await,
-            None => Err(link::store::StoreError::Other),
-        };
-        if let Err(e) = stored {
-            OUTBOX
-                .send(report(
-                    Severity::Error,
-                    format_args!("param {} in force but not stored: {e}", TABLE[index].name),
-                ))
-                .await;
-        }
+        save_param(store, index, value).await;
         if is_origin(index) {
             announce_origin(params).await;
         } else {
