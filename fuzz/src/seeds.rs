@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use link::MessageData;
-use link::command::{OperatorCommand, command_long};
+use link::command::{MotorTestRequest, OperatorCommand, command_long};
 use link::frame::{Encoder, Frame};
 use link::ftp::{FtpMessage, Opcode, PAYLOAD_PATH, Progress, Server, Upload};
 use link::hil::{ImuSample, MocapFix};
@@ -203,12 +203,12 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
         ),
         (
             "command-motor-test",
-            one(&OperatorCommand::MotorTest {
+            one(&OperatorCommand::MotorTest(MotorTestRequest {
                 first: 1,
                 count: 2,
                 permille: 100,
                 millis: 1_000,
-            }
+            })
             .to_command_long()),
         ),
         (

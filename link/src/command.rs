@@ -29,7 +29,7 @@ use crate::MessageData;
 use crate::command_wire::{CommandAck, CommandId, CommandInt, CommandLong};
 use crate::modes::FlightMode;
 use crate::msg::{COMMAND_LONG_DATA, HOME_POSITION_DATA, MavCmd, MavFrame, MavResult};
-pub use shared::mission::bringup::CalibrationKind;
+pub use shared::mission::bringup::{CalibrationKind, MotorTestRequest};
 
 /// A command as [`classify`] reads it, from a `COMMAND_LONG` or a `COMMAND_INT`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -145,16 +145,7 @@ pub enum OperatorCommand {
     /// An IMU calibration at rest.
     Calibrate(CalibrationKind),
     /// Spin some rotors.
-    MotorTest {
-        /// The first robot, from 1.
-        first: u8,
-        /// How many.
-        count: u8,
-        /// The ESC command, thousandths.
-        permille: u16,
-        /// How long, ms.
-        millis: u16,
-    },
+    MotorTest(MotorTestRequest),
 }
 
 impl OperatorCommand {
@@ -167,7 +158,7 @@ impl OperatorCommand {
             Self::Kill => MavCmd::MAV_CMD_DO_FLIGHTTERMINATION,
             Self::Hold | Self::Resume => MavCmd::MAV_CMD_DO_PAUSE_CONTINUE,
             Self::Calibrate(_) => MavCmd::MAV_CMD_PREFLIGHT_CALIBRATION,
-            Self::MotorTest { .. } => MavCmd::MAV_CMD_DO_MOTOR_TEST,
+            Self::MotorTest(_) => MavCmd::MAV_CMD_DO_MOTOR_TEST,
             Self::ConfirmRails => CONFIRM_RAILS,
             Self::Jog { .. } => JOG,
         }
@@ -193,17 +184,7 @@ impl From<OperatorCommand> for shared::mission::OperatorCommand {
             OperatorCommand::ConfirmRails => Self::ConfirmRails,
             OperatorCommand::Jog { robot, micrometres } => Self::Jog { robot, micrometres },
             OperatorCommand::Calibrate(kind) => Self::Calibrate(kind),
-            OperatorCommand::MotorTest {
-                first,
-                count,
-                permille,
-                millis,
-            } => Self::MotorTest {
-                first,
-                count,
-                permille,
-                millis,
-            },
+            OperatorCommand::MotorTest(request) => Self::MotorTest(request),
         }
     }
 }
@@ -222,17 +203,7 @@ impl From<shared::mission::OperatorCommand> for OperatorCommand {
             Mission::ConfirmRails => Self::ConfirmRails,
             Mission::Jog { robot, micrometres } => Self::Jog { robot, micrometres },
             Mission::Calibrate(kind) => Self::Calibrate(kind),
-            Mission::MotorTest {
-                first,
-                count,
-                permille,
-                millis,
-            } => Self::MotorTest {
-                first,
-                count,
-                permille,
-                millis,
-            },
+            Mission::MotorTest(request) => Self::MotorTest(request),
         }
     }
 }
@@ -258,12 +229,12 @@ impl OperatorCommand {
                 param5: 2.0,
                 ..command_long(MavCmd::MAV_CMD_PREFLIGHT_CALIBRATION, 0.0, 0.0)
             },
-            Self::MotorTest {
+            Self::MotorTest(MotorTestRequest {
                 first,
                 count,
                 permille,
                 millis,
-            } => COMMAND_LONG_DATA {
+            }) => COMMAND_LONG_DATA {
                 param3: f32::from(permille) * 0.1,
                 param4: f32::from(millis) * 1e-3,
                 param5: f32::from(count),
@@ -423,12 +394,12 @@ fn bench_request(command: &Command) -> Request {
         };
         match (motor, count, command_fraction) {
             (Some(motor), Some(count), Some(c)) if param4.is_finite() => {
-                Request::Operator(OperatorCommand::MotorTest {
+                Request::Operator(OperatorCommand::MotorTest(MotorTestRequest {
                     first: motor as u8,
                     count: count as u8,
                     permille: (c * 1000.0 + 0.5) as u16,
                     millis: (param4.clamp(0.0, 60.0) * 1000.0) as u16,
-                })
+                }))
             }
             _ => denied,
         }
@@ -619,12 +590,12 @@ mod tests {
             },
             OperatorCommand::Calibrate(CalibrationKind::Gyro),
             OperatorCommand::Calibrate(CalibrationKind::Level),
-            OperatorCommand::MotorTest {
+            OperatorCommand::MotorTest(MotorTestRequest {
                 first: 2,
                 count: 3,
                 permille: 150,
                 millis: 2_000,
-            },
+            }),
         ] {
             assert_eq!(
                 classify(&c.to_command_long()),
@@ -649,22 +620,22 @@ mod tests {
         // MAVProxy's `motortest 1 0 12 2`: motor 1 at 12 % for 2 s, the count left 0 (one).
         assert_eq!(
             test(1.0, 0.0, 12.0, 2.0, 0.0),
-            Request::Operator(OperatorCommand::MotorTest {
+            Request::Operator(OperatorCommand::MotorTest(MotorTestRequest {
                 first: 1,
                 count: 1,
                 permille: 120,
                 millis: 2_000
-            })
+            }))
         );
         // A 1150 us pulse is 15 %.
         assert_eq!(
             test(4.0, 1.0, 1150.0, 1.0, 1.0),
-            Request::Operator(OperatorCommand::MotorTest {
+            Request::Operator(OperatorCommand::MotorTest(MotorTestRequest {
                 first: 4,
                 count: 1,
                 permille: 150,
                 millis: 1_000
-            })
+            }))
         );
         let denied = Request::Refused(MavResult::MAV_RESULT_DENIED);
         assert_eq!(test(0.0, 0.0, 10.0, 1.0, 0.0), denied, "motor 0");

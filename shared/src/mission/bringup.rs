@@ -267,6 +267,19 @@ impl ImuCalibration {
     }
 }
 
+/// A motor test as the operator asks for it (`MAV_CMD_DO_MOTOR_TEST`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MotorTestRequest {
+    /// The first robot, from 1.
+    pub first: u8,
+    /// How many robots from the first.
+    pub count: u8,
+    /// The ESC command, thousandths of full.
+    pub permille: u16,
+    /// How long, ms (cut to 3 s).
+    pub millis: u16,
+}
+
 /// A motor test under way: robots `first .. first + count` (from 0) at an ESC command.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MotorTest {

@@ -5,7 +5,7 @@
 use crate::control::imu_monitor::ImuFailure;
 use crate::control::navigator::{ImuSample, MocapFix, NavState};
 use crate::flight::{AdaptEvent, CascadeSetpoints};
-use crate::mission::bringup::{CalibrationFailure, CalibrationKind};
+use crate::mission::bringup::{CalibrationFailure, CalibrationKind, MotorTestRequest};
 use crate::mission::jobs::JobRequest;
 use crate::mission::phases::{AbortReason, Phase, Transition};
 use crate::mission::supervision::{Notice, Supervision};
@@ -40,16 +40,7 @@ pub enum OperatorCommand {
     /// An IMU calibration at rest.
     Calibrate(CalibrationKind),
     /// Spin some rotors at an ESC command for a while (rotors off the payload: props off).
-    MotorTest {
-        /// The first robot, from 1.
-        first: u8,
-        /// How many robots from the first.
-        count: u8,
-        /// The ESC command, thousandths of full.
-        permille: u16,
-        /// How long, ms (cut to 3 s).
-        millis: u16,
-    },
+    MotorTest(MotorTestRequest),
 }
 
 impl OperatorCommand {
@@ -65,7 +56,7 @@ impl OperatorCommand {
             Self::ConfirmRails => "confirm rails",
             Self::Jog { .. } => "jog",
             Self::Calibrate(_) => "calibrate",
-            Self::MotorTest { .. } => "motor test",
+            Self::MotorTest(_) => "motor test",
         }
     }
 
@@ -74,7 +65,7 @@ impl OperatorCommand {
     pub fn is_bench(self) -> bool {
         matches!(
             self,
-            Self::ConfirmRails | Self::Jog { .. } | Self::Calibrate(_) | Self::MotorTest { .. }
+            Self::ConfirmRails | Self::Jog { .. } | Self::Calibrate(_) | Self::MotorTest(_)
         )
     }
 }

@@ -750,7 +750,7 @@ impl Mission {
             OperatorCommand::ConfirmRails
             | OperatorCommand::Jog { .. }
             | OperatorCommand::Calibrate(_)
-            | OperatorCommand::MotorTest { .. } => Ok(()),
+            | OperatorCommand::MotorTest(_) => Ok(()),
         };
         (Some(CommandReply { command, outcome }), transition)
     }

@@ -2,7 +2,7 @@
 //! pre-arm check, the jog, the IMU's calibrations and the motor test, on the ground only.
 
 use super::*;
-use shared::mission::bringup::{CALIBRATION_SAMPLES, CalibrationKind};
+use shared::mission::bringup::{CALIBRATION_SAMPLES, CalibrationKind, MotorTestRequest};
 
 /// A flight controller's mission: unloaded, then given `s` (its rails unconfirmed).
 fn on_the_bench(s: &Scenario) -> Mission {
@@ -82,12 +82,12 @@ fn the_start_waits_for_the_rails_and_each_robot_on_its_mark() {
         OperatorCommand::ConfirmRails,
         jog,
         OperatorCommand::Calibrate(CalibrationKind::Gyro),
-        OperatorCommand::MotorTest {
+        OperatorCommand::MotorTest(MotorTestRequest {
             first: 1,
             count: 1,
             permille: 100,
             millis: 1000,
-        },
+        }),
     ] {
         assert_eq!(
             reply(&mut mission, &world, tick + 2, c),
@@ -166,12 +166,12 @@ fn a_motor_test_spins_the_rotors_asked_for_until_its_time_or_another_command() {
     let s = straight_up_scenario(3.5);
     let world = World::new(&s);
     let mut mission = on_the_bench(&s);
-    let test = OperatorCommand::MotorTest {
+    let test = OperatorCommand::MotorTest(MotorTestRequest {
         first: 2,
         count: 1,
         permille: 200,
         millis: 500,
-    };
+    });
     let out = mission.step(&world.input(1, Some(test)));
     assert_eq!(out.reply.map(|r| r.outcome), Some(Ok(())));
     assert!(out.armed);
@@ -215,12 +215,12 @@ fn a_motor_test_spins_the_rotors_asked_for_until_its_time_or_another_command() {
             &mut mission,
             &world,
             402,
-            OperatorCommand::MotorTest {
+            OperatorCommand::MotorTest(MotorTestRequest {
                 first: n,
                 count: 2,
                 permille: 100,
                 millis: 100
-            }
+            })
         ),
         Err(CommandRefusal::NoSuchRobot { .. })
     ));

@@ -7,7 +7,8 @@ use crate::control::navigator::ImuSample;
 use crate::control::thrust_map::ThrustMap;
 use crate::math;
 use crate::mission::bringup::{
-    BenchConfig, CalibrationFailure, CalibrationKind, ImuCalibration, MotorTest, SensorOffsets,
+    BenchConfig, CalibrationFailure, CalibrationKind, ImuCalibration, MotorTest, MotorTestRequest,
+    SensorOffsets,
 };
 use crate::mission::interface::{CommandRefusal, OperatorCommand};
 use crate::rail::moves::{Positions, RailMove};
@@ -125,7 +126,7 @@ impl Mission {
             return Err(CommandRefusal::NoPayload);
         }
         // A new motor test replaces one under way; anything else waits for the bench.
-        if self.bench.busy() && !matches!(command, OperatorCommand::MotorTest { .. }) {
+        if self.bench.busy() && !matches!(command, OperatorCommand::MotorTest(_)) {
             return Err(CommandRefusal::BenchBusy);
         }
         match command {
@@ -139,12 +140,12 @@ impl Mission {
             OperatorCommand::Calibrate(kind) => {
                 self.bench.calibration = Some(ImuCalibration::new(kind));
             }
-            OperatorCommand::MotorTest {
+            OperatorCommand::MotorTest(MotorTestRequest {
                 first,
                 count,
                 permille,
                 millis,
-            } => {
+            }) => {
                 if !self.config.hardware.motor_test_enabled {
                     return Err(CommandRefusal::MotorTestDisabled);
                 }
@@ -199,7 +200,7 @@ impl Mission {
 
     /// A command stops a motor test under way (the test's own command starts a new one).
     pub(super) fn stop_motor_test_for(&mut self, command: OperatorCommand) {
-        if !matches!(command, OperatorCommand::MotorTest { .. }) {
+        if !matches!(command, OperatorCommand::MotorTest(_)) {
             self.bench.motor_test = None;
         }
     }
