@@ -1,6 +1,7 @@
 //! The vehicle's MAVLink link as plain, synchronous, `no_std` logic:
 //! what the firmware and the hardware-in-the-loop plant say to each other, and how.
 //!
+//! - [`bandwidth`]: the link's rate as a budget of bytes (what may wait goes within it).
 //! - [`flight_log`]: what the vehicle records of a mission, as ULog.
 //! - [`frame`]: MAVLink 2 framing: a byte-at-a-time parser that survives any byte stream, and
 //!   the encoder (the `mavlink` crate's message types, CRCs and payload encoding).
@@ -14,11 +15,13 @@
 //! - [`command_wire`]: those two messages with the command as its number.
 //! - [`ftp`]: MAVLink FTP: the vehicle's minimal server (one writable file, the payload
 //!   description; read-only files, the parameter metadata) and the ground side's upload.
+//! - [`link_health`]: what the link dropped, counted for `SYS_STATUS` and told.
 //! - [`log_transfer`]: MAVLink's log protocol: the flight logs listed, downloaded, erased.
 //! - [`mission`]: MAVLink's mission protocol: a ground station's route uploaded (checked,
 //!   atomic, with timeouts), downloaded, cleared, flown from an item; stored.
 //! - [`modes`]: the flight modes, in PX4's numbers and the standard modes protocol.
 //! - [`param`]: MAVLink's parameter protocol over the mission's parameter table.
+//! - [`param_lists`]: the parameter lists in flight, one per requester, sent as room allows.
 //! - [`slots`]: the payload description's two power-cut-safe slots.
 //! - [`store`]: the parameters' storage (`sequential-storage` on NOR flash), power-cut safe.
 //! - [`signing`]: MAVLink 2 message signing (SHA-256), both ways.
@@ -43,6 +46,7 @@ compile_error!("link: enable `std` (host) or `embedded` (firmware), not both");
 #[cfg(test)]
 extern crate std;
 
+pub mod bandwidth;
 pub mod command;
 pub mod command_wire;
 pub mod flight_log;
@@ -51,11 +55,13 @@ pub mod ftp;
 pub mod geo;
 pub mod hil;
 pub mod hil_ethernet;
+pub mod link_health;
 pub mod log_transfer;
 pub mod mission;
 pub mod modes;
 pub mod odometry;
 pub mod param;
+pub mod param_lists;
 pub mod signing;
 pub mod slots;
 pub mod status;
