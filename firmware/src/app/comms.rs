@@ -11,16 +11,18 @@
 
 use core::sync::atomic::Ordering;
 
-use embassy_futures::select::{Either3, select3};
+use embassy_futures::select::{select3, select4};
 use embassy_time::{Duration, Instant, Timer};
 use embedded_io_async::{Read, Write};
 use link::MessageData;
+use link::bandwidth::LinkBudget;
 use link::command::{Request, ack};
 use link::command_wire::CommandId;
 use link::frame::{Encoder, Frame, Parser};
 use link::ftp::{FileEvent, FtpMessage, Server, component_metadata};
 use link::geo::{GeoOrigin, OriginError};
 use link::hil::{Actuators, ImuSample};
+use link::link_health::LinkHealth;
 use link::log_transfer::{LogReply, LogRequest};
 use link::mission::stored::{self, MAX_STORED_LEN};
 use link::mission::wire::{MissionMessage, MissionReply};
@@ -31,6 +33,7 @@ use link::msg::{
     HOME_POSITION_DATA, MavResult, MavSeverity, TIMESYNC_DATA,
 };
 use link::param::{ParamRequest, ParamService, Values, value_message};
+use link::param_lists::ParamLists;
 use link::signing::{KEY_LEN, Verdict};
 use link::status::{MissionState, Text, chunks, heartbeat, named_float, named_int};
 use link::store::ParamStore;
@@ -53,9 +56,9 @@ mod metadata {
 use super::autonomy::RouteChange;
 use super::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity, Value};
 use super::{
-    ARMED, CALIBRATED, COMMANDS, GCS_HEARTBEAT, IN_HIL, LINK_BATTERY_MV, MISSION_CONFIG,
-    MISSION_ITEMS, MISSION_STATE, MOCAP, OUTBOX, RELOAD, ROUTE, ROUTE_SENT, SENSOR, STATUS_CHANGES,
-    TELEMETRY_CHANGED, TO_LOAD, VEHICLE, signing, telemetry, timesync,
+    ARMED, BULK, CALIBRATED, COMMANDS, GCS_HEARTBEAT, IN_HIL, LINK, LINK_BATTERY_MV, LIST_STARTED,
+    MISSION_CONFIG, MISSION_ITEMS, MISSION_STATE, MOCAP, OUTBOX, RELOAD, ROUTE, ROUTE_SENT, SENSOR,
+    STATUS_CHANGES, STEP_OUT, TELEMETRY_CHANGED, TO_LOAD, VEHICLE, signing, telemetry, timesync,
 };
 use crate::board::{Board, Selected};
 
@@ -89,33 +92,31 @@ pub struct PendingCommand {
     pub from: Sender,
 }
 
-/// What the send task sends.
+/// One control step's messages, sent before anything else queued (in HIL the plant waits for
+/// them).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepMessages {
+    /// The vehicle's time of the step, us.
+    pub time_us: u64,
+    /// Texts and values.
+    pub report: Report,
+    /// The step's command and how it was taken.
+    pub ack: Option<(PendingCommand, CommandResult)>,
+    /// A command begun earlier (a calibration) that ended this step, and how.
+    pub done: Option<(PendingCommand, CommandResult)>,
+    /// The mission state after the step.
+    pub state: MissionState,
+    /// In HIL: the actuator commands for the plant.
+    pub actuators: Option<Actuators>,
+}
+
+/// Replies, texts and values the send task sends after a step's messages and the heartbeat.
+// A report is 728 bytes, the other replies a few: the queue holds four, and no_std has no box.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum Outbound {
-    /// One control step's messages.
-    Step {
-        /// The vehicle's time of the step, us.
-        time_us: u64,
-        /// Texts and values.
-        report: Report,
-        /// The step's command and how it was taken.
-        ack: Option<(PendingCommand, CommandResult)>,
-        /// A command begun earlier (a calibration) that ended this step, and how.
-        done: Option<(PendingCommand, CommandResult)>,
-        /// The mission state after the step.
-        state: MissionState,
-        /// In HIL: the actuator commands for the plant.
-        actuators: Option<Actuators>,
-    },
     /// Texts and values outside a step.
     Report(Report),
-    /// An FTP answer.
-    Ftp {
-        /// The answer.
-        message: FtpMessage,
-        /// To whom.
-        to: Sender,
-    },
     /// A command's acknowledgement decided by the link itself.
     Ack {
         /// The command.
@@ -127,19 +128,34 @@ pub enum Outbound {
     Identity,
     /// `COMPONENT_METADATA` (where the general metadata file is), on request.
     ComponentMetadata,
-    /// `PARAM_VALUE`s of these values.
-    Params {
-        /// The values in force.
-        values: ParamValues,
-        /// Which to send.
-        which: Values,
-    },
+    /// The `PARAM_VALUE` of this index, from the values in force ([`LinkShared`]).
+    Param(usize),
     /// `TIMESYNC`: an answer to a request.
     TimeSync {
         /// The vehicle's time, ns.
         tc1: i64,
         /// The request's time.
         ts1: i64,
+    },
+    /// `AVAILABLE_MODES`: the mode of this index (from 1), or every mode (0).
+    AvailableModes(u8),
+    /// `CURRENT_MODE`, on request.
+    CurrentMode,
+    /// `GPS_GLOBAL_ORIGIN`, the map origin in force (at start, set, or asked for).
+    Origin,
+    /// `HOME_POSITION`, on request.
+    Home,
+}
+
+/// A bulk transfer's message: sent when nothing else waits and the link has room.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Bulk {
+    /// An FTP answer.
+    Ftp {
+        /// The answer.
+        message: FtpMessage,
+        /// To whom.
+        to: Sender,
     },
     /// A mission-protocol reply.
     Mission {
@@ -148,17 +164,48 @@ pub enum Outbound {
         /// To whom (system, component).
         to: Peer,
     },
-    /// `AVAILABLE_MODES`: the mode of this index (from 1), or every mode (0).
-    AvailableModes(u8),
-    /// `CURRENT_MODE`, on request.
-    CurrentMode,
     /// A log-protocol answer (`LOG_ENTRY`, `LOG_DATA`), from the logger task.
     Log(LogReply),
-    /// The map origin in force (at start, set, or asked for): kept for the global position,
-    /// and sent as `GPS_GLOBAL_ORIGIN`.
-    Origin(GeoOrigin),
-    /// `HOME_POSITION`, on request.
-    Home,
+}
+
+/// What the receive and send tasks share besides their queues ([`super::LINK`]).
+pub struct LinkShared {
+    /// The parameters in force (the receive task's, copied at each change): the send task's
+    /// `PARAM_VALUE`s and map origin come from them.
+    pub values: ParamValues,
+    /// The parameter lists in flight.
+    pub lists: ParamLists,
+    /// What the link dropped.
+    pub health: LinkHealth,
+}
+
+impl LinkShared {
+    /// At start: the default values, no list, nothing dropped.
+    pub const START: Self = Self {
+        values: ParamValues::DEFAULT,
+        lists: ParamLists::new(),
+        health: LinkHealth::new(),
+    };
+}
+
+/// Queues a reply for the send task without waiting: one that finds the queue full is dropped
+/// and counted (docs/ground-link.md#under-a-flood).
+fn reply(message: Outbound) {
+    if OUTBOX.try_send(message).is_err() {
+        LINK.lock(|l| l.borrow_mut().health.reply_dropped());
+    }
+}
+
+/// Queues a bulk transfer's message without waiting, as [`reply`].
+fn bulk(message: Bulk) {
+    if BULK.try_send(message).is_err() {
+        LINK.lock(|l| l.borrow_mut().health.reply_dropped());
+    }
+}
+
+/// Hands the values in force to the send task (after every change).
+fn publish(params: &ParamService) {
+    LINK.lock(|l| l.borrow_mut().values = params.values().clone());
 }
 
 /// The parameters' store on this board.
@@ -170,6 +217,12 @@ const LINK_ID: u8 = 0;
 /// Oldest a motion-capture fix may be when it arrives for its own stamp to be used, us (the
 /// attitude estimator keeps 160 ms of history to compensate a fix's latency).
 const MAX_FIX_AGE_US: u64 = 150_000;
+
+/// The link's rate for what may wait (replies, telemetry, bulk transfers), bytes a second:
+/// TELEM1's 921,600 baud. USB and the QEMU board's links carry more, so it holds for each.
+const LINK_RATE: u32 = link::bandwidth::bytes_per_second(921_600);
+/// Most bytes the link's budget holds after a quiet spell (a few messages at once).
+const LINK_BURST: u32 = 1024;
 
 /// Largest payload description file the vehicle takes.
 const FILE_CAPACITY: usize = MAX_ENCODED_LEN;
@@ -245,7 +298,9 @@ async fn open_params(flash: <Selected as Board>::ParamFlash) -> (ParamService, O
     };
     let service = ParamService::new(values);
     super::set_config(service.values().config());
-    announce_origin(&service).await;
+    // Waited for, as the texts above: the send task may not have begun.
+    publish(&service);
+    OUTBOX.send(Outbound::Origin).await;
     (service, store)
 }
 
@@ -274,6 +329,10 @@ pub async fn receive(
             let inbound = dispatch(frame, integrity);
             handle(inbound, verdict, ftp, mission, &mut params, &mut store).await;
         }
+        LINK.lock(|l| l.borrow_mut().health.parsed(parser.stats()));
+        // A flood of bytes (each read ready at once) must not keep the send task, on this
+        // executor, from the control step's messages and the heartbeat.
+        embassy_futures::yield_now().await;
         // An upload's timeout, looked at whenever bytes come (in flight at least the ground
         // station's heartbeat, once a second).
         if let Some(outcome) = mission.poll(Instant::now().as_micros()) {
@@ -305,16 +364,26 @@ async fn store_calibration(
         if let Some((index, value)) = answer.changed {
             save_param(store, index, value).await;
         }
-        if answer.values != Values::None {
-            OUTBOX
-                .send(Outbound::Params {
-                    values: params.values().clone(),
-                    which: answer.values,
-                })
-                .await;
-        }
+        send_values(params, answer.values, None);
     }
     MISSION_CONFIG.lock(|c| c.set(params.values().config()));
+}
+
+/// Sends the `PARAM_VALUE`s a parameter request asks for, from the values in force (handed to
+/// the send task first): one at once, every one as `from`'s list, which a new request from
+/// the same sender restarts (docs/ground-link.md#under-a-flood).
+fn send_values(params: &ParamService, which: Values, from: Option<Sender>) {
+    publish(params);
+    match (which, from) {
+        (Values::None, _) => {}
+        (Values::One(index), _) => reply(Outbound::Param(index)),
+        (Values::All, Some(from)) => {
+            LINK.lock(|l| l.borrow_mut().lists.request(from));
+            LIST_STARTED.signal(());
+        }
+        // Every value without a requester: not asked for.
+        (Values::All, None) => {}
+    }
 }
 
 /// Loads the stored payload description, if one is stored and passes the checks, as if it had
@@ -378,12 +447,10 @@ async fn restore_signing(store: &mut Option<Store>) {
 /// [`Board::key_setup_allowed`]); stores it before saying so.
 async fn setup_signing(key: [u8; KEY_LEN], timestamp: u64, store: &mut Option<Store>) {
     if !<Selected as Board>::key_setup_allowed() {
-        OUTBOX
-            .send(report(
-                Severity::Warning,
-                format_args!("signing: key refused: it is set over USB only"),
-            ))
-            .await;
+        reply(report(
+            Severity::Warning,
+            format_args!("signing: key refused: it is set over USB only"),
+        ));
         return;
     }
     let stored = match store {
@@ -413,7 +480,7 @@ async fn setup_signing(key: [u8; KEY_LEN], timestamp: u64, store: &mut Option<St
         }
         r
     };
-    OUTBOX.send(Outbound::Report(r)).await;
+    reply(Outbound::Report(r));
 }
 
 /// `MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN`: refused while armed or while the mission runs;
@@ -445,12 +512,10 @@ async fn save_param(store: &mut Option<Store>, index: usize, value: f32) {
         None => Err(link::store::StoreError::Other),
     };
     if let Err(e) = stored {
-        OUTBOX
-            .send(report(
-                Severity::Error,
-                format_args!("param {} in force but not stored: {e}", TABLE[index].name),
-            ))
-            .await;
+        reply(report(
+            Severity::Error,
+            format_args!("param {} in force but not stored: {e}", TABLE[index].name),
+        ));
     }
 }
 
@@ -459,6 +524,7 @@ async fn save_param(store: &mut Option<Store>, index: usize, value: f32) {
 /// the power.
 async fn handle_param(
     request: ParamRequest,
+    from: Sender,
     verdict: Verdict,
     params: &mut ParamService,
     store: &mut Option<Store>,
@@ -475,25 +541,16 @@ async fn handle_param(
     if let Some((index, value)) = answer.changed {
         save_param(store, index, value).await;
         if is_origin(index) {
-            announce_origin(params).await;
+            announce_origin(params);
         } else {
             // In force now for the loaded payload (the mission is not running) and the next.
             super::set_config(params.values().config());
             RELOAD.signal(());
         }
     }
-    if answer.values != Values::None {
-        OUTBOX
-            .send(Outbound::Params {
-                values: params.values().clone(),
-                which: answer.values,
-            })
-            .await;
-    }
+    send_values(params, answer.values, Some(from));
     if let Some(text) = &answer.text {
-        OUTBOX
-            .send(report(Severity::Warning, format_args!("{text}")))
-            .await;
+        reply(report(Severity::Warning, format_args!("{text}")));
     }
 }
 
@@ -501,59 +558,43 @@ async fn handle_param(
 /// logs lists none, and an erase must be signed once signing is on.
 async fn handle_log(request: LogRequest, verdict: Verdict) {
     if request == LogRequest::Erase && !verdict.trusted() {
-        OUTBOX
-            .send(report(
-                Severity::Warning,
-                format_args!("log erase refused: {}", verdict.reason()),
-            ))
-            .await;
+        reply(report(
+            Severity::Warning,
+            format_args!("log erase refused: {}", verdict.reason()),
+        ));
         return;
     }
     if !super::logger::request(request) {
         match request {
             LogRequest::List { .. } => {
-                OUTBOX
-                    .send(Outbound::Log(LogReply::Entry(
-                        link::log_transfer::no_logs_entry(),
-                    )))
-                    .await;
+                bulk(Bulk::Log(LogReply::Entry(
+                    link::log_transfer::no_logs_entry(),
+                )));
             }
             LogRequest::End => {}
             LogRequest::Data { .. } | LogRequest::Erase => {
-                OUTBOX
-                    .send(report(
-                        Severity::Warning,
-                        format_args!("flight logs: this board keeps none"),
-                    ))
-                    .await;
+                reply(report(
+                    Severity::Warning,
+                    format_args!("flight logs: this board keeps none"),
+                ));
             }
         }
     }
 }
 
 async fn refuse(command: CommandId, result: MavResult, why: &str) {
-    OUTBOX.send(Outbound::Ack { command, result }).await;
-    OUTBOX
-        .send(report(
-            Severity::Warning,
-            format_args!("command {} refused: {why}", command.0),
-        ))
-        .await;
+    reply(Outbound::Ack { command, result });
+    reply(report(
+        Severity::Warning,
+        format_args!("command {} refused: {why}", command.0),
+    ));
 }
 
-/// Hands the map origin in force to the send task (which sends `GPS_GLOBAL_ORIGIN`); says so
+/// Hands the map origin in force to the send task, which sends `GPS_GLOBAL_ORIGIN` and says
 /// when the global position cannot be given (docs/ground-link.md#the-map-origin).
-async fn announce_origin(params: &ParamService) {
-    let origin = params.origin();
-    if let Err(e) = origin.check() {
-        OUTBOX
-            .send(report(
-                Severity::Warning,
-                format_args!("origin: unusable ({e}); no global position"),
-            ))
-            .await;
-    }
-    OUTBOX.send(Outbound::Origin(origin)).await;
+fn announce_origin(params: &ParamService) {
+    publish(params);
+    reply(Outbound::Origin);
 }
 
 /// The origin a `SET_GPS_GLOBAL_ORIGIN` or `MAV_CMD_DO_SET_GLOBAL_ORIGIN` asks for, checked:
@@ -584,12 +625,10 @@ async fn set_origin(
     match checked_origin(origin, verdict) {
         Ok(origin) => store_origin(&origin, params, store).await,
         Err(why) => {
-            OUTBOX
-                .send(report(
-                    Severity::Warning,
-                    format_args!("origin not changed: {why}"),
-                ))
-                .await;
+            reply(report(
+                Severity::Warning,
+                format_args!("origin not changed: {why}"),
+            ));
         }
     }
 }
@@ -606,7 +645,7 @@ async fn command_origin(
     match checked_origin(origin, verdict) {
         Ok(origin) => {
             let result = MavResult::MAV_RESULT_ACCEPTED;
-            OUTBOX.send(Outbound::Ack { command, result }).await;
+            reply(Outbound::Ack { command, result });
             store_origin(&origin, params, store).await;
         }
         Err(why) => refuse(command, MavResult::MAV_RESULT_DENIED, why).await,
@@ -623,21 +662,14 @@ async fn store_origin(origin: &GeoOrigin, params: &mut ParamService, store: &mut
         if let Some(store) = store
             && let Err(e) = store.save(index, value).await
         {
-            OUTBOX
-                .send(report(
-                    Severity::Error,
-                    format_args!("param {} in force but not stored: {e}", TABLE[index].name),
-                ))
-                .await;
+            reply(report(
+                Severity::Error,
+                format_args!("param {} in force but not stored: {e}", TABLE[index].name),
+            ));
         }
-        OUTBOX
-            .send(Outbound::Params {
-                values: params.values().clone(),
-                which: Values::One(index),
-            })
-            .await;
+        send_values(params, Values::One(index), None);
     }
-    announce_origin(params).await;
+    announce_origin(params);
 }
 
 async fn handle(
@@ -653,12 +685,10 @@ async fn handle(
             // Known here already, so a fix right behind the first sample is taken as HIL's.
             IN_HIL.store(true, Ordering::Relaxed);
             if SENSOR.try_send(SensorSample { imu, hil: true }).is_err() {
-                OUTBOX
-                    .send(report(
-                        Severity::Warning,
-                        format_args!("HIL_SENSOR dropped: the control step is behind"),
-                    ))
-                    .await;
+                reply(report(
+                    Severity::Warning,
+                    format_args!("HIL_SENSOR dropped: the control step is behind"),
+                ));
             }
         }
         Inbound::Mocap(mut fix) => {
@@ -674,12 +704,10 @@ async fn handle(
             let now_ns = Instant::now().as_micros().saturating_mul(1000) as i64;
             let message = TIMESYNC_DATA { tc1, ts1 };
             if let SyncReceived::Answer(a) = timesync(|t| t.receive(&message, now_ns)) {
-                OUTBOX
-                    .send(Outbound::TimeSync {
-                        tc1: a.tc1,
-                        ts1: a.ts1,
-                    })
-                    .await;
+                reply(Outbound::TimeSync {
+                    tc1: a.tc1,
+                    ts1: a.ts1,
+                });
             }
         }
         Inbound::Command {
@@ -693,24 +721,24 @@ async fn handle(
                     refuse(command, result, "no mode of that index").await;
                 } else {
                     let result = MavResult::MAV_RESULT_ACCEPTED;
-                    OUTBOX.send(Outbound::Ack { command, result }).await;
-                    OUTBOX.send(Outbound::AvailableModes(index)).await;
+                    reply(Outbound::Ack { command, result });
+                    reply(Outbound::AvailableModes(index));
                 }
             }
             Request::Message(id) if id == CURRENT_MODE_DATA::ID => {
                 let result = MavResult::MAV_RESULT_ACCEPTED;
-                OUTBOX.send(Outbound::Ack { command, result }).await;
-                OUTBOX.send(Outbound::CurrentMode).await;
+                reply(Outbound::Ack { command, result });
+                reply(Outbound::CurrentMode);
             }
             Request::Message(id) if id == AUTOPILOT_VERSION_DATA::ID => {
                 let result = MavResult::MAV_RESULT_ACCEPTED;
-                OUTBOX.send(Outbound::Ack { command, result }).await;
-                OUTBOX.send(Outbound::Identity).await;
+                reply(Outbound::Ack { command, result });
+                reply(Outbound::Identity);
             }
             Request::Message(id) if id == COMPONENT_METADATA_DATA::ID => {
                 let result = MavResult::MAV_RESULT_ACCEPTED;
-                OUTBOX.send(Outbound::Ack { command, result }).await;
-                OUTBOX.send(Outbound::ComponentMetadata).await;
+                reply(Outbound::Ack { command, result });
+                reply(Outbound::ComponentMetadata);
             }
             Request::Message(id)
                 if id == HOME_POSITION_DATA::ID || id == GPS_GLOBAL_ORIGIN_DATA::ID =>
@@ -720,21 +748,19 @@ async fn handle(
                     refuse(command, result, e.as_str()).await;
                 } else {
                     let result = MavResult::MAV_RESULT_ACCEPTED;
-                    OUTBOX.send(Outbound::Ack { command, result }).await;
-                    OUTBOX
-                        .send(if id == HOME_POSITION_DATA::ID {
-                            Outbound::Home
-                        } else {
-                            Outbound::Origin(params.origin())
-                        })
-                        .await;
+                    reply(Outbound::Ack { command, result });
+                    reply(if id == HOME_POSITION_DATA::ID {
+                        Outbound::Home
+                    } else {
+                        Outbound::Origin
+                    });
                 }
             }
             Request::Message(id) => {
                 if telemetry(|t| t.request_once(id)) {
                     TELEMETRY_CHANGED.signal(());
                     let result = MavResult::MAV_RESULT_ACCEPTED;
-                    OUTBOX.send(Outbound::Ack { command, result }).await;
+                    reply(Outbound::Ack { command, result });
                 } else {
                     let result = MavResult::MAV_RESULT_UNSUPPORTED;
                     refuse(command, result, "that message is not sent on request").await;
@@ -752,7 +778,7 @@ async fn handle(
                 };
                 if COMMANDS.try_send(pending).is_err() {
                     let result = MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
-                    OUTBOX.send(Outbound::Ack { command, result }).await;
+                    reply(Outbound::Ack { command, result });
                 }
             }
             Request::SetInterval {
@@ -764,7 +790,7 @@ async fn handle(
                 match result {
                     MavResult::MAV_RESULT_ACCEPTED => {
                         TELEMETRY_CHANGED.signal(());
-                        OUTBOX.send(Outbound::Ack { command, result }).await;
+                        reply(Outbound::Ack { command, result });
                     }
                     MavResult::MAV_RESULT_UNSUPPORTED => {
                         refuse(command, result, "that message is not streamed").await;
@@ -789,7 +815,9 @@ async fn handle(
             }
             Request::Reboot => reboot(command).await,
         },
-        Inbound::Param { request, .. } => handle_param(request, verdict, params, store).await,
+        Inbound::Param { request, from } => {
+            handle_param(request, from, verdict, params, store).await;
+        }
         Inbound::SetupSigning { key, timestamp, .. } => {
             setup_signing(key, timestamp, store).await;
         }
@@ -804,38 +832,30 @@ async fn handle(
             ..
         } => set_origin((lat_e7, lon_e7, alt_mm), verdict, params, store).await,
         Inbound::Ftp { message, from } if !verdict.trusted() => {
-            OUTBOX
-                .send(Outbound::Ftp {
-                    message: link::ftp::refusal(&message),
-                    to: from,
-                })
-                .await;
-            OUTBOX
-                .send(report(
-                    Severity::Warning,
-                    format_args!("payload upload refused: {}", verdict.reason()),
-                ))
-                .await;
+            bulk(Bulk::Ftp {
+                message: link::ftp::refusal(&message),
+                to: from,
+            });
+            reply(report(
+                Severity::Warning,
+                format_args!("payload upload refused: {}", verdict.reason()),
+            ));
         }
         Inbound::Ftp { message, from } => {
             let (answer, event) = ftp.handle_with(&message, &metadata::FILES);
-            OUTBOX
-                .send(Outbound::Ftp {
-                    message: answer,
-                    to: from,
-                })
-                .await;
+            bulk(Bulk::Ftp {
+                message: answer,
+                to: from,
+            });
             if let FileEvent::Written { .. } = event {
                 check_payload(ftp.file(), store).await;
             }
         }
         Inbound::Invalid(e) => {
-            OUTBOX
-                .send(report(
-                    Severity::Warning,
-                    format_args!("HIL message refused: {e}"),
-                ))
-                .await;
+            reply(report(
+                Severity::Warning,
+                format_args!("HIL message refused: {e}"),
+            ));
         }
         // The ground link is up: the next control step takes it.
         Inbound::GcsHeartbeat(_) => GCS_HEARTBEAT.store(true, Ordering::Relaxed),
@@ -942,12 +962,10 @@ async fn deliver_mission(
     store: &mut Option<Store>,
 ) {
     if let Some((reply, to)) = outcome.reply {
-        OUTBOX.send(Outbound::Mission { reply, to }).await;
+        bulk(Bulk::Mission { reply, to });
     }
     if let Some(text) = &outcome.refusal {
-        OUTBOX
-            .send(report(Severity::Warning, format_args!("{text}")))
-            .await;
+        reply(report(Severity::Warning, format_args!("{text}")));
     }
     match outcome.event {
         Some(MissionEvent::Replaced | MissionEvent::Cleared) => {
@@ -972,7 +990,7 @@ async fn deliver_mission(
                     format_args!("mission in force but not stored: {e}"),
                 );
             }
-            OUTBOX.send(Outbound::Report(r)).await;
+            reply(Outbound::Report(r));
         }
         Some(MissionEvent::SetCurrent(seq)) => {
             ROUTE.send(RouteChange::Current(seq)).await;
@@ -1080,8 +1098,11 @@ struct Sending<W> {
     encoder: Encoder,
     frame: Frame,
     text_id: u16,
-    /// The map origin in force (the receive task's parameters hand it over).
-    origin: GeoOrigin,
+    /// The link's rate: what may wait goes only while it holds bytes.
+    budget: LinkBudget,
+    /// What is sent now spends from the budget (not a HIL step's messages: the lockstep runs
+    /// at the simulator's pace, many times the vehicle's clock under QEMU).
+    charged: bool,
     /// The take-off point.
     home: Home,
     /// The flight mode, the route's progress and the landed state last said.
@@ -1110,6 +1131,9 @@ impl<W: Write> Sending<W> {
         if let Some(extra) = crc_extra(self.frame.message_id()) {
             let now = Instant::now().as_micros();
             signing(|s| s.sign(&mut self.frame, extra, now));
+        }
+        if self.charged {
+            self.budget.spend(self.frame.bytes().len());
         }
         // A board link cannot fail in a way the firmware could mend; the bytes are dropped.
         let _ = self.tx.write_all(self.frame.bytes()).await;
@@ -1218,7 +1242,9 @@ impl<W: Write> Sending<W> {
             }
             match stream {
                 Stream::SysStatus => {
-                    self.encode(&vehicle.sys_status_with_log(super::logger::health()))
+                    let mut status = vehicle.sys_status_with_log(super::logger::health());
+                    LINK.lock(|l| l.borrow().health.fill(&mut status));
+                    self.encode(&status)
                 }
                 Stream::AttitudeQuaternion => self.encode(&vehicle.attitude_quaternion()),
                 Stream::LocalPositionNed => self.encode(&vehicle.local_position_ned()),
@@ -1236,7 +1262,7 @@ impl<W: Write> Sending<W> {
                         self.encode(&vehicle.actuator_output_status(&map));
                     }
                 }
-                Stream::GlobalPositionInt => match vehicle.global_position_int(&self.origin) {
+                Stream::GlobalPositionInt => match vehicle.global_position_int(&origin()) {
                     Some(m) => self.encode(&m),
                     // An unusable origin (said at start): nothing to send.
                     None => continue,
@@ -1248,7 +1274,7 @@ impl<W: Write> Sending<W> {
 
     /// `HOME_POSITION` (nothing with an unusable origin).
     async fn home_position(&mut self) {
-        if let Some(m) = self.home.home_position(&self.origin) {
+        if let Some(m) = self.home.home_position(&origin()) {
             self.encode(&m);
             self.flush().await;
         }
@@ -1262,60 +1288,40 @@ impl<W: Write> Sending<W> {
         self.flush().await;
     }
 
-    /// Sends one message of the queue; `state` is the mission state last said in a
-    /// `HEARTBEAT` (a step that changes it says the new one). By reference: the task keeps
-    /// the message it took from the queue, and no copy of it, across the link's waits.
-    async fn outbound(&mut self, message: &Outbound, state: &mut MissionState) {
-        match message {
-            Outbound::Step {
-                time_us,
-                report,
-                ack: step_ack,
-                done,
-                state: now,
-                actuators,
-            } => {
-                self.report(report, (time_us / 1000) as u32).await;
-                for (pending, result) in step_ack.iter().chain(done) {
-                    self.encode(&ack(pending.mav_cmd, mav_result(*result)));
-                    self.flush().await;
-                }
-                if now != state {
-                    *state = *now;
-                    self.heartbeat().await;
-                }
-                if let Some(actuators) = actuators {
-                    let messages = actuators.to_messages();
-                    if let Some(status) = &messages.status {
-                        self.encode(status);
-                        self.flush().await;
-                    }
-                    self.encode(&messages.controls);
-                    self.flush().await;
-                }
+    /// Sends a control step's messages; `state` is the mission state last said in a
+    /// `HEARTBEAT` (a step that changes it says the new one). By reference: the task keeps the
+    /// messages it took from the queue, and no copy of them, across the link's waits.
+    async fn step(&mut self, step: &StepMessages, state: &mut MissionState) {
+        self.report(&step.report, (step.time_us / 1000) as u32)
+            .await;
+        for (pending, result) in step.ack.iter().chain(&step.done) {
+            self.encode(&ack(pending.mav_cmd, mav_result(*result)));
+            self.flush().await;
+        }
+        if step.state != *state {
+            *state = step.state;
+            self.heartbeat().await;
+        }
+        if let Some(actuators) = &step.actuators {
+            let messages = actuators.to_messages();
+            if let Some(status) = &messages.status {
+                self.encode(status);
+                self.flush().await;
             }
+            self.encode(&messages.controls);
+            self.flush().await;
+        }
+    }
+
+    /// Sends one reply of the queue.
+    async fn outbound(&mut self, message: &Outbound) {
+        match message {
             Outbound::Report(report) => {
                 self.report(report, Instant::now().as_millis() as u32).await;
             }
             Outbound::Identity => self.identity().await,
             Outbound::ComponentMetadata => self.component_metadata().await,
-            Outbound::Params { values, which } => {
-                let range = match *which {
-                    Values::None => 0..0,
-                    Values::One(i) => i..i + 1,
-                    Values::All => 0..PARAM_COUNT,
-                };
-                for i in range {
-                    if let Some(m) = value_message(values, i) {
-                        self.encode(&m);
-                        self.flush().await;
-                    }
-                }
-            }
-            Outbound::Ftp { message, to } => {
-                self.encode(&message.to_message(to.system, to.component));
-                self.flush().await;
-            }
+            Outbound::Param(index) => self.param_value(*index).await,
             Outbound::Ack { command, result } => {
                 self.encode(&ack(*command, *result));
                 self.flush().await;
@@ -1327,24 +1333,20 @@ impl<W: Write> Sending<W> {
                 });
                 self.flush().await;
             }
-            Outbound::Log(LogReply::Entry(entry)) => {
-                self.encode(entry);
-                self.flush().await;
-            }
-            Outbound::Log(LogReply::Data(data)) => {
-                self.encode(data);
-                self.flush().await;
-            }
-            Outbound::Origin(origin) => {
-                self.origin = *origin;
-                self.encode(&gps_global_origin(origin));
+            Outbound::Origin => {
+                let origin = origin();
+                if let Err(e) = origin.check() {
+                    let mut text = Text::new();
+                    let _ = core::fmt::write(
+                        &mut text,
+                        format_args!("origin: unusable ({e}); no global position"),
+                    );
+                    self.text(Severity::Warning, &text).await;
+                }
+                self.encode(&gps_global_origin(&origin));
                 self.flush().await;
             }
             Outbound::Home => self.home_position().await,
-            Outbound::Mission { reply, to } => {
-                reply.encode(*to, &mut self.encoder, &mut self.frame);
-                self.flush().await;
-            }
             Outbound::CurrentMode => {
                 let mode = VEHICLE.lock(|v| v.get()).mode;
                 let mode = FlightMode::from_code(mode).unwrap_or(FlightMode::Ready);
@@ -1359,6 +1361,46 @@ impl<W: Write> Sending<W> {
                     }
                 }
             }
+        }
+    }
+
+    /// Sends one bulk transfer's message.
+    async fn bulk(&mut self, message: &Bulk) {
+        match message {
+            Bulk::Ftp { message, to } => {
+                self.encode(&message.to_message(to.system, to.component));
+            }
+            Bulk::Log(LogReply::Entry(entry)) => self.encode(entry),
+            Bulk::Log(LogReply::Data(data)) => self.encode(data),
+            Bulk::Mission { reply, to } => {
+                reply.encode(*to, &mut self.encoder, &mut self.frame);
+            }
+        }
+        self.flush().await;
+    }
+
+    /// The `PARAM_VALUE` of `index`, from the values in force.
+    async fn param_value(&mut self, index: usize) {
+        let message = LINK.lock(|l| value_message(&l.borrow().values, index));
+        if let Some(m) = message {
+            self.encode(&m);
+            self.flush().await;
+        }
+    }
+
+    /// What the link dropped since it was last said, at most once every few seconds.
+    async fn drops(&mut self) {
+        let now = Instant::now().as_micros();
+        let due = LINK.lock(|l| {
+            let mut l = l.borrow_mut();
+            let restarted = l.lists.restarted();
+            l.health.lists_restarted(restarted);
+            l.health.report_due(now)
+        });
+        if let Some(drops) = due {
+            let mut text = Text::new();
+            let _ = core::fmt::write(&mut text, format_args!("{drops}"));
+            self.text(Severity::Warning, &text).await;
         }
     }
 
@@ -1384,8 +1426,32 @@ impl<W: Write> Sending<W> {
     }
 }
 
-/// Sends what the other tasks queue, a heartbeat every second and the telemetry streams at
-/// their rates, forever.
+/// The map origin in force (from the receive task's parameters).
+fn origin() -> GeoOrigin {
+    LINK.lock(|l| GeoOrigin::from_params(&l.borrow().values))
+}
+
+/// What the send task does next (docs/ground-link.md#under-a-flood).
+enum Next {
+    /// A control step's messages: at once.
+    Step(StepMessages),
+    /// The heartbeat (with the mission's status and a time-sync request): when due.
+    Heartbeat,
+    /// A reply: within the link's rate.
+    Reply(Outbound),
+    /// The telemetry streams due: within the link's rate.
+    Telemetry,
+    /// A bulk transfer's message: within the link's rate.
+    Bulk(Bulk),
+    /// A parameter list's next value: within the link's rate.
+    ListValue(usize),
+    /// Nothing now: wait for something to send or for the time to send it.
+    Wait,
+}
+
+/// Sends, forever, by priority: a control step's messages, the heartbeat each second, then
+/// within the link's rate ([`LINK_RATE`]) the replies, the telemetry streams due, the bulk
+/// transfers and the parameter lists in flight.
 #[embassy_executor::task]
 pub async fn send(tx: <Selected as Board>::LinkTx) {
     let mut out = Sending {
@@ -1393,7 +1459,8 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
         encoder: Encoder::new(link::VEHICLE_SYSTEM_ID, link::VEHICLE_COMPONENT_ID),
         frame: Frame::default(),
         text_id: 0,
-        origin: GeoOrigin::from_params(&ParamValues::DEFAULT),
+        budget: LinkBudget::new(LINK_RATE, LINK_BURST, Instant::now().as_micros()),
+        charged: true,
         home: Home::START,
         said: Said {
             mode: FlightMode::Ready.code(),
@@ -1407,33 +1474,75 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
     let mut state = MissionState::Idle;
     let mut next_beat = Instant::now();
     loop {
+        let now = Instant::now();
         let telemetry_due = telemetry(|t| t.next_due());
-        let wake = match telemetry_due {
-            Some(due) => next_beat.min(Instant::from_micros(due)),
-            None => next_beat,
+        let may_wait_goes = out.budget.allows(now.as_micros());
+        let next = if let Ok(step) = STEP_OUT.try_receive() {
+            Next::Step(step)
+        } else if now >= next_beat {
+            Next::Heartbeat
+        } else if !may_wait_goes {
+            Next::Wait
+        } else if let Ok(message) = OUTBOX.try_receive() {
+            Next::Reply(message)
+        } else if telemetry_due.is_some_and(|due| due <= now.as_micros()) {
+            Next::Telemetry
+        } else if let Ok(message) = BULK.try_receive() {
+            Next::Bulk(message)
+        } else if let Some(index) = LINK.lock(|l| l.borrow_mut().lists.next(PARAM_COUNT)) {
+            Next::ListValue(index)
+        } else {
+            Next::Wait
         };
-        let event = select3(OUTBOX.receive(), Timer::at(wake), TELEMETRY_CHANGED.wait()).await;
-        match &event {
-            Either3::First(message) => {
-                // Before the message: a step's lockstep reply goes last, and after the last
-                // one (the touchdown) the plant may stop listening.
+        match &next {
+            // Before the step's messages: the lockstep reply goes last, and after the last
+            // one (the touchdown) the plant may stop listening.
+            Next::Step(step) => {
+                out.charged = step.actuators.is_none();
                 out.mission_status(false).await;
-                out.outbound(message, &mut state).await;
+                out.step(step, &mut state).await;
+                out.charged = true;
             }
-            Either3::Second(()) => {
-                if Instant::now() >= next_beat {
-                    out.heartbeat().await;
-                    out.mission_status(true).await;
-                    // A time-sync request with every heartbeat (as PX4 asks once a second).
-                    let now_ns = Instant::now().as_micros().saturating_mul(1000) as i64;
-                    out.encode(&timesync(|t| t.request(now_ns)));
-                    out.flush().await;
-                    next_beat = Instant::now() + Duration::from_secs(1);
+            Next::Heartbeat => {
+                out.heartbeat().await;
+                out.mission_status(true).await;
+                // A time-sync request with every heartbeat (as PX4 asks once a second).
+                let now_ns = Instant::now().as_micros().saturating_mul(1000) as i64;
+                out.encode(&timesync(|t| t.request(now_ns)));
+                out.flush().await;
+                out.drops().await;
+                next_beat = Instant::now() + Duration::from_secs(1);
+            }
+            Next::Reply(message) => {
+                out.mission_status(false).await;
+                out.outbound(message).await;
+            }
+            Next::Telemetry => out.telemetry().await,
+            Next::Bulk(message) => out.bulk(message).await,
+            Next::ListValue(index) => out.param_value(*index).await,
+            Next::Wait => {
+                let mut wake = next_beat;
+                if !may_wait_goes {
+                    wake = wake.min(Instant::from_micros(out.budget.ready_at()));
+                } else if let Some(due) = telemetry_due {
+                    wake = wake.min(Instant::from_micros(due));
                 }
-                out.telemetry().await;
+                let more = async {
+                    if may_wait_goes {
+                        select4(
+                            OUTBOX.ready_to_receive(),
+                            BULK.ready_to_receive(),
+                            LIST_STARTED.wait(),
+                            TELEMETRY_CHANGED.wait(),
+                        )
+                        .await;
+                    } else {
+                        core::future::pending::<()>().await;
+                    }
+                };
+                select3(STEP_OUT.ready_to_receive(), Timer::at(wake), more).await;
+                continue;
             }
-            // The schedule changed: the next wake is worked out again.
-            Either3::Third(()) => {}
         }
         // The group's end: a link that frames (the QEMU board's Ethernet) sends it now, as
         // one frame.

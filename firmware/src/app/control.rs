@@ -19,12 +19,12 @@ use core::sync::atomic::Ordering;
 use link::hil::{Actuators, JobDeadline, VehicleClock};
 
 use super::autonomy::{Autonomy, CommandResult, JobResult, Severity, TickInput, TickOutput, Value};
-use super::comms::{Outbound, SensorSample};
+use super::comms::{Outbound, SensorSample, StepMessages};
 use super::logger::RingEnd;
 use super::{
     ARMED, BENCH_CONFIG, CALIBRATED, COMMANDS, CONFIG_CHANGED, GCS_HEARTBEAT, IDLE_COUNTS, IN_HIL,
     JOB_REQUESTS, JOB_RESULTS, LINK_BATTERY_MV, LOADING, MISSION_STATE, MOCAP, OUTBOX, PAYLOAD,
-    ROUTE, ROUTE_SENT, SENSOR, STATUS_CHANGES, VEHICLE,
+    ROUTE, ROUTE_SENT, SENSOR, STATUS_CHANGES, STEP_OUT, VEHICLE,
 };
 use crate::board::{ActuatorOutputs, Board, Selected};
 use shared::mission::{HardwareFaults, Supervision};
@@ -250,7 +250,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             if let Some((p, CommandResult::InProgress)) = ack {
                 calibrating = Some(p);
             }
-            Outbound::Step {
+            StepMessages {
                 time_us: step.time_us,
                 report: out.report,
                 // Every command is acknowledged; one the autonomy took without a word is accepted.
@@ -262,8 +262,8 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
         };
         if sample.hil {
             // The plant waits for this reply: it must go, and nothing else is waiting.
-            OUTBOX.send(message).await;
-        } else if OUTBOX.try_send(message).is_err() {
+            STEP_OUT.send(message).await;
+        } else if STEP_OUT.try_send(message).is_err() {
             // In flight the step never waits for the link: this step's telemetry is lost.
             dropped_reports = dropped_reports.wrapping_add(1);
         }

@@ -8,7 +8,7 @@
 //! The same task serves the logs to the ground (docs/formats.md#downloading-the-logs,
 //! `link::log_transfer`): the link's receive task hands it the log requests ([`request`])
 //! and it answers between its writes, the ring first: a turn sends at most
-//! [`TURN_MESSAGES`] messages, each only into an empty [`OUTBOX`], then waits [`TURN_PAUSE`],
+//! [`TURN_MESSAGES`] messages, each only into an empty [`BULK`] queue, then waits [`TURN_PAUSE`],
 //! so a download never holds up the control step's messages, the heartbeat or the telemetry.
 
 use core::sync::atomic::{AtomicBool, Ordering};
@@ -28,8 +28,8 @@ use link::log_transfer::{LogNotice, LogReply, LogRequest, LogService};
 use link::telemetry::LogHealth;
 
 use super::autonomy::{Report, Severity};
-use super::comms::Outbound;
-use super::{ARMED, Cs, MISSION_CONFIG, OUTBOX};
+use super::comms::{Bulk, Outbound};
+use super::{ARMED, BULK, Cs, MISSION_CONFIG, OUTBOX};
 use crate::board::{Board, LogRam, Selected};
 
 /// Bytes of one slot of the ring.
@@ -328,8 +328,8 @@ fn take_request<S: LogStorage>(
 }
 
 /// Sends up to [`TURN_MESSAGES`] of what the service has to send, each only into an empty
-/// outbox (so the send task's heartbeat and telemetry, and the control step's messages, wait
-/// behind one at most), never waiting: a message the outbox had no room for after all waits in
+/// bulk queue (which the send task serves after the control step's messages, the heartbeat,
+/// the replies and the telemetry), never waiting: a message the outbox had no room for after all waits in
 /// `pending` for the next turn. A storage error goes into `report`.
 fn serve_turn<S: LogStorage>(
     service: &mut LogService,
@@ -338,7 +338,7 @@ fn serve_turn<S: LogStorage>(
     report: &mut Report,
 ) {
     for _ in 0..TURN_MESSAGES {
-        if !OUTBOX.is_empty() {
+        if !BULK.is_empty() {
             return;
         }
         let reply = match pending.take() {
@@ -352,8 +352,7 @@ fn serve_turn<S: LogStorage>(
                 }
             },
         };
-        if let Err(TrySendError::Full(Outbound::Log(back))) = OUTBOX.try_send(Outbound::Log(reply))
-        {
+        if let Err(TrySendError::Full(Bulk::Log(back))) = BULK.try_send(Bulk::Log(reply)) {
             *pending = Some(back);
             return;
         }

@@ -127,8 +127,21 @@ pub struct LoadedPayload {
 pub static JOB_REQUESTS: Channel<Cs, (u32, autonomy::JobRequest), 1> = Channel::new();
 /// Results of jobs, with their numbers.
 pub static JOB_RESULTS: Channel<Cs, (u32, autonomy::JobResult), 2> = Channel::new();
-/// What goes out on the link, in order.
+/// Replies, texts and values for the link, in order (docs/ground-link.md#under-a-flood): sent
+/// after a control step's messages and the heartbeat, within the link's rate. The receive task
+/// never waits for room: a reply that finds it full is dropped and counted.
 pub static OUTBOX: Channel<Cs, comms::Outbound, 4> = Channel::new();
+/// A control step's messages (in HIL the lockstep reply), sent before anything else.
+pub static STEP_OUT: Channel<Cs, comms::StepMessages, 1> = Channel::new();
+/// Bulk transfers' messages (FTP, mission items, logs), sent when nothing else waits and the
+/// link has room.
+pub static BULK: Channel<Cs, comms::Bulk, 2> = Channel::new();
+/// What the receive and send tasks share besides their queues: the parameters in force, the
+/// parameter lists in flight and the link's drop counts.
+pub static LINK: Mutex<Cs, core::cell::RefCell<comms::LinkShared>> =
+    Mutex::new(core::cell::RefCell::new(comms::LinkShared::START));
+/// A parameter list was asked for: the send task looks at [`LINK`]'s lists.
+pub static LIST_STARTED: Signal<Cs, ()> = Signal::new();
 
 /// The vehicle's state after the last control step, for telemetry.
 pub static VEHICLE: Mutex<Cs, Cell<VehicleSnapshot>> =
