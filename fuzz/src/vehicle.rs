@@ -47,6 +47,7 @@ use link::msg::{
     TIMESYNC_DATA,
 };
 use link::param::{ParamService, Values, value_message};
+use link::param_lists::ParamLists;
 use link::signing::{KEY_LEN, Signing, Verdict};
 use link::status::{MissionState, PHASE_PREFIX, chunks, heartbeat, named_float, named_int};
 use link::store::ParamStore;
@@ -134,6 +135,8 @@ pub struct Vehicle {
     /// Route changes for the control task (`ROUTE`, capacity 2).
     routes: VecDeque<RouteChange>,
     params: ParamService,
+    /// The parameter lists in flight.
+    lists: ParamLists,
     store: Option<ParamStore<MemFlash>>,
     /// `MISSION_CONFIG`.
     config: MissionConfig,
@@ -218,6 +221,7 @@ impl Vehicle {
             mission: Box::new(MissionService::new()),
             routes: VecDeque::with_capacity(2),
             params: ParamService::new(ParamValues::DEFAULT),
+            lists: ParamLists::new(),
             store: None,
             config: MissionConfig::DEFAULT,
             config_changed: false,
@@ -595,7 +599,7 @@ impl Vehicle {
                     Err(why) => self.refuse(command, MavResult::MAV_RESULT_DENIED, why),
                 },
             },
-            Inbound::Param { request, .. } => {
+            Inbound::Param { request, from } => {
                 let running = self.mission_state == MissionState::Running;
                 let refuse_changes = if !verdict.trusted() {
                     Some(verdict.reason())
@@ -630,12 +634,17 @@ impl Vehicle {
                         "a parameter changed without being reported"
                     ),
                 }
-                let range = match answer.values {
-                    Values::None => 0..0,
-                    Values::One(i) => i..i + 1,
-                    Values::All => 0..PARAM_COUNT,
-                };
-                for i in range {
+                // The send task's order: one value at once, a list as the sender's list in
+                // flight (sent whole here, the link always having room).
+                match answer.values {
+                    Values::None => {}
+                    Values::One(i) => {
+                        let m = value_message(self.params.values(), i).expect("an index in range");
+                        self.send(&m);
+                    }
+                    Values::All => self.lists.request(from),
+                }
+                while let Some(i) = self.lists.next(PARAM_COUNT) {
                     let m = value_message(self.params.values(), i).expect("an index in range");
                     self.send(&m);
                 }
