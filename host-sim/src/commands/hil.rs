@@ -87,6 +87,11 @@ pub struct HilArgs {
     /// The rotors' command-to-thrust map over-reads by this factor.
     #[arg(long, value_name = "S", default_value_t = 1.0)]
     pub map_error: f64,
+    /// After the mission, keep the firmware and the ground station's link (--gcs) up for up to
+    /// S seconds of wall time, ending once the ground station has been silent for 2 s: time to
+    /// read parameters or download the log. At most 600.
+    #[arg(long, requires = "gcs", value_name = "S")]
+    pub linger: Option<f64>,
     /// Leave the mission start to the ground station (--gcs): upload the payload, then step
     /// the idle vehicle until it starts (parameters may be changed meanwhile).
     #[arg(long, requires = "gcs")]
@@ -149,6 +154,7 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
     };
     let speed = positive("--speed", args.speed, 1000.0)?;
     let duration = positive("--duration", args.duration, f64::from(MISSION_TIME_LIMIT))?;
+    let linger = positive("--linger", args.linger, 600.0)?;
     let mocap_lost_after = args
         .mocap_lost_after
         .map(|s| {
@@ -197,6 +203,7 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
         map_error,
         mocap_lost_after_takeoff: mocap_lost_after,
         ground_start: args.ground_start,
+        linger: linger.map(|s| Duration::from_secs_f64(f64::from(s))),
         confirm_rails: !args.unconfirmed_rails,
         gyro_bias,
     };
@@ -276,6 +283,8 @@ pub fn to_json(scenario: &str, o: &HilOutcome) -> serde_json::Value {
             "to_firmware_per_tick": o.link_bytes.to_firmware as f64 / o.ticks.max(1) as f64,
             "from_firmware_per_tick": o.link_bytes.from_firmware as f64 / o.ticks.max(1) as f64,
         },
+        // A bridged ground station's frames: forwarded, and dropped by the radio link.
+        "gcs_link": o.gcs_link.map(|c| json!({"baud": crate::hil::gcs::GCS_BAUD, "forwarded_frames": c.forwarded, "dropped_frames": c.dropped})),
         "worst_tick": worst.map(|(name, v)| json!({"name": name, "value": v})),
         "busy_per_step": o.busy_per_step().map(|(name, mean, worst)| json!({"name": name, "mean": mean, "worst_second": worst})),
         // The last value of each name the firmware sent (NAMED_VALUE_FLOAT/INT).

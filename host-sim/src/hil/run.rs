@@ -70,6 +70,10 @@ pub struct HilSetup {
     /// The ground station (through `gcs`) starts the mission, not the plant: the plant
     /// uploads the payload and steps the idle vehicle until the firmware reports it running.
     pub ground_start: bool,
+    /// After the mission, the firmware and the ground link stay up this long at most (wall
+    /// time), until the ground station is silent for [`super::session::GCS_SILENCE`]
+    /// (`--linger`).
+    pub linger: Option<Duration>,
     /// The plant confirms the rail positions (`MAV_CMD_USER_1`) with the first step, as an
     /// operator who placed the robots at their marks; `false` leaves it to a ground station
     /// (`--unconfirmed-rails`).
@@ -94,6 +98,7 @@ impl Default for HilSetup {
             gcs: None,
             map_error: 1.0,
             ground_start: false,
+            linger: None,
             confirm_rails: true,
             gyro_bias: None,
             mocap_lost_after_takeoff: None,
@@ -125,6 +130,9 @@ pub struct HilOutcome {
     pub wall_s: f64,
     /// Bytes that crossed the link during the lockstep.
     pub link_bytes: ByteCounts,
+    /// A bridged ground station's frames forwarded and dropped by the radio link
+    /// (`--gcs`; over the whole run).
+    pub gcs_link: Option<super::gcs::GcsCounts>,
     /// The firmware's mission state at the end.
     pub state: MissionState,
     /// The acknowledgement of the start command.
@@ -427,6 +435,9 @@ pub fn run(
     let record = mission_run::fly(s, &plant_setup, &mut autopilot, &mut |_, _, _| {})?;
     let wall_s = wall.elapsed().as_secs_f64();
     let bytes_after = autopilot.session.byte_counts();
+    if let Some(linger) = setup.linger {
+        autopilot.session.linger(linger)?;
+    }
     let link_bytes = ByteCounts {
         to_firmware: bytes_after.to_firmware - bytes_before.to_firmware,
         from_firmware: bytes_after.from_firmware - bytes_before.from_firmware,
@@ -452,6 +463,7 @@ pub fn run(
         simulated_s: f64::from(record.simulated_s),
         wall_s,
         link_bytes,
+        gcs_link: autopilot.session.gcs_counts(),
         state,
         start_ack: log.ack_of(MavCmd::MAV_CMD_MISSION_START),
         delivered: state == MissionState::Completed

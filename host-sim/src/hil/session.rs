@@ -116,6 +116,9 @@ pub struct Session {
     rebooting: Option<(u64, usize)>,
 }
 
+/// How long a ground station is silent before a lingering session ends ([`Session::linger`]).
+pub const GCS_SILENCE: Duration = Duration::from_secs(2);
+
 /// Time between resends of a request that got no answer.
 const RESEND: Duration = Duration::from_millis(1000);
 
@@ -151,6 +154,26 @@ impl Session {
     /// Bytes that crossed the link so far.
     pub fn byte_counts(&self) -> super::transport::ByteCounts {
         self.link.counts()
+    }
+
+    /// Keeps the link up with no lockstep (the firmware's own tasks run on, the ground
+    /// station's frames pass both ways) for at most `most`, ending once the ground station
+    /// has been silent for [`GCS_SILENCE`] (at once without one).
+    pub fn linger(&mut self, most: Duration) -> Result<()> {
+        let end = Instant::now() + most;
+        while let Some(gcs) = &self.gcs {
+            let now = Instant::now();
+            if now >= end || gcs.silent_for() >= GCS_SILENCE {
+                break;
+            }
+            self.next((now + Duration::from_millis(100)).min(end))?;
+        }
+        Ok(())
+    }
+
+    /// A bridged ground station's frames forwarded and dropped (`None` without one).
+    pub fn gcs_counts(&self) -> Option<super::gcs::GcsCounts> {
+        self.gcs.as_ref().map(GcsBridge::counts)
     }
 
     /// Lockstep steps done.
