@@ -128,8 +128,9 @@ pub enum Outbound {
     Identity,
     /// `COMPONENT_METADATA` (where the general metadata file is), on request.
     ComponentMetadata,
-    /// The `PARAM_VALUE` of this index, from the values in force ([`LinkShared`]).
-    Param(usize),
+    /// The `PARAM_VALUE`s of these indices (bit `i`: index `i`; the values a request changed
+    /// go as one entry), from the values in force ([`LinkShared`]).
+    Params(u128),
     /// `TIMESYNC`: an answer to a request.
     TimeSync {
         /// The vehicle's time, ns.
@@ -188,6 +189,9 @@ impl LinkShared {
     };
 }
 
+// Every parameter's index is a bit of `Outbound::Params`.
+const _: () = assert!(PARAM_COUNT <= 128);
+
 /// Queues a reply for the send task without waiting: one that finds the queue full is dropped
 /// and counted (docs/ground-link.md#under-a-flood).
 fn reply(message: Outbound) {
@@ -218,9 +222,6 @@ const LINK_ID: u8 = 0;
 /// attitude estimator keeps 160 ms of history to compensate a fix's latency).
 const MAX_FIX_AGE_US: u64 = 150_000;
 
-/// The link's rate for what may wait (replies, telemetry, bulk transfers), bytes a second:
-/// TELEM1's 921,600 baud. USB and the QEMU board's links carry more, so it holds for each.
-const LINK_RATE: u32 = link::bandwidth::bytes_per_second(921_600);
 /// Most bytes the link's budget holds after a quiet spell (a few messages at once).
 const LINK_BURST: u32 = 1024;
 
@@ -357,6 +358,7 @@ async fn store_calibration(
         CalibrationKind::Gyro => ["CAL_GYRO0_XOFF", "CAL_GYRO0_YOFF", "CAL_GYRO0_ZOFF"],
         CalibrationKind::Level => ["CAL_ACC0_XOFF", "CAL_ACC0_YOFF", "CAL_ACC0_ZOFF"],
     };
+    let mut answered = 0u128;
     for (name, value) in names.into_iter().zip(offsets) {
         let mut id = [0u8; shared::mission::params::NAME_LEN];
         id[..name.len()].copy_from_slice(name.as_bytes());
@@ -364,8 +366,13 @@ async fn store_calibration(
         if let Some((index, value)) = answer.changed {
             save_param(store, index, value).await;
         }
-        send_values(params, answer.values, None);
+        if let Values::One(index) = answer.values {
+            answered |= 1 << index;
+        }
     }
+    // The three values as one entry of the queue.
+    publish(params);
+    reply(Outbound::Params(answered));
     MISSION_CONFIG.lock(|c| c.set(params.values().config()));
 }
 
@@ -376,7 +383,7 @@ fn send_values(params: &ParamService, which: Values, from: Option<Sender>) {
     publish(params);
     match (which, from) {
         (Values::None, _) => {}
-        (Values::One(index), _) => reply(Outbound::Param(index)),
+        (Values::One(index), _) => reply(Outbound::Params(1 << index)),
         (Values::All, Some(from)) => {
             LINK.lock(|l| l.borrow_mut().lists.request(from));
             LIST_STARTED.signal(());
@@ -658,6 +665,7 @@ async fn store_origin(origin: &GeoOrigin, params: &mut ParamService, store: &mut
     let Ok(changed) = params.set_origin(origin) else {
         return;
     };
+    let mut answered = 0u128;
     for &(index, value) in &changed {
         if let Some(store) = store
             && let Err(e) = store.save(index, value).await
@@ -667,8 +675,11 @@ async fn store_origin(origin: &GeoOrigin, params: &mut ParamService, store: &mut
                 format_args!("param {} in force but not stored: {e}", TABLE[index].name),
             ));
         }
-        send_values(params, Values::One(index), None);
+        answered |= 1 << index;
     }
+    // One entry for the five values: the queue keeps room for the origin after them.
+    publish(params);
+    reply(Outbound::Params(answered));
     announce_origin(params);
 }
 
@@ -1321,7 +1332,11 @@ impl<W: Write> Sending<W> {
             }
             Outbound::Identity => self.identity().await,
             Outbound::ComponentMetadata => self.component_metadata().await,
-            Outbound::Param(index) => self.param_value(*index).await,
+            Outbound::Params(indices) => {
+                for index in (0..PARAM_COUNT).filter(|i| indices & (1 << i) != 0) {
+                    self.param_value(index).await;
+                }
+            }
             Outbound::Ack { command, result } => {
                 self.encode(&ack(*command, *result));
                 self.flush().await;
@@ -1450,7 +1465,7 @@ enum Next {
 }
 
 /// Sends, forever, by priority: a control step's messages, the heartbeat each second, then
-/// within the link's rate ([`LINK_RATE`]) the replies, the telemetry streams due, the bulk
+/// within the link's rate ([`Board::link_rate`]) the replies, the telemetry streams due, the bulk
 /// transfers and the parameter lists in flight.
 #[embassy_executor::task]
 pub async fn send(tx: <Selected as Board>::LinkTx) {
@@ -1459,7 +1474,11 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
         encoder: Encoder::new(link::VEHICLE_SYSTEM_ID, link::VEHICLE_COMPONENT_ID),
         frame: Frame::default(),
         text_id: 0,
-        budget: LinkBudget::new(LINK_RATE, LINK_BURST, Instant::now().as_micros()),
+        budget: LinkBudget::new(
+            <Selected as Board>::link_rate(),
+            LINK_BURST,
+            Instant::now().as_micros(),
+        ),
         charged: true,
         home: Home::START,
         said: Said {

@@ -88,6 +88,10 @@ pub trait Board: 'static {
     /// A free-running counter (wrapping) for measuring the control tick.
     fn cycle_count() -> u32;
 
+    /// Bytes a second the link in use carries: the send task's budget for what may wait
+    /// (docs/ground-link.md#under-a-flood).
+    fn link_rate() -> u32;
+
     /// Whether the link in use may set the signing key (`SETUP_SIGNING`): a wired link the
     /// operator plugs in by hand (the Pixhawk's USB), never a radio.
     fn key_setup_allowed() -> bool;

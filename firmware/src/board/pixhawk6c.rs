@@ -168,6 +168,16 @@ impl Board for Pixhawk6c {
         LINK_IS_USB.load(core::sync::atomic::Ordering::Relaxed)
     }
 
+    /// USB full speed's 12 Mbit/s carries about 1 MB/s of CDC-ACM bulk transfers; TELEM1 runs
+    /// at 921,600 baud.
+    fn link_rate() -> u32 {
+        if LINK_IS_USB.load(core::sync::atomic::Ordering::Relaxed) {
+            1_000_000
+        } else {
+            link::bandwidth::bytes_per_second(921_600)
+        }
+    }
+
     fn battery_volts() -> Option<f32> {
         match BATTERY_MV.load(core::sync::atomic::Ordering::Relaxed) {
             u32::MAX => None,

@@ -79,6 +79,10 @@ impl ActuatorOutputs for NoOutputs {
     fn apply(&mut self, _thrust: &[f32], _rail: &[f32], _armed: bool) {}
 }
 
+/// The link chosen at start is the Ethernet controller (not the UART).
+static LINK_IS_ETHERNET: core::sync::atomic::AtomicBool =
+    core::sync::atomic::AtomicBool::new(false);
+
 impl Board for QemuMps2An500 {
     const NAME: &'static str = "qemu-mps2-an500";
     const TICK_COST_NAME: &'static str = "tick_insn";
@@ -87,6 +91,15 @@ impl Board for QemuMps2An500 {
     /// Its UART stands for the bench's wired link (the Pixhawk's USB).
     fn key_setup_allowed() -> bool {
         true
+    }
+
+    /// The LAN9118's 100 Mbit/s; the UART as TELEM1's 921,600 baud.
+    fn link_rate() -> u32 {
+        if LINK_IS_ETHERNET.load(core::sync::atomic::Ordering::Relaxed) {
+            12_500_000
+        } else {
+            ::link::bandwidth::bytes_per_second(921_600)
+        }
     }
     const TICK_COST_PER_COUNT: u32 = 40;
     /// `-icount shift=0`: one instruction per virtual nanosecond.
@@ -138,6 +151,7 @@ pub fn init() -> Parts<QemuMps2An500> {
     }
     time_driver::init();
     let (link_rx, link_tx, ethernet) = link::init();
+    LINK_IS_ETHERNET.store(ethernet, core::sync::atomic::Ordering::Relaxed);
     // SAFETY: the handlers of these lines are in the vector table below.
     unsafe {
         NVIC::unmask(Irq::Timer0);
