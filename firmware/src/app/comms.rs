@@ -1566,5 +1566,8 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
         // The group's end: a link that frames (the QEMU board's Ethernet) sends it now, as
         // one frame.
         let _ = out.tx.flush().await;
+        // A fast link never makes this task wait: the receive task, on this executor, gets
+        // its turn between two groups (else a flood's answers would keep it from the input).
+        embassy_futures::yield_now().await;
     }
 }
