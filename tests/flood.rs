@@ -1,7 +1,7 @@
 //! A ground station that floods the link (docs/ground-link.md#under-a-flood): runs
 //! `tests/flood.py` (pymavlink) against the firmware under QEMU through `host-sim hil --gcs`:
-//! random bytes, a mix of bad requests, and parameter-list requests, each at 1,000 messages a
-//! second (five times a busy ground station's 200) for a whole mission. Each mission must
+//! random bytes, a mix of bad requests, and parameter-list requests, each at 200 messages a
+//! second for a whole mission. Each mission must
 //! deliver exactly as the clean run, the vehicle's heartbeat must keep coming each second of
 //! its clock, and a parameter list must still come whole after the flood. What it checks is listed at the top of the script.
 //!
