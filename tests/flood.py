@@ -158,9 +158,7 @@ def flooded_run(args, kind, clean):
                              "--speed", str(SPEED)]),
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        v = gs.Vehicle(port)
-        v.conn = gs.mavutil.mavlink_connection(
-            f"udpin:127.0.0.1:{port}", source_system=FLOODER_SYSTEM, source_component=190)
+        v = gs.Vehicle(port, system=FLOODER_SYSTEM)
         v.conn.target_system, v.conn.target_component = 1, 1
         if v.recv(["HEARTBEAT"], 60, lambda m: m.get_srcComponent() == 1) is None:
             raise Failure(f"{kind}: no HEARTBEAT from the vehicle")

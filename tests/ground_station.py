@@ -97,9 +97,9 @@ def free_udp_port():
 class Vehicle:
     """The firmware as a ground station sees it, with every STATUSTEXT kept."""
 
-    def __init__(self, port, dialect="common"):
+    def __init__(self, port, dialect="common", system=255):
         self.conn = mavutil.mavlink_connection(
-            f"udpin:127.0.0.1:{port}", source_system=255, source_component=190,
+            f"udpin:127.0.0.1:{port}", source_system=system, source_component=190,
             dialect=dialect)
         self.texts = []
         self.last_beat = 0.0

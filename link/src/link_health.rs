@@ -66,22 +66,22 @@ pub struct LinkHealth {
     told_at_us: Option<u64>,
 }
 
+impl Counts {
+    /// Nothing counted.
+    pub const ZERO: Self = Self {
+        received: 0,
+        corrupt: 0,
+        replies_dropped: 0,
+        lists_restarted: 0,
+    };
+}
+
 impl LinkHealth {
     /// Nothing counted yet.
     pub const fn new() -> Self {
         Self {
-            counts: Counts {
-                received: 0,
-                corrupt: 0,
-                replies_dropped: 0,
-                lists_restarted: 0,
-            },
-            told: Counts {
-                received: 0,
-                corrupt: 0,
-                replies_dropped: 0,
-                lists_restarted: 0,
-            },
+            counts: Counts::ZERO,
+            told: Counts::ZERO,
             told_at_us: None,
         }
     }

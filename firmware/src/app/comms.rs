@@ -677,8 +677,8 @@ async fn store_origin(origin: &GeoOrigin, params: &mut ParamService, store: &mut
         }
         answered |= 1 << index;
     }
-    // One entry for the five values: the queue keeps room for the origin after them.
-    publish(params);
+    // One entry for the five values: the queue keeps room for the origin after them (whose
+    // announcement hands the send task the values in force).
     reply(Outbound::Params(answered));
     announce_origin(params);
 }
