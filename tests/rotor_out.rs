@@ -1,12 +1,14 @@
 //! A rotor that stops in flight (`rotor-out:J`), in the physics plant with
 //! `shared`'s mission: the rotor monitor (`shared::flight::rotor_monitor`) finds it from the
 //! vehicle's response, the mixer is rebuilt without it and the payload lands where it is.
-//! The paper's 8-rotor payloads, every rotor, fixed seed; and what two rotors out do.
+//! The paper's 8-rotor payloads, every rotor, fixed seed; two rotors out, apart and at once
+//! (`host_sim::rotor_faults`); a rotor that fades (`rotor-fade`); the ESCs' RPM.
 
 mod common;
 
 use common::load;
 use host_sim::mission_run::{self, LoadShift, MissionOutcome, MissionSetup, RotorStop};
+use host_sim::rotor_faults::{self, FADE_SECONDS};
 use shared::geometry::Vec2;
 use shared::mission::{AbortReason, MissionConfig};
 
@@ -37,6 +39,7 @@ fn fly(name: &str, stops: &[(usize, f32)]) -> MissionOutcome {
             .map(|&(robot, after)| RotorStop {
                 robot: robot - 1,
                 after,
+                fade: 0.0,
             })
             .collect(),
         ..MissionSetup::default()
@@ -157,16 +160,11 @@ fn l_sim1_any_rotor_in_hover() {
 }
 
 /// Two rotors, two seconds apart (the second in the landing the first began): measured on
-/// every pair of rect-ex1 and L-sim1 (first at 11 s, in the hover), none drops; the worst
-/// tilt is 36.5 degrees (rect-ex1, rotors 1 and 2, the two at one end). The second is named
-/// 0.09 to 0.11 s after it stops, unless the degraded mixer was not flying it (L-sim1
-/// without rotor 5 leaves rotors 6 to 8 unused: stopping one changes nothing), or the payload
-/// is already within 9 cm of the ground (rect-ex1 1+4, 2+7). Two at the same instant: 20 of
-/// rect-ex1's 28 pairs drop and 3 of L-sim1's (4+5, 5+6, 6+8): the change is two rotors' and
-/// the monitor, which names one rotor at a time, names one of them or none, and then waits
-/// 1.5 s before it can name another.
+/// every pair of rect-ex1 and L-sim1 (first at 11 s, in the hover), none drops. The second is
+/// named 0.09 to 0.11 s after it stops, unless the degraded mixer was not flying it, or the
+/// payload is already within 9 cm of the ground.
 #[test]
-fn two_rotors() {
+fn two_rotors_apart() {
     for (name, a, b) in [("rect-ex1", 1, 2), ("rect-ex1", 6, 7), ("L-sim1", 3, 4)] {
         let o = fly(name, &[(a, 11.0), (b, 13.0)]);
         let case = format!("{name}, rotors {a} at 11 s and {b} at 13 s");
@@ -175,13 +173,6 @@ fn two_rotors() {
             o.dropped, o.max_tilt_deg, o.rotors_found, o.rotor_landing_offset_m
         );
         assert!(!o.dropped && o.max_tilt_deg < DROP_TILT_DEG, "{case}");
-        assert_eq!(
-            o.aborted,
-            Some(AbortReason::RotorOut {
-                robot: (b - 1) as u8
-            }),
-            "{case}"
-        );
         for robot in [a, b] {
             let detection = detection_s(&o, robot - 1).expect("named");
             assert!(
@@ -194,14 +185,140 @@ fn two_rotors() {
             "{case}"
         );
     }
-    // The limit, kept honest: two at once at one end of the rectangle drop it.
-    let o = fly("rect-ex1", &[(1, 11.0), (2, 11.0)]);
-    eprintln!(
-        "rect-ex1, rotors 1 and 2 at 11 s: dropped {}, tilt {:.1} deg, named {:?}",
-        o.dropped, o.max_tilt_deg, o.rotors_found
-    );
-    assert!(
-        o.dropped,
-        "two rotors at once at one end: now survived, update docs/failures.md"
-    );
+}
+
+/// Two rotors at the same instant, from the vehicle's response alone: pairs the monitor names
+/// together, both within [`DETECTION_BOUND_S`], and flies home on the six left (the full
+/// sweep, `.ci/rotor-faults`, measured 21 of rect-ex1's 28 pairs and 27 of L-sim1's held;
+/// before pairs were judged, 8 and 25). rect-ex1 1+2, the two rotors at one end, has no static
+/// hover on the six left and is held all the same.
+#[test]
+fn two_rotors_at_once_from_the_response() {
+    for (name, a, b) in [
+        ("rect-ex1", 1, 2),
+        ("rect-ex1", 3, 6),
+        ("rect-ex1", 4, 7),
+        ("L-sim1", 1, 6),
+        ("L-sim1", 4, 8),
+    ] {
+        let case = format!("{name}, rotors {a} and {b} at once");
+        let c = rotor_faults::pair(&load(name), a, b, false).expect("runs");
+        eprintln!(
+            "{case}: holdable {}, dropped {}, tilt {:.1} deg, named {:?} after {:?} s",
+            c.holdable,
+            c.outcome.dropped,
+            c.outcome.max_tilt_deg,
+            c.named(),
+            c.detection_s()
+        );
+        assert!(!c.outcome.dropped, "{case}: dropped");
+        let mut named = c.named();
+        named.sort_unstable();
+        assert_eq!(named, vec![a, b], "{case}: both named, no other");
+        assert!(
+            c.detection_s().is_some_and(|s| s < DETECTION_BOUND_S),
+            "{case}: named after {:?} s",
+            c.detection_s()
+        );
+    }
+}
+
+/// Longest time from a rotor's RPM collapsing to the monitor naming it, s (the issue's
+/// bound: 30 ms; measured 7 ms on every pair).
+const RPM_DETECTION_BOUND_S: f32 = 0.03;
+
+/// With the ESCs' RPM, two rotors at once: the pairs the response alone cannot hold (it names
+/// the wrong pair or too late) are named from their RPM within [`RPM_DETECTION_BOUND_S`] and
+/// held. The full sweep held all 56, holdable or not.
+#[test]
+fn two_rotors_at_once_with_rpm() {
+    for (name, a, b) in [
+        ("rect-ex1", 1, 6),
+        ("rect-ex1", 2, 4),
+        ("rect-ex1", 6, 7),
+        ("rect-ex1", 1, 8),
+        ("L-sim1", 6, 8),
+    ] {
+        let case = format!("{name}, rotors {a} and {b} at once, with RPM");
+        let c = rotor_faults::pair(&load(name), a, b, true).expect("runs");
+        assert!(!c.outcome.dropped, "{case}: dropped");
+        assert!(
+            c.outcome.max_tilt_deg < ONE_ROTOR_TILT_DEG,
+            "{case}: tilt {} deg",
+            c.outcome.max_tilt_deg
+        );
+        let mut named = c.named();
+        named.sort_unstable();
+        assert_eq!(named, vec![a, b], "{case}: both named, no other");
+        let detection = c.detection_s().expect("named");
+        assert!(
+            detection < RPM_DETECTION_BOUND_S,
+            "{case}: named after {detection} s"
+        );
+    }
+}
+
+/// Largest tilt before a fading rotor is named, degrees (the bound; measured at most
+/// 1.8).
+const FADE_TILT_DEG: f32 = 20.0;
+
+/// A rotor fading over 4 s in the hover: named before the payload tilts [`FADE_TILT_DEG`],
+/// the payload held and landed; with RPM, once its thrust is half its command (2.0 s).
+#[test]
+fn a_fading_rotor_is_named_before_it_tilts_the_payload() {
+    for (name, robot, rpm) in [
+        ("rect-ex1", 1, false),
+        ("rect-ex1", 7, false),
+        ("L-sim1", 5, false),
+        ("rect-ex1", 4, true),
+        ("L-sim1", 2, true),
+    ] {
+        let case = format!("{name}, rotor {robot} fading over {FADE_SECONDS} s, RPM {rpm}");
+        let c = rotor_faults::fade(&load(name), robot, FADE_SECONDS, rpm).expect("runs");
+        let detection = c.detection_s();
+        let tilt = c.tilt_when_named_deg();
+        eprintln!("{case}: named after {detection:?} s, tilt by then {tilt:?} deg");
+        assert!(!c.outcome.dropped, "{case}: dropped");
+        assert_eq!(
+            c.outcome
+                .rotors_found
+                .iter()
+                .map(|(r, _)| r + 1)
+                .collect::<Vec<_>>(),
+            vec![robot],
+            "{case}: only this rotor named"
+        );
+        assert!(
+            tilt.is_some_and(|t| t < FADE_TILT_DEG),
+            "{case}: tilt {tilt:?}"
+        );
+        if rpm {
+            // Half its thrust gone at half the fade; RPM's confirmation on top.
+            assert!(
+                detection.is_some_and(|s| s < FADE_SECONDS / 2.0 + 0.1),
+                "{case}: {detection:?}"
+            );
+        }
+        assert!(
+            c.outcome
+                .phases
+                .last()
+                .is_some_and(|(p, _)| p == "disarmed"),
+            "{case}: landed and disarmed"
+        );
+    }
+}
+
+/// The normal missions with the ESCs' RPM: no rotor named.
+#[test]
+fn no_rotor_is_named_from_the_rpm_on_the_normal_missions() {
+    for name in ["rect-ex1", "L-sim1", "rect-sim2"] {
+        let o = rotor_faults::fly(&load(name), &[], true).expect("runs");
+        assert!(
+            o.rotors_found.is_empty(),
+            "{name}: named {:?}",
+            o.rotors_found
+        );
+        assert!(o.delivered, "{name}: {:?}", o.aborted);
+    }
 }

@@ -18,6 +18,8 @@
 //!   is at V from the start;
 //! - `rotor-out:J@T`: robot J's rotor stops and makes no thrust from then on, whatever is
 //!   commanded (repeatable: two rotors can stop);
+//! - `rotor-fade:J,S@T`: robot J's rotor makes less and less of its commanded thrust, none
+//!   after S seconds (a damaged propeller, a failing ESC; repeatable with `rotor-out`);
 //! - `mocap-loss@T`: motion capture stops (as `--mocap-lost-after T`).
 
 use std::fmt;
@@ -39,6 +41,8 @@ pub const MAX_LOAD_SHIFT: f32 = 1.0;
 pub const MAX_IMU_NOISE: f32 = 1000.0;
 /// Highest pack voltage `battery:V` takes, V (a 24-cell pack).
 pub const MAX_PACK_VOLTS: f32 = 100.0;
+/// Longest fade of `rotor-fade:J,S`, s.
+pub const MAX_FADE_TIME: f32 = 60.0;
 /// Latest injection, s after take-off: the mission's own time limit.
 pub const MAX_INJECT_TIME: f32 = crate::mission_run::MISSION_TIME_LIMIT;
 
@@ -60,6 +64,9 @@ pub enum Fault {
     Battery(f32),
     /// This robot's rotor (index from 0) stops: no thrust from then on.
     RotorOut(usize),
+    /// This robot's rotor (index from 0) fades from what is commanded to nothing over this
+    /// many seconds.
+    RotorFade(usize, f32),
     /// Motion capture stops.
     MocapLoss,
 }
@@ -109,6 +116,7 @@ impl fmt::Display for Injection {
             Fault::Battery(v) if from_start => return write!(f, "battery:{v}"),
             Fault::Battery(v) => write!(f, "battery:{v}"),
             Fault::RotorOut(robot) => write!(f, "rotor-out:{}", robot + 1),
+            Fault::RotorFade(robot, seconds) => write!(f, "rotor-fade:{},{seconds}", robot + 1),
             Fault::MocapLoss => write!(f, "mocap-loss"),
         }?;
         match self.since {
@@ -191,9 +199,32 @@ fn fault(kind: &str, text: &str) -> Result<Fault, String> {
             }
             Ok(Fault::RotorOut(robot - 1))
         }
+        "rotor-fade" => {
+            let usage = "rotor-fade:J,S takes a robot's number and the seconds its thrust takes to fade to nothing, e.g. rotor-fade:3,4@8";
+            let (robot, seconds) = arg
+                .split_once(',')
+                .ok_or_else(|| format!("`{text}`: {usage}"))?;
+            let robot: usize = robot
+                .trim()
+                .parse()
+                .map_err(|_| format!("`{text}`: {usage}"))?;
+            if !(1..=MAX_ROBOTS).contains(&robot) {
+                return Err(format!(
+                    "`{text}`: robots are numbered 1 to {MAX_ROBOTS} at most"
+                ));
+            }
+            let seconds =
+                number(seconds, "fade time S").map_err(|e| format!("`{text}`: {usage}: {e}"))?;
+            if !(seconds > 0.0 && seconds <= MAX_FADE_TIME) {
+                return Err(format!(
+                    "`{text}`: the fade time {seconds} s must be above 0 and at most {MAX_FADE_TIME} s"
+                ));
+            }
+            Ok(Fault::RotorFade(robot - 1, seconds))
+        }
         "battery" => Ok(Fault::Battery(pack_volts(arg, text)?)),
         other => Err(format!(
-            "`{text}`: unknown fault `{other}` (known: load-shift:DX,DY@T, rotor-out:J@T, mocap-loss@T, stepper-stall:J, imu-stuck@T, imu-noise:X@T, gcs-loss[@T], battery:V[@T]; the IMU, ground-station and battery faults also @start+T)"
+            "`{text}`: unknown fault `{other}` (known: load-shift:DX,DY@T, rotor-out:J@T, rotor-fade:J,S@T, mocap-loss@T, stepper-stall:J, imu-stuck@T, imu-noise:X@T, gcs-loss[@T], battery:V[@T]; the IMU, ground-station and battery faults also @start+T)"
         )),
     }
 }
@@ -261,7 +292,8 @@ impl Injection {
 pub fn check_robots(injections: &[Injection], loaded: &LoadedScenario) -> anyhow::Result<()> {
     let robots = loaded.scenario.robots.count();
     for i in injections {
-        if let Fault::StepperStall(robot) | Fault::RotorOut(robot) = i.fault
+        if let Fault::StepperStall(robot) | Fault::RotorOut(robot) | Fault::RotorFade(robot, _) =
+            i.fault
             && robot >= robots
         {
             anyhow::bail!("--inject {i}: {} has robots 1 to {robots}", loaded.name);
@@ -271,7 +303,7 @@ pub fn check_robots(injections: &[Injection], loaded: &LoadedScenario) -> anyhow
 }
 
 /// `setup` with `injections` in it, as the plant loop takes them (for `mission` and `hil`
-/// alike): every `rotor-out` counts, the last one of another kind; `mocap-loss@T` replaces
+/// alike): every `rotor-out` and `rotor-fade` counts, the last one of another kind; `mocap-loss@T` replaces
 /// the setup's `mocap_lost_after_takeoff`.
 pub fn apply(injections: &[Injection], mut setup: MissionSetup) -> MissionSetup {
     let onset = |i: &Injection| match i.since {
@@ -305,7 +337,7 @@ pub fn apply(injections: &[Injection], mut setup: MissionSetup) -> MissionSetup 
                     onset: onset(i),
                 });
             }
-            Fault::RotorOut(_) => {}
+            Fault::RotorOut(_) | Fault::RotorFade(..) => {}
             Fault::MocapLoss => setup.mocap_lost_after_takeoff = Some(i.after),
         }
     }
@@ -322,6 +354,12 @@ pub fn rotors_out(injections: &[Injection]) -> Vec<RotorStop> {
             Fault::RotorOut(robot) => Some(RotorStop {
                 robot,
                 after: i.after,
+                fade: 0.0,
+            }),
+            Fault::RotorFade(robot, fade) => Some(RotorStop {
+                robot,
+                after: i.after,
+                fade,
             }),
             _ => None,
         })
@@ -394,6 +432,11 @@ mod tests {
             ("rotor-out:17@3", "numbered 1 to"),
             ("rotor-out:2@-1", "from 0"),
             ("rotor-out:2@start+1", "in flight"),
+            ("rotor-fade:2@3", "fade to nothing"),
+            ("rotor-fade:2,x@3", "fade time S"),
+            ("rotor-fade:2,0@3", "above 0"),
+            ("rotor-fade:2,61@3", "at most 60"),
+            ("rotor-fade:0,2@3", "numbered 1 to"),
             ("mocap-loss:2@3", "no argument"),
         ] {
             let err = Injection::parse(bad).expect_err(bad);
@@ -401,7 +444,7 @@ mod tests {
         }
         let two = [
             Injection::parse("rotor-out:3@8.5").expect("valid"),
-            Injection::parse("rotor-out:7@9").expect("valid"),
+            Injection::parse("rotor-fade:7,2.5@9").expect("valid"),
             Injection::parse("gcs-loss@2").expect("valid"),
         ];
         assert_eq!(
@@ -409,11 +452,13 @@ mod tests {
             vec![
                 RotorStop {
                     robot: 2,
-                    after: 8.5
+                    after: 8.5,
+                    fade: 0.0,
                 },
                 RotorStop {
                     robot: 6,
-                    after: 9.0
+                    after: 9.0,
+                    fade: 2.5,
                 }
             ]
         );

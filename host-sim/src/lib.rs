@@ -23,6 +23,7 @@ pub mod mission_run;
 pub mod monte_carlo;
 pub mod plant;
 pub mod report;
+pub mod rotor_faults;
 pub mod scenario_file;
 pub mod thrust_calibration;
 pub mod trial_trace;

@@ -17,10 +17,10 @@ use shared::estimation::Measurement;
 use shared::flight::AdaptEvent;
 use shared::geometry::{Rail, Vec2};
 use shared::mission::{
-    AbortReason, CommandRefusal, HardwareFaults, JobRequest, Mission, MissionConfig,
+    AbortReason, CommandRefusal, EscRpm, HardwareFaults, JobRequest, Mission, MissionConfig,
     MissionPlanner, OperatorCommand, Phase, Reason, Supervision, TickInput,
 };
-use shared::scenario::Scenario;
+use shared::scenario::{MAX_ROBOTS, Scenario};
 
 use crate::flight_log::LogFile;
 use crate::harness::{CONTROL_HZ, DROP_TILT_DEG};
@@ -69,6 +69,8 @@ pub struct MissionSetup {
     /// Failure injection: rotors that stop in flight ([`crate::inject::rotors_out`] makes
     /// them from `--inject rotor-out:J@T`).
     pub rotors_out: Vec<RotorStop>,
+    /// The ESCs report each rotor's RPM every tick (bidirectional DShot's telemetry).
+    pub esc_telemetry: bool,
     /// Write the mission's flight log (ULog) to this file.
     pub log: Option<PathBuf>,
     /// A ground station's route to fly instead of the scenario's target.
@@ -79,13 +81,16 @@ pub struct MissionSetup {
 }
 
 /// A rotor that stops: from `after` seconds after take-off began, robot `robot`'s rotor
-/// (from 0) makes no thrust, whatever is commanded.
+/// (from 0) makes no thrust, whatever is commanded; or, with `fade` seconds, its thrust goes
+/// from what is commanded to nothing over that time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RotorStop {
     /// The robot, from 0.
     pub robot: usize,
     /// When, s after take-off began.
     pub after: f32,
+    /// Seconds over which it fades to nothing (0: it stops at once).
+    pub fade: f32,
 }
 
 /// An IMU that fails: from `after` seconds after take-off began (or after the mission's start,
@@ -214,6 +219,7 @@ impl Default for MissionSetup {
             gcs_loss: None,
             battery_drop: None,
             rotors_out: Vec::new(),
+            esc_telemetry: false,
             log: None,
             route: None,
             gyro_bias: None,
@@ -234,6 +240,8 @@ pub struct Sensed {
     pub command: Option<OperatorCommand>,
     /// What the board's drivers report failed (the plant stands in for them).
     pub faults: HardwareFaults,
+    /// Each rotor's RPM as its ESC's telemetry reports it, if the vehicle has it.
+    pub esc_rpm: Option<EscRpm>,
     /// The simulated ground station's heartbeat (once a second) is due with this tick.
     pub gcs_heartbeat: bool,
     /// The ground link is lost (injected): nothing from any ground station reaches the
@@ -325,8 +333,12 @@ pub struct PlantRecord {
     /// Horizontal distance from where the payload was when the injected IMU fault began to
     /// where it ended, m.
     pub moved_after_imu_fault_m: Option<f32>,
-    /// Each injected rotor stop that happened: robot (from 0), simulated time, s.
+    /// Each injected rotor stop that happened (or fade that began): robot (from 0),
+    /// simulated time, s.
     pub rotors_stopped: Vec<(usize, f32)>,
+    /// From the first rotor stop or fade on, each tick's time (s) and tilt (largest of roll
+    /// and pitch, degrees).
+    pub tilts_after_stop: Vec<(f32, f32)>,
     /// Horizontal distance from where the first injected rotor stopped to where the payload
     /// ended, m (the landing "where it is" measured).
     pub rotor_landing_offset_m: Option<f32>,
@@ -437,15 +449,22 @@ pub fn fly(
             }
         }
         for stop in &setup.rotors_out {
-            if t >= takeoff_at + stop.after
-                && let Some(d) = dead.get_mut(stop.robot)
-                && !*d
-            {
-                *d = true;
-                plant.stop_rotor(stop.robot);
-                record.rotors_stopped.push((stop.robot, t));
-                stopped_over.get_or_insert(plant.state().position);
+            let begin = takeoff_at + stop.after;
+            if t < begin || dead.get(stop.robot).is_none_or(|&d| d) {
+                continue;
             }
+            if stop.fade > 0.0 {
+                if !record.rotors_stopped.iter().any(|(r, _)| *r == stop.robot) {
+                    record.rotors_stopped.push((stop.robot, t));
+                    stopped_over.get_or_insert(plant.state().position);
+                }
+                plant.set_rotor_health(stop.robot, 1.0 - (t - begin) / stop.fade);
+                continue;
+            }
+            dead[stop.robot] = true;
+            plant.stop_rotor(stop.robot);
+            record.rotors_stopped.push((stop.robot, t));
+            stopped_over.get_or_insert(plant.state().position);
         }
         let truth_now = plant.state();
         let mut imu = sensors.imu(&truth_now, dt);
@@ -508,6 +527,13 @@ pub fn fly(
             mocap,
             command: command.take(),
             faults,
+            esc_rpm: setup.esc_telemetry.then(|| {
+                let mut rpm = [f32::NAN; MAX_ROBOTS];
+                for (r, v) in rpm.iter_mut().zip(plant.rotor_rpm()) {
+                    *r = v;
+                }
+                rpm
+            }),
             gcs_heartbeat,
             gcs_lost,
             battery_volts,
@@ -594,6 +620,9 @@ pub fn fly(
         if t >= takeoff_at {
             let tilt = euler.x.abs().max(euler.y.abs()).to_degrees();
             record.max_tilt_deg = record.max_tilt_deg.max(tilt);
+            if !record.rotors_stopped.is_empty() {
+                record.tilts_after_stop.push((t, tilt));
+            }
             let top = record.final_thrusts.iter().fold(0.0f32, |m, &c| m.max(c));
             record.max_thrust_fraction = record
                 .max_thrust_fraction
@@ -775,6 +804,7 @@ impl Autopilot for InProcess {
             mocap: sensed.mocap,
             command: sensed.command,
             faults: sensed.faults,
+            esc_rpm: sensed.esc_rpm,
             supervision: Supervision {
                 gcs_heartbeat: sensed.gcs_heartbeat,
                 battery_volts: Some(sensed.battery_volts),
@@ -890,8 +920,11 @@ pub struct MissionOutcome {
     pub moved_after_imu_fault_m: Option<f32>,
     /// What the mission's IMU monitor found after the start, and when, s.
     pub imu_detected: Option<(ImuFailure, f32)>,
-    /// Each rotor stopped by injection: robot (from 0), simulated time, s.
+    /// Each rotor stopped by injection (or whose fade began): robot (from 0), simulated
+    /// time, s.
     pub rotors_stopped: Vec<(usize, f32)>,
+    /// From the first rotor stop or fade on, each tick's time (s) and tilt (degrees).
+    pub tilts_after_stop: Vec<(f32, f32)>,
     /// Horizontal distance from where the first injected rotor stopped to where the payload
     /// ended, m.
     pub rotor_landing_offset_m: Option<f32>,
@@ -973,6 +1006,7 @@ pub fn run(
             .map(|d| (d.failure, d.time_us as f32 * 1e-6)),
         rotors_stopped: record.rotors_stopped,
         rotor_landing_offset_m: record.rotor_landing_offset_m,
+        tilts_after_stop: record.tilts_after_stop,
         rotors_found: match (mission.flight(), record.takeoff_at) {
             (Some(flight), Some(takeoff)) => flight
                 .rotors_lost()
@@ -1037,5 +1071,15 @@ mod tests {
         let (at, stalled) = stall_run(0.2, 0.6, 0.01, 15);
         assert!(!stalled);
         assert!((at - 0.35).abs() < 1e-4, "at {at}");
+    }
+}
+
+impl MissionOutcome {
+    /// The largest tilt (degrees) from the first rotor stop or fade up to simulated time `t`.
+    pub fn tilt_until(&self, t: f32) -> f32 {
+        self.tilts_after_stop
+            .iter()
+            .take_while(|(at, _)| *at <= t)
+            .fold(0.0f32, |m, (_, tilt)| m.max(*tilt))
     }
 }

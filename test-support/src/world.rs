@@ -113,6 +113,7 @@ impl World {
             }),
             command,
             faults: self.faults,
+            esc_rpm: None,
             supervision: Supervision {
                 gcs_heartbeat: tick < self.gcs_until
                     && tick % self.heartbeat_period.max(1) == heartbeat_phase,

@@ -441,6 +441,7 @@ impl Autonomy {
             mocap: input.mocap.as_ref().map(fix),
             command: command.map(self::command),
             faults: input.faults,
+            esc_rpm: None,
             supervision: input.supervision,
         };
         let out = self.mission.step(&mission_input);

@@ -31,6 +31,9 @@ use shared::scenario::GRAVITY;
 /// Rotor time constant, s: a 20 ms first-order lag, typical of 10-inch props on 4S ESCs
 /// (5 to 50 ms in the field).
 pub const MOTOR_TIME_CONSTANT: f32 = 0.02;
+/// A rotor's RPM at its largest thrust (a 10-inch propeller on a 4S motor of about 700 kV
+/// makes some 14 N there).
+pub const RPM_AT_MAX_THRUST: f32 = 11_000.0;
 /// Thickness of the payload plate, m.
 pub const PLATE_THICKNESS: f32 = 0.03;
 /// Physics step, s (2 kHz: five steps per 400 Hz control tick).
@@ -86,6 +89,8 @@ pub struct Plant {
     body: RigidBodyHandle,
     config: PlantConfig,
     thrusts: Vec<f32>,
+    /// Each rotor's share of its commanded thrust that it makes (1 healthy, 0 stopped).
+    health: Vec<f32>,
     /// Each robot's place in its play (0: lower stop, BACKLASH: upper stop) and speed in it.
     play: Vec<(f32, f32)>,
     /// Physics steps taken: time is counted, not summed, so it never drifts.
@@ -165,6 +170,7 @@ impl Plant {
             body,
             config,
             thrusts: vec![0.0; n],
+            health: vec![1.0; n],
             play: vec![(0.0, 0.0); n],
             steps: 0,
         }
@@ -244,12 +250,29 @@ impl Plant {
         }
     }
 
+    /// Rotor `i` makes `health` (0 to 1) of the thrust commanded from now on, through its
+    /// motor's lag: a damaged propeller or a failing ESC.
+    pub fn set_rotor_health(&mut self, i: usize, health: f32) {
+        if let Some(h) = self.health.get_mut(i) {
+            *h = health.clamp(0.0, 1.0);
+        }
+    }
+
+    /// Each rotor's RPM as its ESC would report it: thrust goes with the RPM squared, the
+    /// largest thrust at [`RPM_AT_MAX_THRUST`].
+    pub fn rotor_rpm(&self) -> impl Iterator<Item = f32> + '_ {
+        let max = self.config.max_thrust.max(f32::MIN_POSITIVE);
+        self.thrusts
+            .iter()
+            .map(move |&t| RPM_AT_MAX_THRUST * (t.max(0.0) / max).sqrt())
+    }
+
     /// One physics step of `PHYSICS_DT` with rotor commands `commands` (N, commanded units).
     pub fn step(&mut self, commands: &[f32]) {
         let alpha = PHYSICS_DT / MOTOR_TIME_CONSTANT;
         let scale = 1.0 / self.config.map_error;
-        for (t, &c) in self.thrusts.iter_mut().zip(commands) {
-            let target = c.clamp(0.0, self.config.max_thrust) * scale;
+        for ((t, &c), &health) in self.thrusts.iter_mut().zip(commands).zip(&self.health) {
+            let target = c.clamp(0.0, self.config.max_thrust) * scale * health;
             *t += (target - *t) * alpha;
         }
         let disturbance = self.disturbance(self.time());

@@ -172,6 +172,7 @@ mod tests {
             mocap: None,
             command: None,
             faults: HardwareFaults::NONE,
+            esc_rpm: None,
             supervision: Supervision::NONE,
         }
     }

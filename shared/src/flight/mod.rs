@@ -9,10 +9,12 @@
 //! - [`trim`]: the payload's COM and mass from the wrench that holds it in a hover.
 //! - [`adapt`]: the formation re-solved and the robots moved in flight when the load shifts.
 //! - [`route`]: a ground station's mission items in the local frame, checked.
-//! - [`rotor_monitor`]: a rotor that stops in flight, found from the vehicle's response.
+//! - [`rotor_monitor`]: rotors that stop or fade in flight, found from the vehicle's response
+//!   and the ESCs' RPM; [`rotor_isolation`]: which one or two rotors a change is.
 
 pub mod adapt;
 pub mod model;
+pub mod rotor_isolation;
 pub mod rotor_monitor;
 pub mod route;
 pub mod stack;

@@ -53,6 +53,7 @@
 use crate::control::allocation::Mixer;
 use crate::control::vector::Vec3;
 use crate::control::vehicle::VehicleModel;
+use crate::flight::rotor_isolation::{Columns, Judging, explain};
 use crate::geometry::Vec2;
 use crate::math;
 use crate::scenario::MAX_ROBOTS;
@@ -74,10 +75,15 @@ pub struct RotorMonitorConfig {
     pub rebase_time: f32,
     /// Time after (re)starting before a rotor can be declared stopped, s.
     pub settle_time: f32,
-    /// Time after a rotor is found before another can be, s: the recovery on the rotors left
-    /// applies large torques, and the inertia's error (the residual is the torque times the
-    /// model's inertia over the true one, less one) is then the size of a rotor's.
+    /// Time after a rotor is found in which another must show in the thrust row too, s: the
+    /// recovery on the rotors left applies large torques, and the inertia's error (the
+    /// residual is the torque times the model's inertia over the true one, less one) is then
+    /// the size of a rotor's.
     pub resettle_time: f32,
+    /// Time after a rotor is found in which nothing is judged from the vehicle's response, s:
+    /// the recovery's first swing moves the thrust row too (the accelerometer sits off the
+    /// COM, and its lever arm is corrected with the model's angular acceleration).
+    pub blind_time: f32,
     /// Expected thrust below which a rotor is not judged (its loss is too small to see), N.
     pub min_thrust: f32,
     /// Share of the change (squared norm) one rotor's column must explain.
@@ -100,6 +106,7 @@ impl RotorMonitorConfig {
         rebase_time: 0.3,
         settle_time: 0.5,
         resettle_time: 1.5,
+        blind_time: 0.25,
         min_thrust: 1.0,
         min_explained: 0.8,
         min_fraction: 0.5,
@@ -117,6 +124,19 @@ impl Default for RotorMonitorConfig {
 /// Time constant of the change's average that names the rotor, s.
 const SMOOTHING_TIME: f32 = 0.01;
 
+/// Time a drift of the baseline must be explained by the same finding before it is named, s.
+const DRIFT_CONFIRM_TIME: f32 = 0.2;
+
+/// Time over which each rotor's RPM-to-thrust ratio is learned once the rotors fly, s.
+const RPM_LEARN_TIME: f32 = 1.0;
+
+/// Time constant of that learning, s.
+const RPM_LEARN_AVERAGE: f32 = 0.2;
+
+/// Time a rotor's RPM must show less than [`RotorMonitorConfig::min_fraction`] of its
+/// expected thrust before it is named, s.
+const RPM_CONFIRM_TIME: f32 = 0.01;
+
 /// What the monitor reads each tick.
 #[derive(Clone, Copy, Debug)]
 pub struct MonitorInput<'a> {
@@ -130,11 +150,16 @@ pub struct MonitorInput<'a> {
     pub com: Vec2,
     /// This tick's rotor commands, N.
     pub thrusts: &'a [f32],
+    /// Each rotor's RPM from its ESC's telemetry (NaN where this tick has none), or `None`
+    /// without ESC telemetry.
+    pub rpm: Option<&'a [f32]>,
     /// Body rate, rad/s.
     pub rate: Vec3,
     /// The accelerometer's specific force, body frame, m/s^2.
     pub accel: Vec3,
-    /// Whether to watch: airborne and clear of the ground.
+    /// Whether the rotors fly the vehicle (airborne): the RPM is judged.
+    pub flying: bool,
+    /// Whether to watch the vehicle's response: flying, clear of the ground, the IMU trusted.
     pub active: bool,
     /// Seconds since the previous tick.
     pub dt: f32,
@@ -154,17 +179,33 @@ pub struct RotorMonitor {
     filtered: [f32; 3],
     /// Their slow baseline.
     baseline: [f32; 3],
+    /// The baseline when the monitor settled, moved with every rebase: the baseline's drift
+    /// from it is what a rotor that fades slowly shows.
+    reference: [f32; 3],
     /// Time left before judging, s.
     wait: f32,
+    /// Time left in which a finding must show in the thrust row (after a rotor was found), s.
+    guard: f32,
     /// Time the change has been beyond [`RotorMonitorConfig::quiet`], s.
     loud: f32,
     /// Time some rotor has explained the change without a break, s.
     confirming: f32,
+    /// Time the same rotors have explained the baseline's drift, s.
+    drifting: f32,
+    /// The rotors the drift was last explained by.
+    drift_rotors: u16,
     /// The change through a [`SMOOTHING_TIME`] low-pass.
     smoothed: [f32; 3],
     started: bool,
     /// Rotors known to be out (bit `i` for rotor `i`): never candidates again.
     out: u16,
+    /// Each rotor's RPM squared over its expected thrust, learned in the first
+    /// [`RPM_LEARN_TIME`] of flight.
+    rpm_ratio: [f32; MAX_ROBOTS],
+    /// Time the RPM has been learned, s.
+    rpm_learned: f32,
+    /// Ticks each rotor's RPM has been too low in a row.
+    rpm_low: [u8; MAX_ROBOTS],
 }
 
 impl Default for RotorMonitor {
@@ -182,12 +223,19 @@ impl RotorMonitor {
             residual: [0.0; 3],
             filtered: [0.0; 3],
             baseline: [0.0; 3],
+            reference: [0.0; 3],
             wait: 0.0,
+            guard: 0.0,
             loud: 0.0,
             confirming: 0.0,
+            drifting: 0.0,
+            drift_rotors: 0,
             smoothed: [0.0; 3],
             started: false,
             out: 0,
+            rpm_ratio: [0.0; MAX_ROBOTS],
+            rpm_learned: 0.0,
+            rpm_low: [0; MAX_ROBOTS],
         }
     }
 
@@ -196,15 +244,39 @@ impl RotorMonitor {
         self.out
     }
 
-    /// Takes rotors in `out` as stopped (found here or reported by their ESCs): they are not
-    /// judged again, and the monitor starts afresh for the mixer rebuilt without them, judging
-    /// again after [`RotorMonitorConfig::resettle_time`].
-    pub fn mark_out(&mut self, out: u16, config: &RotorMonitorConfig) {
-        if out & !self.out != 0 {
-            self.out |= out;
-            self.restart();
-            self.wait = config.resettle_time;
+    /// Takes rotors in `out` as stopped (found here or reported by their ESCs), `mixer` the
+    /// one flown until now: they are not judged again; what their loss put into the residuals
+    /// is taken out (the mixer rebuilt without them no longer expects their thrust), so a
+    /// rotor that stopped with them still shows; for [`RotorMonitorConfig::resettle_time`] a
+    /// new finding must show in the thrust row as well.
+    pub fn mark_out(&mut self, out: u16, mixer: &Mixer, config: &RotorMonitorConfig) {
+        let newly = out & !self.out;
+        if newly == 0 {
+            return;
         }
+        self.out |= newly;
+        if self.started {
+            let k = config.bandwidth;
+            for j in (0..mixer.count().min(MAX_ROBOTS)).filter(|&j| newly & (1 << j) != 0) {
+                let c = mixer.column(j);
+                let lost = [c[0], c[1], c[2]].map(|v| v * self.expected[j]);
+                for row in 0..3 {
+                    self.residual[row] += lost[row];
+                    self.filtered[row] += lost[row];
+                }
+                for axis in 0..2 {
+                    if k > 0.0 {
+                        self.momentum[axis] -= lost[axis + 1] / k;
+                    }
+                }
+            }
+        }
+        self.reference = self.baseline;
+        self.confirming = 0.0;
+        self.drifting = 0.0;
+        self.loud = 0.0;
+        self.smoothed = [0.0; 3];
+        self.guard = config.resettle_time;
     }
 
     /// Each rotor's expected thrust: its command through the rotors' response, N.
@@ -218,11 +290,16 @@ impl RotorMonitor {
         if !self.started || self.wait > 0.0 {
             return [0.0; 3];
         }
-        let mut d = [0.0; 3];
-        for (i, v) in d.iter_mut().enumerate() {
-            *v = self.filtered[i] - self.baseline[i];
+        core::array::from_fn(|i| self.filtered[i] - self.baseline[i])
+    }
+
+    /// The baseline's drift since the monitor settled (rebases left out): thrust (N), roll
+    /// and pitch torque (N m).
+    pub fn drift(&self) -> [f32; 3] {
+        if !self.started || self.wait > 0.0 {
+            return [0.0; 3];
         }
-        d
+        core::array::from_fn(|i| self.baseline[i] - self.reference[i])
     }
 
     fn restart(&mut self) {
@@ -230,13 +307,13 @@ impl RotorMonitor {
         self.wait = 0.0;
         self.loud = 0.0;
         self.confirming = 0.0;
+        self.drifting = 0.0;
         self.smoothed = [0.0; 3];
     }
 
-    /// One tick; the rotor (index from 0) newly found stopped, if any. The caller rebuilds
-    /// the mixer without it and calls [`Self::mark_out`] (done here already for the rotor
-    /// returned).
-    pub fn update(&mut self, input: &MonitorInput<'_>) -> Option<usize> {
+    /// One tick; the rotors (bit `i` for rotor `i`) newly found stopped, 0 if none. The
+    /// caller rebuilds the mixer without them (this has called [`Self::mark_out`] for them).
+    pub fn update(&mut self, input: &MonitorInput<'_>) -> u16 {
         let config = input.config;
         let n = input.mixer.count().min(input.thrusts.len()).min(MAX_ROBOTS);
         let dt = input.dt;
@@ -252,6 +329,11 @@ impl RotorMonitor {
                 *e += alpha * (t - *e);
             }
         }
+        let by_rpm = self.watch_rpm(input, n);
+        if by_rpm != 0 {
+            self.mark_out(by_rpm, input.mixer, config);
+            return by_rpm;
+        }
         let inertia = input.vehicle.inertia;
         let w = input.rate;
         let usable = input.active
@@ -262,7 +344,7 @@ impl RotorMonitor {
             && inertia.y > 0.0;
         if !usable {
             self.restart();
-            return None;
+            return 0;
         }
         let p = [inertia.x * w.x, inertia.y * w.y];
         if !self.started {
@@ -270,9 +352,10 @@ impl RotorMonitor {
             self.residual = [0.0; 3];
             self.filtered = [0.0; 3];
             self.baseline = [0.0; 3];
+            self.reference = [0.0; 3];
             self.started = true;
             self.wait = math::max(self.wait, config.settle_time);
-            return None;
+            return 0;
         }
         let k = config.bandwidth;
         let gyroscopic = w.cross(inertia.component_mul(w));
@@ -308,9 +391,19 @@ impl RotorMonitor {
         self.wait -= dt;
         if self.wait > 0.0 {
             self.baseline = self.filtered;
-            return None;
+            self.reference = self.filtered;
+            return 0;
         }
-        let scale = torque_scale(input.mixer, n)?;
+        self.guard = math::max(self.guard - dt, 0.0);
+        let Some(scale) = torque_scale(input.mixer, n) else {
+            return 0;
+        };
+        if self.guard > config.resettle_time - config.blind_time {
+            // The baseline stays what it was before: a rotor that stopped with the one found
+            // shows once this has passed.
+            self.loud = 0.0;
+            return 0;
+        }
         let d = self.change();
         let size = math::sqrt(d[0] * d[0] + (d[1] * d[1] + d[2] * d[2]) * scale * scale);
         if size <= config.quiet {
@@ -326,71 +419,167 @@ impl RotorMonitor {
         for (m, v) in self.smoothed.iter_mut().zip(d) {
             *m += recent * (v - *m);
         }
-        if self
-            .isolate(config, &d, input.mixer, n, scale, true)
-            .is_none()
-        {
+        // Nothing a rotor's loss could be: spare the search (most ticks).
+        let least = config.min_fraction * config.min_thrust;
+        let drift = self.drift();
+        let drift_size = math::sqrt(
+            drift[0] * drift[0] + (drift[1] * drift[1] + drift[2] * drift[2]) * scale * scale,
+        );
+        // A drift a rotor could explain shows in the collective (a quarter of the least loss).
+        let drift_shown = drift_size >= least && -drift[0] >= config.min_fraction * least;
+        if size < least && !drift_shown {
+            self.confirming = 0.0;
+            self.drifting = 0.0;
+            return 0;
+        }
+        let columns = Columns::new(
+            n,
+            |j| {
+                let c = input.mixer.column(j);
+                [c[0], c[1], c[2]]
+            },
+            scale,
+            &self.expected,
+            !self.out,
+            config.min_thrust,
+        );
+        let scaled = |v: &[f32; 3]| [v[0], v[1] * scale, v[2] * scale];
+        let guarded = self.guard > 0.0;
+        let judged = Judging {
+            sized: true,
+            thrust_shown: guarded,
+        };
+        let found = if size >= least {
+            explain(&scaled(&d), &columns, config, judged)
+        } else {
+            0
+        };
+        if found == 0 {
             self.confirming = 0.0;
             if self.loud >= config.rebase_time {
+                // A change no rotor's size explains becomes the new baseline. Pointing along
+                // a rotor's column, collective included, it is part of a rotor that fades
+                // and stays in the drift; otherwise (a load that moved) it is not.
                 self.loud = 0.0;
+                let rotorlike = Judging {
+                    sized: false,
+                    thrust_shown: true,
+                };
+                if explain(&scaled(&d), &columns, config, rotorlike) == 0 {
+                    for i in 0..3 {
+                        self.reference[i] += self.filtered[i] - self.baseline[i];
+                    }
+                }
                 self.baseline = self.filtered;
             }
-            return None;
+            if !drift_shown {
+                self.drifting = 0.0;
+                return 0;
+            }
+            return self.watch_drift(input, &columns, &scaled(&drift));
         }
-        // Some rotor explains it: confirm over time, and name the rotor that explains the
+        // Some rotor explains it: confirm over time, and name the rotors that explain the
         // recent change (neighbours' columns are close; one tick's noise can pick either).
+        self.drifting = 0.0;
+        // Two rotors' loss is twice the evidence: it confirms in half the time (and tilts the
+        // payload twice as fast).
         self.confirming += dt;
         if self.confirming < config.confirm_time {
-            return None;
+            return 0;
         }
-        let j = self.isolate(config, &self.smoothed, input.mixer, n, scale, false)?;
-        self.mark_out(1 << j, config);
-        Some(j)
+        let named = explain(
+            &scaled(&self.smoothed),
+            &columns,
+            config,
+            Judging {
+                sized: false,
+                thrust_shown: guarded,
+            },
+        );
+        if named != 0 {
+            self.mark_out(named, input.mixer, config);
+        }
+        named
     }
 
-    /// The rotor whose loss explains the change `d` (thrust N, roll and pitch N m), if one
-    /// does; `scale` is [`torque_scale`]'s. With `sized`, only rotors whose loss has the
-    /// change's size are candidates (is it a rotor at all?); without, the best direction
-    /// names it (which rotor?: the change may still be rising, and a rotor with less thrust
-    /// further out can match its size while pointing elsewhere).
-    fn isolate(
-        &self,
-        config: &RotorMonitorConfig,
-        d: &[f32; 3],
-        mixer: &Mixer,
-        n: usize,
-        scale: f32,
-        sized: bool,
-    ) -> Option<usize> {
-        let d = [d[0], d[1] * scale, d[2] * scale];
-        let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        // Zero, or NaN from a non-finite input: nothing to explain.
-        if dd.is_nan() || dd <= 0.0 {
-            return None;
+    /// A rotor that fades slowly: its loss goes into the baseline as it grows. The drift
+    /// since the monitor settled is judged as a change is, the thrust row always required
+    /// (a slow torque is a load, or the COM believed elsewhere), and named once the same
+    /// rotors explain it for [`DRIFT_CONFIRM_TIME`].
+    fn watch_drift(
+        &mut self,
+        input: &MonitorInput<'_>,
+        columns: &Columns,
+        drift: &[f32; 3],
+    ) -> u16 {
+        let config = input.config;
+        let judged = Judging {
+            sized: true,
+            thrust_shown: true,
+        };
+        let found = explain(drift, columns, config, judged);
+        if found == 0 || found != self.drift_rotors {
+            self.drift_rotors = found;
+            self.drifting = 0.0;
+            return 0;
         }
-        // Of the rotors whose loss could be the change, the one whose column explains it best.
-        let mut best: Option<(usize, f32)> = None;
-        for j in 0..n {
-            let c = mixer.column(j);
-            if self.out & (1 << j) != 0 || c[0] == 0.0 || self.expected[j] < config.min_thrust {
+        self.drifting += input.dt;
+        if self.drifting < DRIFT_CONFIRM_TIME {
+            return 0;
+        }
+        self.mark_out(found, input.mixer, config);
+        found
+    }
+
+    /// The rotors whose ESCs' RPM says they make less than
+    /// [`RotorMonitorConfig::min_fraction`] of their expected thrust, for
+    /// [`RPM_CONFIRM_TIME`]. Thrust goes with the RPM squared (one propeller, one air density):
+    /// each rotor's ratio of the two is learned in the first [`RPM_LEARN_TIME`] of flight and
+    /// a rotor is judged against its own.
+    fn watch_rpm(&mut self, input: &MonitorInput<'_>, n: usize) -> u16 {
+        let Some(rpm) = input.rpm else {
+            return 0;
+        };
+        let config = input.config;
+        let dt = input.dt;
+        if !input.flying || dt <= 0.0 {
+            self.rpm_low = [0; MAX_ROBOTS];
+            return 0;
+        }
+        let learning = self.rpm_learned < RPM_LEARN_TIME;
+        let first = self.rpm_learned == 0.0;
+        let learn = math::clamp(dt / RPM_LEARN_AVERAGE, 0.0, 1.0);
+        let confirm = math::ceil(RPM_CONFIRM_TIME / dt) as u8;
+        let mut found = 0u16;
+        for j in 0..n.min(rpm.len()) {
+            let (expected, r) = (self.expected[j], rpm[j]);
+            if self.out & (1 << j) != 0 || expected < config.min_thrust || !(r >= 0.0) {
+                self.rpm_low[j] = 0;
                 continue;
             }
-            let a = [c[0], c[1] * scale, c[2] * scale];
-            let aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-            let dot = d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
-            let lost = -dot / aa;
-            let t = self.expected[j];
-            let small = if sized { config.min_fraction * t } else { 0.0 };
-            if lost <= small || lost > config.max_fraction * t {
+            let ratio = r * r / expected;
+            if learning {
+                let known = &mut self.rpm_ratio[j];
+                *known = if first || *known <= 0.0 {
+                    ratio
+                } else {
+                    *known + learn * (ratio - *known)
+                };
                 continue;
             }
-            let explained = dot * dot / (aa * dd);
-            if best.is_none_or(|(_, e)| explained > e) {
-                best = Some((j, explained));
+            if self.rpm_ratio[j] > 0.0 && ratio < config.min_fraction * self.rpm_ratio[j] {
+                self.rpm_low[j] = self.rpm_low[j].saturating_add(1);
+                if self.rpm_low[j] >= confirm.max(1) {
+                    found |= 1 << j;
+                }
+            } else {
+                self.rpm_low[j] = 0;
             }
         }
-        let (j, explained) = best?;
-        (explained >= config.min_explained).then_some(j)
+        if learning {
+            self.rpm_learned += dt;
+        }
+        found
     }
 }
 
@@ -477,13 +666,16 @@ mod tests {
                 vehicle: &v,
                 com: COM,
                 thrusts: &thrusts[..8],
+                rpm: None,
                 rate: w,
                 accel: Vec3::new(0.0, 0.0, accel_z),
+                flying: true,
                 active: true,
                 dt: DT,
             });
-            if let Some(j) = found {
-                return Some((j, t));
+            if found != 0 {
+                assert_eq!(found.count_ones(), 1, "one rotor named: {found:#b}");
+                return Some((found.trailing_zeros() as usize, t));
             }
             for (i, r) in rotor.iter_mut().enumerate().take(8) {
                 let target = if lost.contains(&i) && t >= lost_at {
@@ -550,9 +742,10 @@ mod tests {
             (Vec3::new(0.0, -x * 3.5 * GRAVITY, 0.0), 0.0)
         };
         assert_eq!(fly(&[], 0.0, shift, 4.0), None);
-        // A loss of lift four rotors' worth, no torque (a downdraft): too large for one rotor
-        // (a rotor's own worth near the COM could not be told from a rotor there).
-        let gust = |t: f32| (Vec3::ZERO, if t > 1.0 { -20.0 } else { 0.0 });
+        // A loss of lift seven rotors' worth, no torque (a downdraft): too large for one
+        // rotor or two (a rotor's own worth near the COM, or two balanced rotors' worth,
+        // could not be told from them).
+        let gust = |t: f32| (Vec3::ZERO, if t > 1.0 { -30.0 } else { 0.0 });
         assert_eq!(fly(&[], 0.0, gust, 3.0), None);
     }
 
@@ -570,12 +763,14 @@ mod tests {
                 vehicle: &v,
                 com: COM,
                 thrusts: &thrusts,
+                rpm: None,
                 rate: Vec3::new(3.0, -3.0, 0.0),
                 accel: Vec3::new(0.0, 0.0, 0.0),
+                flying: false,
                 active: false,
                 dt: DT,
             });
-            assert_eq!(found, None);
+            assert_eq!(found, 0);
         }
         assert_eq!(monitor.change(), [0.0; 3]);
         // Garbage input: no panic, nothing found.
@@ -585,20 +780,23 @@ mod tests {
             vehicle: &v,
             com: COM,
             thrusts: &[f32::NAN; 8],
+            rpm: Some(&[f32::NAN; 8]),
             rate: Vec3::new(f32::NAN, 0.0, 0.0),
             accel: Vec3::ZERO,
+            flying: true,
             active: true,
             dt: -1.0,
         });
-        assert_eq!(found, None);
+        assert_eq!(found, 0);
     }
 
     #[test]
     fn a_rotor_marked_out_is_not_found_again() {
         let mut monitor = RotorMonitor::new();
-        monitor.mark_out(1 << 3, &RotorMonitorConfig::DEFAULT);
+        let mixer = mixer();
+        monitor.mark_out(1 << 3, &mixer, &RotorMonitorConfig::DEFAULT);
         assert_eq!(monitor.out(), 1 << 3);
-        monitor.mark_out(1 << 5, &RotorMonitorConfig::DEFAULT);
+        monitor.mark_out(1 << 5, &mixer, &RotorMonitorConfig::DEFAULT);
         assert_eq!(monitor.out(), (1 << 3) | (1 << 5));
     }
 
@@ -606,6 +804,6 @@ mod tests {
     fn its_state_is_small() {
         // The flight controller keeps it in its static mission (about 0.6 KiB to spare).
         let size = core::mem::size_of::<RotorMonitor>();
-        assert!(size <= 144, "{size} bytes");
+        assert!(size <= 256, "{size} bytes");
     }
 }

@@ -318,6 +318,7 @@ impl FlightStack {
         nav: &NavState,
         accel: Vec3,
         thrusts: &[f32],
+        rpm: Option<&[f32]>,
         reported: u16,
         imu_trusted: bool,
         dt: f32,
@@ -336,16 +337,19 @@ impl FlightStack {
             vehicle: &vehicle,
             com: self.com,
             thrusts,
+            rpm,
             rate: nav.attitude.rate,
             accel,
+            flying: self.config.watch_rotors && self.land.airborne(),
             active: self.config.watch_rotors && imu_trusted && self.land.airborne() && clear,
             dt,
         });
-        let newly = newly_reported | found.map_or(0, |j| 1u16 << j);
+        let newly = newly_reported | found;
         if newly == 0 {
             return None;
         }
-        self.monitor.mark_out(newly, &RotorMonitorConfig::DEFAULT);
+        self.monitor
+            .mark_out(newly, &self.mixer, &RotorMonitorConfig::DEFAULT);
         // Not even thrust, roll and pitch left: fly on with the mixer there is (the lost
         // rotor's share is lost) and land.
         if let Ok(mixer) = self.mixer.without(self.monitor.out()) {

@@ -227,9 +227,16 @@ pub struct TickInput {
     pub command: Option<OperatorCommand>,
     /// What the drivers report failed ([`HardwareFaults::NONE`] in simulation).
     pub faults: HardwareFaults,
+    /// Each rotor's RPM from its ESC's telemetry ([`EscRpm`]), or `None` without ESC
+    /// telemetry: the rotor monitor then judges from the vehicle's response alone.
+    pub esc_rpm: Option<EscRpm>,
     /// The ground station's heartbeat and the battery's voltage.
     pub supervision: Supervision,
 }
+
+/// Each rotor's RPM from its ESC's telemetry, robot by robot; NaN for a rotor without a
+/// fresh, valid reading this tick.
+pub type EscRpm = [f32; MAX_ROBOTS];
 
 /// What one tick commands.
 #[derive(Clone, Debug, PartialEq)]

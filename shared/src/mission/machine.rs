@@ -42,7 +42,7 @@ use crate::timing::{CONTROL_RATE_HZ, LoopMonitor, LoopStats};
 mod bench;
 
 pub use crate::mission::interface::{
-    CommandRefusal, CommandReply, HardwareFaults, ImuDetection, OperatorCommand, TickInput,
+    CommandRefusal, CommandReply, EscRpm, HardwareFaults, ImuDetection, OperatorCommand, TickInput,
     TickOutput,
 };
 use bench::Bench;
@@ -1066,6 +1066,7 @@ impl Mission {
                 nav,
                 input.imu.accel,
                 &thrusts[..n],
+                input.esc_rpm.as_ref().map(|r| &r[..n]),
                 reported,
                 imu_trusted,
                 dt,

@@ -24,7 +24,7 @@ pub use config::{DETECTOR_SIGMA, MissionConfig};
 pub use hardware::HardwareConfig;
 pub use jobs::{FormationPlan, JobRequest, JobResult, LiftPlan, MissionPlanner};
 pub use machine::{
-    CommandRefusal, CommandReply, HardwareFaults, ImuDetection, Mission, OperatorCommand,
+    CommandRefusal, CommandReply, EscRpm, HardwareFaults, ImuDetection, Mission, OperatorCommand,
     TickInput, TickOutput,
 };
 pub use phases::{AbortReason, Phase, Reason, Transition};
