@@ -1026,6 +1026,16 @@ pub fn run(
     Ok((outcome, autopilot))
 }
 
+impl MissionOutcome {
+    /// The largest tilt (degrees) from the first rotor stop or fade up to simulated time `t`.
+    pub fn tilt_until(&self, t: f32) -> f32 {
+        self.tilts_after_stop
+            .iter()
+            .take_while(|(at, _)| *at <= t)
+            .fold(0.0f32, |m, (_, tilt)| m.max(*tilt))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1071,15 +1081,5 @@ mod tests {
         let (at, stalled) = stall_run(0.2, 0.6, 0.01, 15);
         assert!(!stalled);
         assert!((at - 0.35).abs() < 1e-4, "at {at}");
-    }
-}
-
-impl MissionOutcome {
-    /// The largest tilt (degrees) from the first rotor stop or fade up to simulated time `t`.
-    pub fn tilt_until(&self, t: f32) -> f32 {
-        self.tilts_after_stop
-            .iter()
-            .take_while(|(at, _)| *at <= t)
-            .fold(0.0f32, |m, (_, tilt)| m.max(*tilt))
     }
 }

@@ -25,6 +25,6 @@ pub use model::FlightModel;
 pub use rotor_monitor::{RotorMonitor, RotorMonitorConfig};
 pub use route::{Route, RouteError, RouteItem, RoutePoint, RouteProblem};
 pub use stack::{
-    CascadeSetpoints, FlightCommand, FlightConfig, FlightEvent, FlightOutput, FlightStack,
-    FlightStop, LandingCause, RotorOut,
+    CascadeSetpoints, EscTelemetry, FlightCommand, FlightConfig, FlightEvent, FlightOutput,
+    FlightStack, FlightStop, LandingCause, RotorOut,
 };

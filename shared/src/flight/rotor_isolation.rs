@@ -26,6 +26,7 @@
 //! can hold it.
 
 use crate::flight::rotor_monitor::RotorMonitorConfig;
+use crate::math;
 use crate::scenario::MAX_ROBOTS;
 
 /// A pair is preferred to the best single rotor when it leaves less than this share of what
@@ -66,13 +67,13 @@ impl Columns {
             eligible: 0,
             count,
         };
-        for j in 0..count {
+        for (j, &t) in thrust.iter().enumerate().take(count) {
             let c = column(j);
             let a = [c[0], c[1] * scale, c[2] * scale];
             let aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
             out.a[j] = a;
             out.aa[j] = aa;
-            if eligible & (1 << j) != 0 && c[0] != 0.0 && aa > 0.0 && thrust[j] >= min_thrust {
+            if eligible & (1 << j) != 0 && c[0] != 0.0 && aa > 0.0 && t >= min_thrust {
                 out.eligible |= 1 << j;
             }
         }
@@ -102,6 +103,8 @@ pub struct Judging {
     /// found, when the recovery's large torques make residuals of a rotor's size through the
     /// inertia's error, but not in the collective.
     pub thrust_shown: bool,
+    /// Pairs are candidates too (a slow drift is judged against single rotors only).
+    pub pairs: bool,
 }
 
 /// The stopped rotors that explain a change `d` (thrust N, roll and pitch torque times the
@@ -140,7 +143,12 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
     // direction per pair, judged as a single rotor's (two free sizes would fit almost any
     // change with two rotors on the same side).
     let mut pair: Option<(usize, usize, f32)> = None;
-    for j in eligible(columns) {
+    // The collective must show at least `min_fraction` of half the least two rotors' thrust:
+    // most ticks of a flight spare the pairs' search here.
+    let least = eligible(columns).fold(f32::INFINITY, |m, j| math::min(m, columns.thrust[j]));
+    let pairs_possible =
+        how.pairs && -d[0] >= config.min_fraction * config.min_fraction * 2.0 * least;
+    for j in eligible(columns).filter(|_| pairs_possible) {
         for k in eligible(columns).filter(|&k| k > j) {
             let (tj, tk) = (columns.thrust[j], columns.thrust[k]);
             let (aj, ak) = (&columns.a[j], &columns.a[k]);
@@ -214,6 +222,7 @@ mod tests {
     const SIZED: Judging = Judging {
         sized: true,
         thrust_shown: false,
+        pairs: true,
     };
 
     fn loss(columns: &Columns, lost: &[(usize, f32)]) -> [f32; 3] {
@@ -284,6 +293,7 @@ mod tests {
         let guarded = Judging {
             sized: true,
             thrust_shown: true,
+            pairs: true,
         };
         let mut d = loss(&c, &[(6, 5.0)]);
         assert_eq!(explain(&d, &c, &config, guarded), 1 << 6);

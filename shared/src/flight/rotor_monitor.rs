@@ -127,6 +127,10 @@ const SMOOTHING_TIME: f32 = 0.01;
 /// Time a drift of the baseline must be explained by the same finding before it is named, s.
 const DRIFT_CONFIRM_TIME: f32 = 0.2;
 
+/// The drift is judged on one tick in this many, and the change on the others (a drift is
+/// slow; the control tick's budget holds one judgement a tick).
+const DRIFT_EVERY: u8 = 8;
+
 /// Time over which each rotor's RPM-to-thrust ratio is learned once the rotors fly, s.
 const RPM_LEARN_TIME: f32 = 1.0;
 
@@ -194,6 +198,8 @@ pub struct RotorMonitor {
     drifting: f32,
     /// The rotors the drift was last explained by.
     drift_rotors: u16,
+    /// Ticks judged, modulo [`DRIFT_EVERY`].
+    tick: u8,
     /// The change through a [`SMOOTHING_TIME`] low-pass.
     smoothed: [f32; 3],
     started: bool,
@@ -230,6 +236,7 @@ impl RotorMonitor {
             confirming: 0.0,
             drifting: 0.0,
             drift_rotors: 0,
+            tick: 0,
             smoothed: [0.0; 3],
             started: false,
             out: 0,
@@ -260,9 +267,9 @@ impl RotorMonitor {
             for j in (0..mixer.count().min(MAX_ROBOTS)).filter(|&j| newly & (1 << j) != 0) {
                 let c = mixer.column(j);
                 let lost = [c[0], c[1], c[2]].map(|v| v * self.expected[j]);
-                for row in 0..3 {
-                    self.residual[row] += lost[row];
-                    self.filtered[row] += lost[row];
+                for (row, l) in lost.iter().enumerate() {
+                    self.residual[row] += l;
+                    self.filtered[row] += l;
                 }
                 for axis in 0..2 {
                     if k > 0.0 {
@@ -425,10 +432,20 @@ impl RotorMonitor {
         let drift_size = math::sqrt(
             drift[0] * drift[0] + (drift[1] * drift[1] + drift[2] * drift[2]) * scale * scale,
         );
-        // A drift a rotor could explain shows in the collective (a quarter of the least loss).
-        let drift_shown = drift_size >= least && -drift[0] >= config.min_fraction * least;
-        if size < least && !drift_shown {
+        // A drift a rotor could explain shows in the collective: `min_fraction` of at least
+        // `min_fraction` of the least thrust a rotor judged carries.
+        let lightest = (0..n)
+            .filter(|&j| self.out & (1 << j) == 0 && self.expected[j] >= config.min_thrust)
+            .fold(f32::INFINITY, |m, j| math::min(m, self.expected[j]));
+        let drift_shown = drift_size >= least
+            && -drift[0] >= config.min_fraction * config.min_fraction * lightest;
+        self.tick = (self.tick + 1) % DRIFT_EVERY;
+        let drift_tick = self.tick == 0;
+        if !drift_tick && size < least {
             self.confirming = 0.0;
+            return 0;
+        }
+        if drift_tick && !drift_shown {
             self.drifting = 0.0;
             return 0;
         }
@@ -448,12 +465,12 @@ impl RotorMonitor {
         let judged = Judging {
             sized: true,
             thrust_shown: guarded,
+            pairs: true,
         };
-        let found = if size >= least {
-            explain(&scaled(&d), &columns, config, judged)
-        } else {
-            0
-        };
+        if drift_tick {
+            return self.watch_drift(input, &columns, &scaled(&drift));
+        }
+        let found = explain(&scaled(&d), &columns, config, judged);
         if found == 0 {
             self.confirming = 0.0;
             if self.loud >= config.rebase_time {
@@ -464,6 +481,7 @@ impl RotorMonitor {
                 let rotorlike = Judging {
                     sized: false,
                     thrust_shown: true,
+                    pairs: false,
                 };
                 if explain(&scaled(&d), &columns, config, rotorlike) == 0 {
                     for i in 0..3 {
@@ -472,17 +490,10 @@ impl RotorMonitor {
                 }
                 self.baseline = self.filtered;
             }
-            if !drift_shown {
-                self.drifting = 0.0;
-                return 0;
-            }
-            return self.watch_drift(input, &columns, &scaled(&drift));
+            return 0;
         }
         // Some rotor explains it: confirm over time, and name the rotors that explain the
         // recent change (neighbours' columns are close; one tick's noise can pick either).
-        self.drifting = 0.0;
-        // Two rotors' loss is twice the evidence: it confirms in half the time (and tilts the
-        // payload twice as fast).
         self.confirming += dt;
         if self.confirming < config.confirm_time {
             return 0;
@@ -494,6 +505,7 @@ impl RotorMonitor {
             Judging {
                 sized: false,
                 thrust_shown: guarded,
+                pairs: true,
             },
         );
         if named != 0 {
@@ -516,6 +528,7 @@ impl RotorMonitor {
         let judged = Judging {
             sized: true,
             thrust_shown: true,
+            pairs: false,
         };
         let found = explain(drift, columns, config, judged);
         if found == 0 || found != self.drift_rotors {
@@ -523,7 +536,7 @@ impl RotorMonitor {
             self.drifting = 0.0;
             return 0;
         }
-        self.drifting += input.dt;
+        self.drifting += input.dt * f32::from(DRIFT_EVERY);
         if self.drifting < DRIFT_CONFIRM_TIME {
             return 0;
         }
@@ -551,9 +564,10 @@ impl RotorMonitor {
         let learn = math::clamp(dt / RPM_LEARN_AVERAGE, 0.0, 1.0);
         let confirm = math::ceil(RPM_CONFIRM_TIME / dt) as u8;
         let mut found = 0u16;
-        for j in 0..n.min(rpm.len()) {
-            let (expected, r) = (self.expected[j], rpm[j]);
-            if self.out & (1 << j) != 0 || expected < config.min_thrust || !(r >= 0.0) {
+        for (j, &r) in rpm.iter().enumerate().take(n) {
+            let expected = self.expected[j];
+            // No reading (NaN) or a nonsense one: not judged.
+            if self.out & (1 << j) != 0 || expected < config.min_thrust || r.is_nan() || r < 0.0 {
                 self.rpm_low[j] = 0;
                 continue;
             }

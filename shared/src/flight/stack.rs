@@ -117,6 +117,15 @@ pub enum LandingCause {
     },
 }
 
+/// What the ESCs tell of their rotors this tick.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EscTelemetry<'a> {
+    /// Each rotor's RPM (NaN where a rotor has no reading), or `None` without telemetry.
+    pub rpm: Option<&'a [f32]>,
+    /// Rotors whose ESC reports them stopped while commanded to turn, bit `i` for rotor `i`.
+    pub stopped: u16,
+}
+
 /// A rotor found stopped in flight.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RotorOut {
@@ -306,20 +315,19 @@ impl FlightStack {
     }
 
     /// After a tick's [`Self::step`]: watches the rotors with the accelerometer's specific
-    /// force `accel` (body frame, m/s^2), the tick's rotor commands `thrusts` and the rotors
-    /// the ESCs report stopped, `reported` (bit `i` for rotor `i`). The monitor judges only in
-    /// the air, clear of the ground. A rotor found stopped is flown without from the next
-    /// tick, and the next tick begins the landing ([`LandingCause::RotorOut`]; under a
-    /// descent without position, that descent goes on). With `imu_trusted` false (the IMU
-    /// failed: its samples explain nothing) only the ESCs' reports count. Returns it when this
-    /// tick found one.
+    /// force `accel` (body frame, m/s^2), the tick's rotor commands `thrusts` and what the
+    /// ESCs tell, `esc` (each rotor's RPM, the rotors they report stopped). The monitor judges
+    /// the vehicle's response only in the air, clear of the ground, and the RPM in the air.
+    /// Rotors found stopped are flown without from the next tick, and the next tick begins
+    /// the landing ([`LandingCause::RotorOut`]; under a descent without position, that descent
+    /// goes on). With `imu_trusted` false (the IMU failed: its samples explain nothing) only
+    /// the ESCs count. Returns the first when this tick found any.
     pub fn watch_rotors(
         &mut self,
         nav: &NavState,
         accel: Vec3,
         thrusts: &[f32],
-        rpm: Option<&[f32]>,
-        reported: u16,
+        esc: EscTelemetry<'_>,
         imu_trusted: bool,
         dt: f32,
     ) -> Option<RotorOut> {
@@ -329,7 +337,7 @@ impl FlightStack {
         let n = self.mixer.count();
         let all = if n >= 16 { u16::MAX } else { (1u16 << n) - 1 };
         let clear = nav.height_above(self.ground_z) > 3.0 * LandDetector::LAND_HEIGHT;
-        let newly_reported = reported & all & !self.monitor.out();
+        let newly_reported = esc.stopped & all & !self.monitor.out();
         let vehicle = *self.controller.model();
         let found = self.monitor.update(&MonitorInput {
             config: &RotorMonitorConfig::DEFAULT,
@@ -337,7 +345,7 @@ impl FlightStack {
             vehicle: &vehicle,
             com: self.com,
             thrusts,
-            rpm,
+            rpm: esc.rpm,
             rate: nav.attitude.rate,
             accel,
             flying: self.config.watch_rotors && self.land.airborne(),

@@ -23,8 +23,8 @@ use crate::control::trajectory::FlightPhase;
 use crate::control::vector::Vec3;
 use crate::estimation::{Estimate, Status};
 use crate::flight::{
-    AdaptEvent, Adapter, CascadeSetpoints, FlightCommand, FlightEvent, FlightModel, FlightStack,
-    FlightStop, LandingCause, Route,
+    AdaptEvent, Adapter, CascadeSetpoints, EscTelemetry, FlightCommand, FlightEvent, FlightModel,
+    FlightStack, FlightStop, LandingCause, Route,
 };
 use crate::geometry::Vec2;
 use crate::liftoff_detector::{LiftState, LiftoffDetector};
@@ -1066,8 +1066,10 @@ impl Mission {
                 nav,
                 input.imu.accel,
                 &thrusts[..n],
-                input.esc_rpm.as_ref().map(|r| &r[..n]),
-                reported,
+                EscTelemetry {
+                    rpm: input.esc_rpm.as_ref().map(|r| &r[..n]),
+                    stopped: reported,
+                },
                 imu_trusted,
                 dt,
             )
