@@ -297,6 +297,7 @@ fn flight_log_step(timer: &mut Timer, scenario: &shared::scenario::Scenario) {
         mocap: None,
         command: None,
         faults: HardwareFaults::NONE,
+        esc_rpm: None,
         supervision: Supervision::NONE,
     };
     let mut out = mission.step(&input);
