@@ -147,8 +147,8 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
             // A regression guard with room for the emulator's interrupt timing; the budget
             // itself (12,000) is measured and printed by .ci/hil-bench. The rotor monitor's
             // judgement (one rotor's column or two's, or the baseline's drift) now costs some
-            // 900 to 1,500 instructions on the worst tick: measured 12,840 (rect-ex1) and
-            // 13,480 (L-sim1), over the budget (docs/firmware.md#memory).
+            // 700 to 1,200 instructions on the worst tick: measured 12,600 (rect-ex1) and
+            // 13,240 (L-sim1), over the budget (docs/firmware.md#memory).
             worst < 14_000.0,
             "{name}: worst control tick {worst} instructions"
         );

@@ -1027,6 +1027,14 @@ pub fn run(
 }
 
 impl MissionOutcome {
+    /// When the mission named robot `robot`'s rotor (from 0) stopped, simulated time, s.
+    pub fn named_at(&self, robot: usize) -> Option<f32> {
+        self.rotors_found
+            .iter()
+            .find(|(r, _)| *r == robot)
+            .map(|&(_, t)| t)
+    }
+
     /// The largest tilt (degrees) from the first rotor stop or fade up to simulated time `t`.
     pub fn tilt_until(&self, t: f32) -> f32 {
         self.tilts_after_stop

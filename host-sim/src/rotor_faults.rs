@@ -95,9 +95,9 @@ impl PairCase {
     /// Time from the stop to the later of the two rotors named, s (`None` unless both were).
     pub fn detection_s(&self) -> Option<f32> {
         let stopped = self.outcome.rotors_stopped.first()?.1;
-        let (a, b) = (self.robots.0 - 1, self.robots.1 - 1);
-        let found = |r| self.outcome.rotors_found.iter().find(|(f, _)| *f == r);
-        Some(found(a)?.1.max(found(b)?.1) - stopped)
+        let (a, b) = self.robots;
+        let named = |robot: usize| self.outcome.named_at(robot - 1);
+        Some(named(a)?.max(named(b)?) - stopped)
     }
 
     /// The robots named (from 1), in order.
@@ -190,23 +190,14 @@ impl FadeCase {
     /// Time from the fade's start to the rotor named, s.
     pub fn detection_s(&self) -> Option<f32> {
         let began = self.outcome.rotors_stopped.first()?.1;
-        let found = self
-            .outcome
-            .rotors_found
-            .iter()
-            .find(|(r, _)| *r == self.robot - 1)?;
-        Some(found.1 - began)
+        Some(self.outcome.named_at(self.robot - 1)? - began)
     }
 
     /// The largest tilt from the fade's start until the rotor was named, degrees (`None`
     /// if it never was).
     pub fn tilt_when_named_deg(&self) -> Option<f32> {
-        let found = self
-            .outcome
-            .rotors_found
-            .iter()
-            .find(|(r, _)| *r == self.robot - 1)?;
-        Some(self.outcome.tilt_until(found.1))
+        let named = self.outcome.named_at(self.robot - 1)?;
+        Some(self.outcome.tilt_until(named))
     }
 }
 

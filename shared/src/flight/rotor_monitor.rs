@@ -1,4 +1,5 @@
-//! A rotor that stops in flight, found from the vehicle's response (`rotor-out`).
+//! Rotors that stop or fade in flight, found from the vehicle's response and the ESCs' RPM
+//! (`rotor-out`, `rotor-fade`; docs/failures.md#rotors-that-stop-in-flight).
 //!
 //! What it implements: actuator failure detection and isolation with a momentum residual
 //! (A. De Luca, R. Mattone, "Actuator failure detection and isolation using generalized
@@ -24,16 +25,21 @@
 //!   and a change no rotor explains for [`RotorMonitorConfig::rebase_time`] becomes the new
 //!   baseline at once (followed slowly, a step would shrink through every size, one rotor's
 //!   among them).
-//! - Isolation: a rotor `j` that stops takes `T_j a_j` away, `T_j` its expected thrust and
-//!   `a_j` its column (thrust, roll, pitch; torques divided by the rotors' RMS arm so all
-//!   rows are in newtons). Rotor `j` is the one whose column explains the change best (least
-//!   squares, one rotor at a time, among the rotors whose loss has the change's size); it is
-//!   declared stopped when its column explains at least
-//!   [`RotorMonitorConfig::min_explained`] of the change, the thrust lost is within
-//!   [`RotorMonitorConfig::min_fraction`]..[`RotorMonitorConfig::max_fraction`] of `T_j`,
-//!   and some rotor explains the change for [`RotorMonitorConfig::confirm_time`]: the rotor
-//!   named is the one whose column points closest to the change averaged over the last
-//!   10 ms (neighbours' columns are close, and one tick's noise can favour either).
+//! - Isolation ([`crate::flight::rotor_isolation`]): one rotor's column, or two rotors'
+//!   stopped together, must explain the change in size and direction for
+//!   [`RotorMonitorConfig::confirm_time`]; the rotors named are those that explain the
+//!   change averaged over the last 10 ms (neighbours' columns are close, and one tick's
+//!   noise can favour either).
+//! - After a finding the monitor goes on: what the rotors found put into the residuals is
+//!   taken out ([`RotorMonitor::mark_out`]), the baseline from before is kept, and a rotor
+//!   that stopped with them still shows after [`RotorMonitorConfig::blind_time`]; until
+//!   [`RotorMonitorConfig::resettle_time`] a finding must show in the collective too.
+//! - A rotor that fades: its loss goes into the baseline as it grows; the baseline's drift
+//!   since the monitor settled (rebases along no rotor's column left out) is judged as a
+//!   change is, every [`DRIFT_EVERY`]th tick.
+//! - The ESCs' RPM, where the vehicle has it: a rotor whose RPM squared over its expected
+//!   thrust falls under half its own (learned in its first second of flight) is named in
+//!   [`RPM_CONFIRM_TIME`], whatever the response says.
 //!
 //! The thrust row is what tells a rotor from a load that shifts: a shifted COM changes the
 //! torque about the believed COM as a rotor loss does, but not the collective. The torque rows
@@ -43,10 +49,10 @@
 //! What it cannot tell apart: a force pushing down at one point (an obstacle met from below)
 //! is, to the dynamics, a rotor stopping there.
 //!
-//! The monitor watches only while the caller says the vehicle is clear of the ground (contact
-//! forces are no rotor's), and starts afresh ([`RotorMonitorConfig::settle_time`]) after
-//! take-off and ([`RotorMonitorConfig::resettle_time`]) after each rotor it finds, once the mixer has been rebuilt without it.
-//! State: about 140 bytes (the flight controller keeps it in its static mission); the tuning,
+//! The monitor watches the response only while the caller says the vehicle is clear of the
+//! ground (contact forces are no rotor's), and starts afresh
+//! ([`RotorMonitorConfig::settle_time`]) after take-off.
+//! State: about 250 bytes (the flight controller keeps it in its static mission); the tuning,
 //! [`RotorMonitorConfig`], comes with each tick's input (the flight stack passes the
 //! defaults, a constant in flash).
 
@@ -411,8 +417,10 @@ impl RotorMonitor {
             self.loud = 0.0;
             return 0;
         }
-        let d = self.change();
-        let size = math::sqrt(d[0] * d[0] + (d[1] * d[1] + d[2] * d[2]) * scale * scale);
+        let scaled = |v: &[f32; 3]| [v[0], v[1] * scale, v[2] * scale];
+        let change = self.change();
+        let d = scaled(&change);
+        let size = norm(&d);
         if size <= config.quiet {
             self.loud = 0.0;
             let gamma = math::clamp(dt / math::max(config.baseline_time, dt), 0.0, 1.0);
@@ -423,30 +431,27 @@ impl RotorMonitor {
             self.loud += dt;
         }
         let recent = math::clamp(dt / math::max(SMOOTHING_TIME, dt), 0.0, 1.0);
-        for (m, v) in self.smoothed.iter_mut().zip(d) {
+        for (m, v) in self.smoothed.iter_mut().zip(change) {
             *m += recent * (v - *m);
         }
         // Nothing a rotor's loss could be: spare the search (most ticks).
         let least = config.min_fraction * config.min_thrust;
-        let drift = self.drift();
-        let drift_size = math::sqrt(
-            drift[0] * drift[0] + (drift[1] * drift[1] + drift[2] * drift[2]) * scale * scale,
-        );
-        // A drift a rotor could explain shows in the collective: `min_fraction` of at least
-        // `min_fraction` of the least thrust a rotor judged carries.
-        let lightest = (0..n)
-            .filter(|&j| self.out & (1 << j) == 0 && self.expected[j] >= config.min_thrust)
-            .fold(f32::INFINITY, |m, j| math::min(m, self.expected[j]));
-        let drift_shown = drift_size >= least
-            && -drift[0] >= config.min_fraction * config.min_fraction * lightest;
         self.tick = (self.tick + 1) % DRIFT_EVERY;
         let drift_tick = self.tick == 0;
-        if !drift_tick && size < least {
+        let drift = scaled(&self.drift());
+        if drift_tick {
+            // A drift a rotor could explain shows in the collective: `min_fraction` of at
+            // least `min_fraction` of the least thrust a rotor judged carries.
+            let lightest = (0..n)
+                .filter(|&j| self.out & (1 << j) == 0 && self.expected[j] >= config.min_thrust)
+                .fold(f32::INFINITY, |m, j| math::min(m, self.expected[j]));
+            let shown = -drift[0] >= config.min_fraction * config.min_fraction * lightest;
+            if !shown || norm(&drift) < least {
+                self.drifting = 0.0;
+                return 0;
+            }
+        } else if size < least {
             self.confirming = 0.0;
-            return 0;
-        }
-        if drift_tick && !drift_shown {
-            self.drifting = 0.0;
             return 0;
         }
         let columns = Columns::new(
@@ -460,17 +465,16 @@ impl RotorMonitor {
             !self.out,
             config.min_thrust,
         );
-        let scaled = |v: &[f32; 3]| [v[0], v[1] * scale, v[2] * scale];
+        if drift_tick {
+            return self.watch_drift(input, &columns, &drift);
+        }
         let guarded = self.guard > 0.0;
         let judged = Judging {
             sized: true,
             thrust_shown: guarded,
             pairs: true,
         };
-        if drift_tick {
-            return self.watch_drift(input, &columns, &scaled(&drift));
-        }
-        let found = explain(&scaled(&d), &columns, config, judged);
+        let found = explain(&d, &columns, config, judged);
         if found == 0 {
             self.confirming = 0.0;
             if self.loud >= config.rebase_time {
@@ -483,7 +487,7 @@ impl RotorMonitor {
                     thrust_shown: true,
                     pairs: false,
                 };
-                if explain(&scaled(&d), &columns, config, rotorlike) == 0 {
+                if explain(&d, &columns, config, rotorlike) == 0 {
                     for i in 0..3 {
                         self.reference[i] += self.filtered[i] - self.baseline[i];
                     }
@@ -595,6 +599,11 @@ impl RotorMonitor {
         }
         found
     }
+}
+
+/// The norm of a change whose torques are already in newtons (times [`torque_scale`]'s).
+fn norm(v: &[f32; 3]) -> f32 {
+    math::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
 }
 
 /// One over the flown rotors' RMS arm, 1/m: torques times it are newtons, as the thrust row.
