@@ -13,7 +13,8 @@ use crate::scenario::{
     EstimationSetup, FormationSetup, GRAVITY, RobotsInput, Scenario, ScenarioInput, Truth,
 };
 
-const RECT: [Vec2; 4] = [
+/// The rectangular payload's footprint, m (its long side along x).
+pub const RECT: [Vec2; 4] = [
     Vec2::new(-0.88, -0.1),
     Vec2::new(0.88, -0.1),
     Vec2::new(0.88, 0.1),

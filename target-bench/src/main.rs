@@ -19,10 +19,12 @@ use cortex_m_semihosting::{debug, hprintln};
 use shared::control::allocation::{Mixer, MixerKind, RotorLayout};
 use shared::control::navigator::{ImuSample, MocapFix};
 use shared::control::vector::{Quat, Vec3};
+use shared::control::vehicle::VehicleModel;
 use shared::estimation::{Estimator, EstimatorOptions, Measurement};
 use shared::formation::{FormationProblem, solve};
 use shared::geometry::Vec2;
 use shared::paper;
+use shared::scenario::GRAVITY;
 
 /// Instructions per SysTick tick under `-icount shift=0` on mps2-an500.
 const INSTRUCTIONS_PER_TICK: u32 = 40;
@@ -259,8 +261,115 @@ fn main() -> ! {
         report("    mean", (total / u64::from(STEPS)) as u32);
         report_against("    worst", worst, *goal);
     }
+    rotor_monitor_ticks(&mut timer, &mixer, layout.com);
     flight_log_step(&mut timer, &rect);
     finish(true)
+}
+
+/// The rotor monitor's share of a control step (it runs after the flight stack's step), on
+/// the mixer above: a steady hover, then one rotor and two at once stopping after the
+/// monitor settled. The worst is the tick that judges the change against the rotors' columns
+/// and the pairs'.
+fn rotor_monitor_ticks(
+    timer: &mut Timer,
+    mixer: &Result<Mixer, shared::control::allocation::AllocationError>,
+    com: Vec2,
+) {
+    use shared::flight::rotor_monitor::{MonitorInput, RotorMonitor, RotorMonitorConfig};
+    let Ok(mixer) = mixer else { finish(false) };
+    let vehicle =
+        VehicleModel::from_payload(&paper::RECT, com, 3.5, &paper::RECT_ROTORS, 0.1, 14.2);
+    let config = RotorMonitorConfig::DEFAULT;
+    let n = mixer.count();
+    let dt = 0.0025;
+    let hover = vehicle.mass * GRAVITY / n as f32;
+    let thrusts = [hover; 8];
+    hprintln!("rotor monitor (after the flight stack's step), 8 rotors:");
+    // One judgement of a change against the rotors' columns: one rotor's loss, then two
+    // rotors' (the pairs searched when the collective shows two rotors' loss).
+    {
+        use shared::flight::rotor_isolation::{Columns, Judging, explain};
+        let expected = [hover; shared::scenario::MAX_ROBOTS];
+        let columns = Columns::new(n, mixer.columns_raw(), 1.0, &expected, 0xff, 1.0);
+        let loss = |rotors: &[usize]| {
+            let mut d = [0.0f32; 3];
+            for &j in rotors {
+                let a = columns.column(j);
+                for r in 0..3 {
+                    d[r] -= a[r] * hover;
+                }
+            }
+            d
+        };
+        for (label, lost, pairs) in [
+            ("a drift (single rotors only)", &[2usize][..], false),
+            ("one rotor's loss", &[2][..], true),
+            ("two rotors' loss", &[0, 5][..], true),
+        ] {
+            let d = loss(lost);
+            let how = Judging {
+                sized: true,
+                thrust_shown: !pairs,
+                pairs,
+            };
+            let (count, named) = timer.instructions(|| explain(&d, &columns, &config, how));
+            hprintln!(
+                "  judging {} (named {:#b}): {} instructions",
+                label,
+                named,
+                count
+            );
+        }
+    }
+    for (label, lost) in [
+        ("steady hover", 0u16),
+        ("rotor 3 stops", 1 << 2),
+        ("rotors 1 and 6 stop", (1 << 0) | (1 << 5)),
+    ] {
+        let mut monitor = RotorMonitor::new();
+        let mut rate = Vec3::ZERO;
+        let (mut total, mut worst, mut ticks, mut named) = (0u64, 0u32, 0u32, 0u16);
+        for k in 0..1200u32 {
+            let stopped = if k >= 800 { lost } else { 0 };
+            let mut lost_thrust = 0.0;
+            for j in (0..n).filter(|&j| stopped & (1 << j) != 0) {
+                let c = mixer.column(j);
+                lost_thrust += c[0] * hover;
+                rate.x -= dt * c[1] * hover / vehicle.inertia.x;
+                rate.y -= dt * c[2] * hover / vehicle.inertia.y;
+            }
+            let accel = Vec3::new(
+                0.0,
+                0.0,
+                -(vehicle.mass * GRAVITY - lost_thrust) / vehicle.mass,
+            );
+            let (count, found) = timer.instructions(|| {
+                monitor.update(&MonitorInput {
+                    config: &config,
+                    mixer,
+                    vehicle: &vehicle,
+                    com,
+                    thrusts: &thrusts[..n],
+                    rpm: None,
+                    rate,
+                    accel,
+                    flying: true,
+                    active: true,
+                    dt,
+                })
+            });
+            total += u64::from(count);
+            worst = worst.max(count);
+            ticks += 1;
+            if found != 0 {
+                named = found;
+                break;
+            }
+        }
+        hprintln!("  {} (named {:#b} after {} ticks):", label, named, ticks);
+        report("    mean", (total / u64::from(ticks)) as u32);
+        report("    worst", worst);
+    }
 }
 
 /// The flight log's share of a control step (the mission's records, packed into a ring that

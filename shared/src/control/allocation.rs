@@ -17,7 +17,7 @@
 //! down only if that is not enough), and yaw gets what room is left, so yaw is given up first.
 //! The caller is told which axes were cut.
 
-use nalgebra::{SMatrix, SVector};
+use nalgebra::SMatrix;
 
 use crate::control::vector::Vec3;
 use crate::geometry::Vec2;
@@ -472,6 +472,13 @@ impl Mixer {
         [c[0], c[1], c[2], c[3]]
     }
 
+    /// The effectiveness matrix's columns of the mixer's rotors, four numbers per rotor (as
+    /// [`Self::column`] gives them), read in place.
+    pub fn columns_raw(&self) -> &[f32] {
+        let raw = self.effectiveness.as_slice();
+        raw.get(..4 * self.count).unwrap_or(raw)
+    }
+
     /// The mixer's kind.
     pub fn kind(&self) -> MixerKind {
         self.kind
@@ -484,11 +491,15 @@ impl Mixer {
 
     /// The wrench that rotor thrusts `thrusts` produce.
     pub fn wrench_of(&self, thrusts: &[f32]) -> Wrench {
-        let mut u = SVector::<f32, MAX_ROBOTS>::zeros();
-        for (slot, &t) in u.iter_mut().zip(thrusts.iter().take(self.count)) {
-            *slot = t;
+        // Over the rotors there are, column by column (the matrix is stored by columns): the
+        // full 4 x 16 product of zero-padded thrusts cost four times the arithmetic.
+        let mut w = [0.0f32; 4];
+        let columns = self.effectiveness.as_slice().chunks_exact(4);
+        for (column, &t) in columns.zip(thrusts.iter().take(self.count)) {
+            for (w, &a) in w.iter_mut().zip(column) {
+                *w += a * t;
+            }
         }
-        let w = self.effectiveness * u;
         Wrench {
             thrust: w[0],
             torque: Vec3::new(w[1], w[2], w[3]),

@@ -33,56 +33,53 @@ use crate::scenario::MAX_ROBOTS;
 /// the single rotor leaves unexplained.
 pub const PAIR_MARGIN: f32 = 0.25;
 
-/// The rotors a change is judged against: their columns in newtons and expected thrusts.
+/// The rotors a change is judged against: a view of the mixer's columns and the rotors'
+/// expected thrusts (built each tick for nothing: nothing is copied).
 #[derive(Clone, Copy, Debug)]
-pub struct Columns {
-    /// Each rotor's column (thrust, roll and pitch torque times the scale), N per N.
-    a: [[f32; 3]; MAX_ROBOTS],
-    /// Each column's squared norm.
-    aa: [f32; MAX_ROBOTS],
+pub struct Columns<'a> {
+    /// Each rotor's column of the effectiveness matrix, four numbers per rotor (thrust N and
+    /// roll, pitch, yaw torque N m per N of the rotor's thrust).
+    raw: &'a [f32],
+    /// The torques' scale, 1/m: torques times it are newtons.
+    scale: f32,
     /// Each rotor's expected thrust, N.
-    thrust: [f32; MAX_ROBOTS],
+    thrust: &'a [f32; MAX_ROBOTS],
     /// Rotors that can be named (flown, turning, not known out), bit `i` for rotor `i`.
     eligible: u16,
+    /// The least expected thrust of a rotor judged, N.
+    min_thrust: f32,
     count: usize,
 }
 
-impl Columns {
-    /// The columns of `count` rotors, `column(j)` giving rotor `j`'s (thrust, roll, pitch),
-    /// torques times `scale`; a rotor is eligible when its bit of `eligible` is set, its
-    /// column is not zero and its expected thrust `thrust[j]` is at least `min_thrust`.
+impl<'a> Columns<'a> {
+    /// The columns of `count` rotors from `raw` (four numbers per rotor: thrust, roll, pitch
+    /// and yaw per newton, as the mixer stores them), torques times `scale`; a rotor is
+    /// eligible when its bit of `eligible` is set, its column is not zero and its expected
+    /// thrust `thrust[j]` is at least `min_thrust`.
     pub fn new(
         count: usize,
-        column: impl Fn(usize) -> [f32; 3],
+        raw: &'a [f32],
         scale: f32,
-        thrust: &[f32; MAX_ROBOTS],
+        thrust: &'a [f32; MAX_ROBOTS],
         eligible: u16,
         min_thrust: f32,
     ) -> Self {
-        let count = count.min(MAX_ROBOTS);
-        let mut out = Self {
-            a: [[0.0; 3]; MAX_ROBOTS],
-            aa: [0.0; MAX_ROBOTS],
-            thrust: *thrust,
-            eligible: 0,
-            count,
-        };
-        for (j, &t) in thrust.iter().enumerate().take(count) {
-            let c = column(j);
-            let a = [c[0], c[1] * scale, c[2] * scale];
-            let aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-            out.a[j] = a;
-            out.aa[j] = aa;
-            if eligible & (1 << j) != 0 && c[0] != 0.0 && aa > 0.0 && t >= min_thrust {
-                out.eligible |= 1 << j;
-            }
+        Self {
+            raw,
+            scale,
+            thrust,
+            eligible,
+            min_thrust,
+            count: count.min(MAX_ROBOTS).min(raw.len() / 4),
         }
-        out
     }
 
     /// Rotor `j`'s column (thrust, roll and pitch times the scale).
     pub fn column(&self, j: usize) -> [f32; 3] {
-        self.a.get(j).copied().unwrap_or([0.0; 3])
+        match self.raw.get(4 * j..4 * j + 3) {
+            Some(&[t, r, p]) if j < self.count => [t, r * self.scale, p * self.scale],
+            _ => [0.0; 3],
+        }
     }
 
     /// Rotor `j`'s expected thrust, N.
@@ -115,67 +112,78 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
     if dd.is_nan() || dd <= 0.0 {
         return 0;
     }
-    // b_j = -d . a_j: the loss's projection on each column.
-    let mut b = [0.0f32; MAX_ROBOTS];
-    for j in eligible(columns) {
-        let a = &columns.a[j];
-        b[j] = -(d[0] * a[0] + d[1] * a[1] + d[2] * a[2]);
-    }
-    let fits = |j: usize, lost: f32, sized: bool| {
+    // The control tick's budget: no division in the loops (ratios are compared crosswise)
+    // and each column read once. Per eligible rotor: its column a_j, |a_j|^2, and
+    // b_j = -d . a_j, the loss's projection on it.
+    let (min, max) = (config.min_fraction, config.max_fraction);
+    let lost_collective = -d[0];
+    let mut rotors = [0u8; MAX_ROBOTS];
+    let mut ta = [[0.0f32; 3]; MAX_ROBOTS];
+    let mut tb = [0.0f32; MAX_ROBOTS];
+    let mut m = 0;
+    let mut lightest = f32::INFINITY;
+    // The best single rotor: its b_j^2 and |a_j|^2 (explained = b^2 / (|a|^2 dd)).
+    let mut single: Option<(usize, f32, f32)> = None;
+    for j in (0..columns.count).filter(|&j| columns.eligible & (1 << j) != 0) {
+        let a = columns.column(j);
         let t = columns.thrust[j];
-        let small = if sized { config.min_fraction * t } else { 0.0 };
-        lost > small && lost <= config.max_fraction * t
-    };
-    // The collective shows at least `min_fraction` of the thrust the rotors lost.
-    let shown = |lost_thrust: f32| !how.thrust_shown || -d[0] >= config.min_fraction * lost_thrust;
-    let mut single: Option<(usize, f32)> = None;
-    for j in eligible(columns) {
-        let lost = b[j] / columns.aa[j];
-        if !fits(j, lost, how.sized) || !shown(lost) {
+        let aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+        // A rotor not flown (zero column) or barely turning is no candidate.
+        if a[0] == 0.0 || aa <= 0.0 || t < columns.min_thrust {
             continue;
         }
-        let explained = b[j] * b[j] / (columns.aa[j] * dd);
-        if single.is_none_or(|(_, e)| explained > e) {
-            single = Some((j, explained));
+        let b = -(d[0] * a[0] + d[1] * a[1] + d[2] * a[2]);
+        rotors[m] = j as u8;
+        ta[m] = [t * a[0], t * a[1], t * a[2]];
+        tb[m] = t * b;
+        m += 1;
+        lightest = math::min(lightest, t);
+        // Its loss b / |a|^2 within the bounds (sized: at least `min_fraction` of `t`), and
+        // the collective showing `min_fraction` of it when that is asked.
+        let small = if how.sized { min * t * aa } else { 0.0 };
+        let fits = b > small && b <= max * t * aa;
+        let shown = !how.thrust_shown || lost_collective * aa >= min * b;
+        if fits && shown && single.is_none_or(|(_, bb, aa0)| b * b * aa0 > bb * aa) {
+            single = Some((j, b * b, aa));
         }
     }
     // Two rotors stopped together lose `mu (T_j a_j + T_k a_k)` as the change rises: one
     // direction per pair, judged as a single rotor's (two free sizes would fit almost any
-    // change with two rotors on the same side).
-    let mut pair: Option<(usize, usize, f32)> = None;
-    // The collective must show at least `min_fraction` of half the least two rotors' thrust:
-    // most ticks of a flight spare the pairs' search here.
-    let least = eligible(columns).fold(f32::INFINITY, |m, j| math::min(m, columns.thrust[j]));
-    let pairs_possible =
-        how.pairs && -d[0] >= config.min_fraction * config.min_fraction * 2.0 * least;
-    for j in eligible(columns).filter(|_| pairs_possible) {
-        for k in eligible(columns).filter(|&k| k > j) {
-            let (tj, tk) = (columns.thrust[j], columns.thrust[k]);
-            let (aj, ak) = (&columns.a[j], &columns.a[k]);
-            let v: [f32; 3] = core::array::from_fn(|r| tj * aj[r] + tk * ak[r]);
-            let vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-            if vv <= 0.0 {
-                continue;
-            }
-            // b_j T_j + b_k T_k = -d . v.
-            let along = tj * b[j] + tk * b[k];
-            let mu = along / vv;
-            // Two rotors' loss always shows in the collective.
-            let lost = mu * (tj + tk);
-            if mu <= config.min_fraction
-                || mu > config.max_fraction
-                || -d[0] < config.min_fraction * lost
-            {
-                continue;
-            }
-            let explained = along * along / (vv * dd);
-            if pair.is_none_or(|(_, _, e)| explained > e) {
-                pair = Some((j, k, explained));
+    // change with two rotors on the same side). The collective must show at least
+    // `min_fraction` of half the least two rotors' thrust: most ticks of a flight spare the
+    // pairs' search here.
+    let mut pair: Option<(usize, usize, f32, f32)> = None;
+    if how.pairs && lost_collective >= min * min * 2.0 * lightest {
+        for x in 0..m {
+            for y in x + 1..m {
+                let (p, q) = (&ta[x], &ta[y]);
+                let v = [p[0] + q[0], p[1] + q[1], p[2] + q[2]];
+                let vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+                // -d . v, and mu = along / vv within the bounds.
+                let along = tb[x] + tb[y];
+                if vv <= 0.0 || along <= min * vv || along > max * vv {
+                    continue;
+                }
+                // Two rotors' loss, mu (T_j + T_k), always shows in the collective.
+                let (j, k) = (usize::from(rotors[x]), usize::from(rotors[y]));
+                let lost = along * (columns.thrust[j] + columns.thrust[k]);
+                if lost_collective * vv < min * lost {
+                    continue;
+                }
+                let aa2 = along * along;
+                if pair.is_none_or(|(_, _, best, vv0)| aa2 * vv0 > best * vv) {
+                    pair = Some((j, k, aa2, vv));
+                }
             }
         }
     }
-    let single = single.filter(|&(_, e)| e >= config.min_explained);
-    let pair = pair.filter(|&(_, _, e)| e >= config.min_explained);
+    let enough = |num: f32, den: f32| num >= config.min_explained * den * dd;
+    let single = single
+        .filter(|&(_, bb, aa)| enough(bb, aa))
+        .map(|(j, bb, aa)| (j, bb / (aa * dd)));
+    let pair = pair
+        .filter(|&(_, _, along2, vv)| enough(along2, vv))
+        .map(|(j, k, along2, vv)| (j, k, along2 / (vv * dd)));
     match (single, pair) {
         (Some((_, e1)), Some((j, k, e2))) if 1.0 - e2 < PAIR_MARGIN * (1.0 - e1) => {
             (1 << j) | (1 << k)
@@ -186,11 +194,6 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
     }
 }
 
-/// The eligible rotors' indices.
-fn eligible(columns: &Columns) -> impl Iterator<Item = usize> + '_ {
-    (0..columns.count).filter(|&j| columns.eligible & (1 << j) != 0)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -198,7 +201,7 @@ mod tests {
     /// Eight rotors on a 2 m x 0.44 m rectangle's rail, unevenly spaced, the COM off the
     /// middle (evenly spaced about the COM, opposite corners' pairs would make the same
     /// change: no wrench tells them apart).
-    fn columns(thrust: f32) -> Columns {
+    fn rect() -> [f32; 32] {
         let points: [[f32; 2]; 8] = [
             [-0.95, -0.22],
             [-0.8, 0.22],
@@ -209,15 +212,24 @@ mod tests {
             [0.7, -0.22],
             [0.95, 0.22],
         ];
-        Columns::new(
-            8,
-            |j| [1.0, -points[j][1], points[j][0]],
-            1.0 / 0.6,
-            &[thrust; MAX_ROBOTS],
-            0xff,
-            1.0,
-        )
+        raw(|j| [1.0, -points[j][1], points[j][0]])
     }
+
+    /// The columns of [`rect`] with each rotor expected at `thrust`.
+    fn columns<'a>(raw: &'a [f32; 32], thrust: &'a [f32; MAX_ROBOTS]) -> Columns<'a> {
+        Columns::new(8, raw, 1.0 / 0.6, thrust, 0xff, 1.0)
+    }
+
+    /// Eight rotors' columns as the mixer stores them (four numbers each, no yaw).
+    fn raw(column: impl Fn(usize) -> [f32; 3]) -> [f32; 32] {
+        let mut raw = [0.0f32; 32];
+        for j in 0..8 {
+            raw[4 * j..4 * j + 3].copy_from_slice(&column(j));
+        }
+        raw
+    }
+
+    const FIVE: [f32; MAX_ROBOTS] = [5.0; MAX_ROBOTS];
 
     const SIZED: Judging = Judging {
         sized: true,
@@ -238,7 +250,8 @@ mod tests {
 
     #[test]
     fn one_rotor_is_named_alone() {
-        let c = columns(5.0);
+        let r = rect();
+        let c = columns(&r, &FIVE);
         for j in 0..8 {
             let d = loss(&c, &[(j, 5.0)]);
             assert_eq!(explain(&d, &c, &RotorMonitorConfig::DEFAULT, SIZED), 1 << j);
@@ -247,7 +260,8 @@ mod tests {
 
     #[test]
     fn every_pair_is_named_as_a_pair_or_one_making_the_same_wrench() {
-        let c = columns(5.0);
+        let r = rect();
+        let c = columns(&r, &FIVE);
         let mut exact = 0;
         for j in 0..8 {
             for k in j + 1..8 {
@@ -278,7 +292,8 @@ mod tests {
 
     #[test]
     fn a_torque_without_thrust_or_a_small_change_is_no_rotor() {
-        let c = columns(5.0);
+        let r = rect();
+        let c = columns(&r, &FIVE);
         let config = RotorMonitorConfig::DEFAULT;
         assert_eq!(explain(&[0.0, 3.0, 0.0], &c, &config, SIZED), 0);
         assert_eq!(explain(&[-0.5, 0.0, 0.3], &c, &config, SIZED), 0);
@@ -288,7 +303,8 @@ mod tests {
 
     #[test]
     fn after_a_finding_the_thrust_row_must_show_the_loss() {
-        let c = columns(5.0);
+        let r = rect();
+        let c = columns(&r, &FIVE);
         let config = RotorMonitorConfig::DEFAULT;
         let guarded = Judging {
             sized: true,
@@ -307,7 +323,8 @@ mod tests {
         let mut thrust = [5.0; MAX_ROBOTS];
         thrust[3] = 0.5;
         let points = |j: usize| [1.0, if j % 2 == 0 { 0.22 } else { -0.22 }, j as f32 * 0.3];
-        let c = Columns::new(8, points, 1.5, &thrust, 0xff & !(1 << 5), 1.0);
+        let r = raw(points);
+        let c = Columns::new(8, &r, 1.5, &thrust, 0xff & !(1 << 5), 1.0);
         let d = loss(&c, &[(3, 5.0)]);
         assert_eq!(
             explain(&d, &c, &RotorMonitorConfig::DEFAULT, SIZED) & (1 << 3),

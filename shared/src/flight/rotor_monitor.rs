@@ -218,6 +218,8 @@ pub struct RotorMonitor {
     rpm_learned: f32,
     /// Ticks each rotor's RPM has been too low in a row.
     rpm_low: [u8; MAX_ROBOTS],
+    /// The flown rotors' mean squared arm (m^2) and one over its root (the torques' scale).
+    arms: (f32, f32),
 }
 
 impl Default for RotorMonitor {
@@ -249,6 +251,7 @@ impl RotorMonitor {
             rpm_ratio: [0.0; MAX_ROBOTS],
             rpm_learned: 0.0,
             rpm_low: [0; MAX_ROBOTS],
+            arms: (0.0, 0.0),
         }
     }
 
@@ -313,6 +316,27 @@ impl RotorMonitor {
             return [0.0; 3];
         }
         core::array::from_fn(|i| self.baseline[i] - self.reference[i])
+    }
+
+    /// One over the flown rotors' RMS arm, 1/m: torques times it are newtons, as the thrust
+    /// row. Its square root is taken again only when the arms change (a mixer rebuilt).
+    fn torque_scale(&mut self, mixer: &Mixer, n: usize) -> Option<f32> {
+        let (mut arms, mut counted) = (0.0f32, 0.0f32);
+        for i in 0..n {
+            let c = mixer.column(i);
+            if c[0] != 0.0 {
+                arms += c[1] * c[1] + c[2] * c[2];
+                counted += 1.0;
+            }
+        }
+        if !(counted > 0.0 && arms > 0.0) {
+            return None;
+        }
+        let mean = arms / counted;
+        if mean != self.arms.0 {
+            self.arms = (mean, 1.0 / math::sqrt(mean));
+        }
+        Some(self.arms.1)
     }
 
     fn restart(&mut self) {
@@ -408,7 +432,7 @@ impl RotorMonitor {
             return 0;
         }
         self.guard = math::max(self.guard - dt, 0.0);
-        let Some(scale) = torque_scale(input.mixer, n) else {
+        let Some(scale) = self.torque_scale(input.mixer, n) else {
             return 0;
         };
         if self.guard > config.resettle_time - config.blind_time {
@@ -420,8 +444,10 @@ impl RotorMonitor {
         let scaled = |v: &[f32; 3]| [v[0], v[1] * scale, v[2] * scale];
         let change = self.change();
         let d = scaled(&change);
-        let size = norm(&d);
-        if size <= config.quiet {
+        // Squared sizes throughout: the software square root costs a few hundred
+        // instructions a tick on the Cortex-M7.
+        let size2 = norm2(&d);
+        if size2 <= config.quiet * config.quiet {
             self.loud = 0.0;
             let gamma = math::clamp(dt / math::max(config.baseline_time, dt), 0.0, 1.0);
             for (b, r) in self.baseline.iter_mut().zip(self.filtered) {
@@ -446,22 +472,20 @@ impl RotorMonitor {
                 .filter(|&j| self.out & (1 << j) == 0 && self.expected[j] >= config.min_thrust)
                 .fold(f32::INFINITY, |m, j| math::min(m, self.expected[j]));
             let shown = -drift[0] >= config.min_fraction * config.min_fraction * lightest;
-            if !shown || norm(&drift) < least {
+            if !shown || norm2(&drift) < least * least {
                 self.drifting = 0.0;
                 return 0;
             }
-        } else if size < least {
+        } else if size2 < least * least {
             self.confirming = 0.0;
             return 0;
         }
+        let expected = self.expected;
         let columns = Columns::new(
             n,
-            |j| {
-                let c = input.mixer.column(j);
-                [c[0], c[1], c[2]]
-            },
+            input.mixer.columns_raw(),
             scale,
-            &self.expected,
+            &expected,
             !self.out,
             config.min_thrust,
         );
@@ -601,22 +625,10 @@ impl RotorMonitor {
     }
 }
 
-/// The norm of a change whose torques are already in newtons (times [`torque_scale`]'s).
-fn norm(v: &[f32; 3]) -> f32 {
-    math::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-}
-
-/// One over the flown rotors' RMS arm, 1/m: torques times it are newtons, as the thrust row.
-fn torque_scale(mixer: &Mixer, n: usize) -> Option<f32> {
-    let (mut arms, mut counted) = (0.0f32, 0.0f32);
-    for i in 0..n {
-        let c = mixer.column(i);
-        if c[0] != 0.0 {
-            arms += c[1] * c[1] + c[2] * c[2];
-            counted += 1.0;
-        }
-    }
-    (counted > 0.0 && arms > 0.0).then(|| 1.0 / math::sqrt(arms / counted))
+/// The squared norm of a change whose torques are already in newtons (times the torques'
+/// scale).
+fn norm2(v: &[f32; 3]) -> f32 {
+    v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
 }
 
 #[cfg(test)]
