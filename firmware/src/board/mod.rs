@@ -111,6 +111,13 @@ pub trait Board: 'static {
     fn battery_volts() -> Option<f32> {
         None
     }
+
+    /// Each rotor's RPM from its ESC's telemetry since the last step (robot `i`'s at `i`; NaN
+    /// for an ESC that did not answer), or `None` when the board reads no ESC telemetry (no
+    /// bidirectional DShot, or it is switched off).
+    fn esc_rpm() -> Option<shared::mission::EscRpm> {
+        None
+    }
 }
 
 /// The robots' actuators: each rotor's ESC and each robot's stepper. In hardware-in-the-loop

@@ -25,11 +25,18 @@ pub struct HardwareConfig {
     pub stall_threshold: u8,
     /// Motor tests (`MAV_CMD_DO_MOTOR_TEST`) are allowed (`COM_MOT_TEST_EN`, PX4's name).
     pub motor_test_enabled: bool,
+    /// Bidirectional DShot: each ESC answers every frame with its electrical RPM
+    /// (`DSHOT_BIDIR_EN`, PX4's name). Only with DShot; the ESCs must support it (BLHeli_32,
+    /// AM32, Bluejay).
+    pub dshot_bidirectional: bool,
+    /// The motors' magnet poles: RPM = electrical RPM / (poles / 2) (`MOT_POLE_COUNT`, PX4's
+    /// name).
+    pub motor_poles: u8,
 }
 
 impl HardwareConfig {
     /// DShot600, the square law, 200-step motors at 16 microsteps on a 20 mm pinion, 0.8 A
-    /// through 0.11 ohm sense resistors (the common TMC2209 boards), stall detection off, motor tests allowed.
+    /// through 0.11 ohm sense resistors (the common TMC2209 boards), stall detection off, motor tests allowed, no ESC telemetry, 14-pole motors.
     pub const DEFAULT: Self = Self {
         esc_protocol: 0,
         thrust_map: [0.04, 0.16, 0.36, 0.64],
@@ -38,6 +45,8 @@ impl HardwareConfig {
         stepper_r_sense: 0.11,
         stall_threshold: 0,
         motor_test_enabled: true,
+        dshot_bidirectional: false,
+        motor_poles: 14,
     };
 }
 

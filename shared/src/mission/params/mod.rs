@@ -107,7 +107,7 @@ macro_rules! param {
 }
 
 /// Number of parameters.
-pub const COUNT: usize = 101;
+pub const COUNT: usize = 103;
 
 /// Index of the first of the map origin's five parameters, in this order: `ORIG_LAT_DEG`,
 /// `ORIG_LAT_E7`, `ORIG_LON_DEG`, `ORIG_LON_E7`, `ORIG_ALT` (docs/ground-link.md#the-map-origin).

@@ -855,4 +855,29 @@ pub static TABLE: [ParamSpec; COUNT] = [
         },
         set: |c, v| c.hardware.motor_test_enabled = v > 0.5,
     },
+    ParamSpec {
+        name: "DSHOT_BIDIR_EN",
+        unit: "-",
+        min: 0.0,
+        max: 1.0,
+        integer: true,
+        #[cfg(feature = "docs")]
+        doc: "bidirectional DShot: each ESC answers with its RPM, which the rotor monitor reads (1 on; BLHeli_32, AM32 or Bluejay ESCs; taken while disarmed)",
+        get: |c| {
+            if c.hardware.dshot_bidirectional {
+                1.0
+            } else {
+                0.0
+            }
+        },
+        set: |c, v| c.hardware.dshot_bidirectional = v > 0.5,
+    },
+    param!(
+        whole "MOT_POLE_COUNT",
+        "-",
+        2.0,
+        64.0,
+        "the motors' magnet poles (RPM is the ESC's electrical RPM over half of them)",
+        |c| c.hardware.motor_poles
+    ),
 ];
