@@ -6,6 +6,13 @@
 //! nibbles of `value << 1 | telemetry`, sent most significant bit first. Values 1..=47 are
 //! commands, 48..=2047 throttle, 0 stops the motor. DShot600 bits last 1.667 us; a one is high
 //! for 75 % of it, a zero for 37.5 %.
+//!
+//! Bidirectional DShot (PX4's `DSHOT_BIDIR_EN`): the frame's checksum is inverted
+//! ([`bidirectional_frame`]), which asks the ESC to answer with its RPM
+//! ([`crate::dshot_telemetry`]), and the line is inverted: it idles high and each bit starts
+//! with a falling edge, low for the bit's high time above. The timer draws it with the same
+//! compare values ([`fill_burst`]) and the channel's output polarity set active low: a bit's
+//! compare value is then its low time, and the burst's closing zeros leave the line high.
 
 /// The value that stops the motor (the only one sent while disarmed).
 pub const STOP: u16 = 0;
@@ -25,6 +32,13 @@ pub fn frame(value: u16, telemetry: bool) -> u16 {
     let packet = (value.min(MAX_THROTTLE) << 1) | u16::from(telemetry);
     let crc = (packet ^ (packet >> 4) ^ (packet >> 8)) & 0x0F;
     (packet << 4) | crc
+}
+
+/// The bidirectional DShot frame for `value`: [`frame`]'s bits with the checksum inverted
+/// (`!(p ^ p >> 4 ^ p >> 8) & 0xF` of the 12-bit packet `p`), which an ESC takes as the
+/// request to answer each frame with its RPM.
+pub fn bidirectional_frame(value: u16, telemetry: bool) -> u16 {
+    frame(value, telemetry) ^ 0x000F
 }
 
 /// The throttle value for a command fraction in `[0, 1]`: 0 (stop) at or below zero and for
@@ -143,6 +157,49 @@ pub fn checksum_ok(frame: u16) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The line a timer channel draws `count` counts into a bit of compare value `compare`
+    /// (PWM mode 1: the reference is active below the compare value), active high or low.
+    fn line_high(compare: u16, count: u16, active_low: bool) -> bool {
+        (count < compare) != active_low
+    }
+
+    /// The inverted checksum by hand: throttle 1046 has checksum 0110, inverted 1001; an
+    /// ordinary ESC's check fails on it, so no ESC mistakes one kind for the other.
+    #[test]
+    fn bidirectional_frames_invert_the_checksum_only() {
+        assert_eq!(bidirectional_frame(1046, false), 0b1000_0010_1100_1001);
+        for value in [0, 1, 47, 48, 1000, 2047] {
+            for telemetry in [false, true] {
+                let f = bidirectional_frame(value, telemetry);
+                let p = f >> 4;
+                assert_eq!(f & 0xF, !(p ^ (p >> 4) ^ (p >> 8)) & 0xF);
+                assert_eq!(f >> 4, frame(value, telemetry) >> 4);
+                assert!(!checksum_ok(f));
+            }
+        }
+    }
+
+    /// Active low, the same compare values draw the inverted line: high at rest (the burst's
+    /// closing zeros), a one low for 75 % of the bit and a zero for 37.5 %, every bit starting
+    /// with a falling edge.
+    #[test]
+    fn an_active_low_channel_draws_the_inverted_line() {
+        let t = BitTiming::dshot600(240_000_000).unwrap();
+        let low_time = |compare| {
+            (0..t.period)
+                .filter(|&c| !line_high(compare, c, true))
+                .count()
+        };
+        assert_eq!(low_time(t.one), 300);
+        assert_eq!(low_time(t.zero), 150);
+        assert_eq!(low_time(0), 0, "idle high");
+        assert!(!line_high(t.zero, 0, true) && line_high(t.zero, t.period - 1, true));
+        assert!(
+            line_high(t.one, 0, false) && !line_high(0, 0, false),
+            "normal: idles low"
+        );
+    }
 
     /// The worked example of the DShot protocol's write-ups (throttle 1046, no telemetry):
     /// 1000001011000110 = 0x82C6, checksum 0110.

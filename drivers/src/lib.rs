@@ -6,6 +6,7 @@
 //! | module | device |
 //! |---|---|
 //! | [`dshot`] | ESC frames, DShot600 (the DShot protocol's frame and its 4-bit checksum) |
+//! | [`dshot_telemetry`] | bidirectional DShot's answer: each ESC's RPM from its line's edges |
 //! | [`esc_gate`] | what the ESC outputs send: armed commands, stops, protocol changes |
 //! | [`pulse`] | ESC pulses for ESCs without DShot: PWM (1000-2000 us) and OneShot125 |
 //! | [`thrust_map`] | rotor thrust to ESC command, a table replaceable by a bench calibration |
@@ -25,6 +26,7 @@ extern crate std;
 
 pub mod battery;
 pub mod dshot;
+pub mod dshot_telemetry;
 pub mod esc_gate;
 pub mod icm42688;
 pub mod imu;
