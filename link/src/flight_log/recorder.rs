@@ -426,7 +426,7 @@ pub fn step_texts(out: &TickOutput, each: &mut impl FnMut(LogLevel, core::fmt::A
     }
     if let Some(notice) = out.notice {
         let level = match notice {
-            Notice::BatteryCritical { .. } => LogLevel::Critical,
+            Notice::BatteryCritical { .. } | Notice::RotorsOut { .. } => LogLevel::Critical,
             Notice::LinkRegained { .. } => LogLevel::Notice,
             _ => LogLevel::Warning,
         };

@@ -28,7 +28,7 @@
 //! Operator commands: [`FlightCommand::LandNow`] lands where the vehicle is (or stops the
 //! rotors if it never left the ground); [`FlightCommand::Kill`] stops the rotors at once.
 
-use crate::control::allocation::{Mixer, Saturation};
+use crate::control::allocation::{Mixer, Saturation, Wrench};
 use crate::control::controller::{ControlInputs, FlightController};
 use crate::control::land_detector::{Contact, LandDetector};
 use crate::control::navigator::NavState;
@@ -43,7 +43,7 @@ use crate::flight::rotor_monitor::{MonitorInput, RotorMonitor, RotorMonitorConfi
 use crate::flight::route::Route;
 use crate::geometry::Vec2;
 use crate::math;
-use crate::scenario::MAX_ROBOTS;
+use crate::scenario::{GRAVITY, MAX_ROBOTS};
 
 /// Tuning of a flight beyond the cascade's gains.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -135,6 +135,25 @@ pub struct RotorOut {
     pub at: f32,
     /// Its ESC reported it (rather than the monitor finding it).
     pub reported: bool,
+}
+
+/// What one tick found of the rotors: the rotors newly found stopped, and whether the rotors
+/// left hold a level hover.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RotorFinding {
+    /// The first rotor newly found.
+    pub first: RotorOut,
+    /// Every rotor newly found this tick, bit `i` for robot `i`.
+    pub newly: u16,
+    /// Every rotor flown without now (these and earlier ones).
+    pub out: u16,
+    /// Rotors left turning.
+    pub left: u8,
+    /// The mixer of the rotors left allocates the hover (the vehicle's weight, no torque)
+    /// within every rotor's range. When it cannot, the allocation keeps the payload level
+    /// and gives up collective thrust (docs/failures.md#rotors-that-stop-in-flight): the
+    /// vehicle comes down faster than planned.
+    pub holdable: bool,
 }
 
 /// Rotors found stopped that a flight records (the first two: a third is flown without as
@@ -321,7 +340,7 @@ impl FlightStack {
     /// Rotors found stopped are flown without from the next tick, and the next tick begins
     /// the landing ([`LandingCause::RotorOut`]; under a descent without position, that descent
     /// goes on). With `imu_trusted` false (the IMU failed: its samples explain nothing) only
-    /// the ESCs count. Returns the first when this tick found any.
+    /// the ESCs count. Returns what this tick found, if anything.
     pub fn watch_rotors(
         &mut self,
         nav: &NavState,
@@ -330,7 +349,7 @@ impl FlightStack {
         esc: EscTelemetry<'_>,
         imu_trusted: bool,
         dt: f32,
-    ) -> Option<RotorOut> {
+    ) -> Option<RotorFinding> {
         if self.stopped.is_some() {
             return None;
         }
@@ -375,7 +394,18 @@ impl FlightStack {
             first.get_or_insert(event);
         }
         self.rotor_landing = first.map(|e| e.robot);
-        first
+        let out = self.monitor.out();
+        let hover = self.mixer.allocate(&Wrench {
+            thrust: vehicle.mass * GRAVITY,
+            torque: Vec3::ZERO,
+        });
+        first.map(|first| RotorFinding {
+            first,
+            newly,
+            out,
+            left: (n as u32 - (out & all).count_ones()) as u8,
+            holdable: !hover.saturation.collective && !hover.saturation.roll_pitch,
+        })
     }
 
     /// Holds the hover past its planned time while `hold` is set (the plan then goes on from

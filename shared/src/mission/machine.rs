@@ -518,8 +518,13 @@ impl Mission {
             };
             transition = self.advance(&nav, dt, flight_command, &mut thrusts, &mut cascade);
         }
-        if matches!(self.phase, Phase::Flying(_)) {
-            self.watch_rotors(input, &nav, &thrusts, dt);
+        if matches!(self.phase, Phase::Flying(_))
+            && let Some(found) = self.watch_rotors(input, &nav, &thrusts, dt)
+        {
+            // Said this tick; another notice waits for the next.
+            if let Some(other) = notice.replace(found) {
+                self.notice.get_or_insert(other);
+            }
         }
         let mut armed = matches!(
             self.phase,
@@ -1045,41 +1050,42 @@ impl Mission {
     /// After this tick's flight step: a rotor found stopped (or reported by its ESC) is flown
     /// without from the next tick and the flight lands; the formation is not re-solved for
     /// the rotors left (the adaptation gives up, a re-formation asked for is dropped).
+    /// Says which rotors were found and whether the rotors left hold a level hover.
     fn watch_rotors(
         &mut self,
         input: &TickInput,
         nav: &NavState,
         thrusts: &[f32; MAX_ROBOTS],
         dt: f32,
-    ) {
-        let Some(flight) = self.flight.as_mut() else {
-            return;
-        };
+    ) -> Option<Notice> {
+        let flight = self.flight.as_mut()?;
         let n = self.scenario.robots.count();
         let reported = u16::from(input.faults.rotors_out);
         // A frozen or noisy IMU makes a residual no rotor caused: once it is found, only the
         // ESCs' word counts.
         let imu_trusted =
             !input.faults.imu && self.imu_detection.is_none() && !self.navigator.imu_dropped();
-        if flight
-            .watch_rotors(
-                nav,
-                input.imu.accel,
-                &thrusts[..n],
-                EscTelemetry {
-                    rpm: input.esc_rpm.as_ref().map(|r| &r[..n]),
-                    stopped: reported,
-                },
-                imu_trusted,
-                dt,
-            )
-            .is_some()
-        {
-            if let Some(adapter) = self.adapter.as_mut() {
-                adapter.give_up();
-            }
-            self.pending = None;
+        let found = flight.watch_rotors(
+            nav,
+            input.imu.accel,
+            &thrusts[..n],
+            EscTelemetry {
+                rpm: input.esc_rpm.as_ref().map(|r| &r[..n]),
+                stopped: reported,
+            },
+            imu_trusted,
+            dt,
+        )?;
+        if let Some(adapter) = self.adapter.as_mut() {
+            adapter.give_up();
         }
+        self.pending = None;
+        Some(Notice::RotorsOut {
+            newly: found.newly,
+            earlier: found.out & !found.newly,
+            left: found.left,
+            holdable: found.holdable,
+        })
     }
 
     /// The in-flight adaptation after this tick's flight step: measure in the hover, ask for a

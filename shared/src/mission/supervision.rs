@@ -267,7 +267,9 @@ impl BatteryMonitor {
 }
 
 /// Something the supervision has to tell people (the firmware sends it as `STATUSTEXT`, the
-/// simulator prints it). Changes of phase carry their own reason; these are the rest.
+/// simulator prints it). Changes of phase carry their own reason; these are the rest. (The
+/// rotors found stopped are said here too: every one of them, where the landing's reason
+/// names the first.)
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Notice {
     /// The ground link is lost; what the vehicle does about it.
@@ -296,6 +298,33 @@ pub enum Notice {
         /// The critical threshold, V.
         threshold: f32,
     },
+    /// Rotors found stopped in flight this tick (docs/failures.md#rotors-that-stop-in-flight).
+    RotorsOut {
+        /// The rotors found now, bit `i` for robot `i`.
+        newly: u16,
+        /// Rotors found before, flown without already.
+        earlier: u16,
+        /// Rotors left turning.
+        left: u8,
+        /// Whether the rotors left hold a level hover; if not, the payload is kept level and
+        /// comes down faster than planned.
+        holdable: bool,
+    },
+}
+
+/// The robots of `mask` (from 1) as words: "rotor 3", "rotors 1 and 6", "rotors 1, 2 and 6".
+fn rotors(f: &mut core::fmt::Formatter<'_>, mask: u16) -> core::fmt::Result {
+    let count = mask.count_ones();
+    write!(f, "{}", if count == 1 { "rotor" } else { "rotors" })?;
+    for (k, robot) in (0..16u32).filter(|&i| mask & (1 << i) != 0).enumerate() {
+        let joint = match k as u32 {
+            0 => " ",
+            k if k + 1 == count => " and ",
+            _ => ", ",
+        };
+        write!(f, "{joint}{}", robot + 1)?;
+    }
+    Ok(())
 }
 
 /// What the vehicle does about a lost link.
@@ -348,6 +377,31 @@ impl core::fmt::Display for Notice {
                 Fixed(hundredths_down(volts), 2),
                 Fixed(threshold, 2)
             ),
+            Self::RotorsOut {
+                newly,
+                earlier,
+                left,
+                holdable,
+            } => {
+                rotors(f, newly)?;
+                write!(f, " stopped in flight")?;
+                if earlier != 0 {
+                    write!(f, " (after ")?;
+                    rotors(f, earlier)?;
+                    write!(f, ")")?;
+                }
+                if holdable {
+                    write!(
+                        f,
+                        ": the {left} left hold a level hover; landing where it is"
+                    )
+                } else {
+                    write!(
+                        f,
+                        ": the {left} left cannot hold a level hover; keeping the payload level, coming down faster than planned"
+                    )
+                }
+            }
         }
     }
 }
@@ -356,6 +410,33 @@ impl core::fmt::Display for Notice {
 mod tests {
     use super::*;
     use std::string::ToString;
+
+    #[test]
+    fn the_rotors_found_are_named_with_what_the_rest_can_do() {
+        let said = |newly, earlier, left, holdable| {
+            Notice::RotorsOut {
+                newly,
+                earlier,
+                left,
+                holdable,
+            }
+            .to_string()
+        };
+        assert_eq!(
+            said(1 << 2, 0, 7, true),
+            "rotor 3 stopped in flight: the 7 left hold a level hover; landing where it is"
+        );
+        assert_eq!(
+            said((1 << 0) | (1 << 5), 0, 6, true),
+            "rotors 1 and 6 stopped in flight: the 6 left hold a level hover; landing where it is"
+        );
+        let worse = said(1 << 7, (1 << 0) | (1 << 1), 5, false);
+        assert!(
+            worse.starts_with("rotor 8 stopped in flight (after rotors 1 and 2): the 5 left cannot hold a level hover"),
+            "{worse}"
+        );
+        assert!(said(0b111, 0, 5, true).starts_with("rotors 1, 2 and 3 stopped"));
+    }
 
     const S: u64 = 1_000_000;
 
