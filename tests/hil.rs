@@ -492,6 +492,79 @@ fn the_firmware_answers_a_stopped_rotor_and_a_low_battery_in_the_loop() {
     assert!(worst < 50_000.0, "worst control tick {worst} instructions");
 }
 
+/// Two rotors stopped at once, 11 s after take-off began, on rect-ex1 (a pair the vehicle's
+/// response alone names too late to hold: docs/failures.md#rotors-that-stop-in-flight), the
+/// plant sending each rotor's RPM (`ESC_STATUS`) with every step: the firmware names both
+/// from the RPM within 30 ms, flies on without them, lands, and tells the ground station the
+/// ESCs' RPM and which rotors are out (`ESC_STATUS`, `ESC_INFO`).
+#[test]
+fn the_firmware_reads_the_escs_rpm_and_names_two_stopped_rotors_at_once() {
+    let Some(elf) =
+        image_or_skip("the_firmware_reads_the_escs_rpm_and_names_two_stopped_rotors_at_once")
+    else {
+        return;
+    };
+    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    let loaded = rect_ex1();
+    let injections: Vec<_> = ["rotor-out:1@11", "rotor-out:6@11"]
+        .iter()
+        .map(|i| Injection::parse(i).expect("valid"))
+        .collect();
+    let (qemu, link) = Qemu::start(&elf, QemuLink::Ethernet).expect("QEMU starts");
+    let setup = HilSetup {
+        injections,
+        esc_telemetry: true,
+        ..HilSetup::default()
+    };
+    let fw = run(&loaded, link, &setup, print_text())
+        .unwrap_or_else(|e| panic!("hil run failed: {e:#}\nQEMU said: {}", qemu.output()));
+    let takeoff = fw.takeoff_at_s.expect("a take-off");
+    let stopped_at = takeoff + 11.0;
+    // When a text first named the robot stopped ("rotors 1 and 6 stopped in flight: ...").
+    let said = |robot: u32| {
+        fw.log
+            .texts
+            .iter()
+            .find(|t| {
+                t.text
+                    .split_once(" stopped in flight")
+                    .is_some_and(|(named, _)| {
+                        named
+                            .split(|c: char| !c.is_ascii_digit())
+                            .any(|w| w.parse() == Ok(robot))
+                    })
+            })
+            .map(|t| t.step as f64 * 0.0025 - stopped_at)
+    };
+    report(format_args!(
+        "hil rect-ex1 with ESC RPM, rotors 1 and 6 stopped at once: dropped {}, aborted {:?}, rotor 1 said {:?} s and rotor 6 {:?} s after the stop; {} ESC_STATUS, ESC_INFO failed {:#b}",
+        fw.dropped,
+        fw.aborted,
+        said(1),
+        said(6),
+        fw.log.esc_statuses,
+        fw.log.esc_failed
+    ));
+    assert!(!fw.dropped, "the vehicle dropped: {:?}", fw.phases);
+    assert_eq!(
+        fw.phases.last().map(|p| p.0.as_str()),
+        Some("disarmed"),
+        "landed and disarmed: {:?}",
+        fw.phases
+    );
+    for robot in [1, 6] {
+        let after = said(robot).unwrap_or_else(|| panic!("rotor {robot} never said stopped"));
+        assert!(
+            (0.0..0.03).contains(&after),
+            "rotor {robot} said {after} s after it stopped"
+        );
+    }
+    // The ground station was told each ESC's RPM (at 4 Hz of the board's clock, which runs
+    // slower than the lockstep's under QEMU): the last after the landing, all stopped.
+    assert!(fw.log.esc_statuses > 0, "no ESC_STATUS");
+    assert_eq!(&fw.log.esc_rpm[8..], &[0; 8], "robots beyond the eighth");
+}
+
 #[test]
 fn the_hil_command_prints_the_mission_keys_as_json() {
     let Some(elf) = image_or_skip("the_hil_command_prints_the_mission_keys_as_json") else {

@@ -155,6 +155,8 @@ pub struct Vehicle {
     gcs_heartbeat: bool,
     /// `LINK_BATTERY_MV`: the plant's pack, mV (`u32::MAX`: none heard).
     link_battery_mv: u32,
+    /// `LINK_ESC_RPM`: the plant's rotor RPM.
+    link_esc_rpm: link::esc::EscRpmInbox,
     /// `PAYLOAD`: the newest description loaded into the planner, for the control task.
     payload: Option<(Scenario, MissionConfig)>,
     /// The job task's last accepted description.
@@ -232,6 +234,7 @@ impl Vehicle {
             mocap: None,
             gcs_heartbeat: false,
             link_battery_mv: u32::MAX,
+            link_esc_rpm: link::esc::EscRpmInbox::new(),
             payload: None,
             last: None,
             autonomy: Box::new(Autonomy::new()),
@@ -415,6 +418,7 @@ impl Vehicle {
                 | Inbound::Heartbeat(_)
                 | Inbound::GcsHeartbeat(_)
                 | Inbound::Battery { .. }
+                | Inbound::EscStatus(_)
         );
         let untrusted = !verdict.trusted();
         let before = (
@@ -749,6 +753,12 @@ impl Vehicle {
             Inbound::Invalid(e) => self.report_text(Severity::Warning, &format!("HIL: {e}")),
             Inbound::GcsHeartbeat(_) => self.gcs_heartbeat = true,
             Inbound::Battery { volts, .. } => self.link_battery_mv = (volts * 1000.0) as u32,
+            Inbound::EscStatus(rpm) if self.in_hil => {
+                if let Err(e) = self.link_esc_rpm.receive(&rpm) {
+                    self.report_text(Severity::Warning, &format!("{e}"));
+                }
+            }
+            Inbound::EscStatus(_) => {}
             Inbound::Heartbeat(_) | Inbound::Ignored { .. } => {}
         }
     }
@@ -900,6 +910,12 @@ impl Vehicle {
             // The job task runs each load to the end before the next frame here.
             loading: false,
             route: route.as_ref(),
+            // The plant's RPM in HIL; no ESC telemetry off HIL (no board here).
+            esc_rpm: if hil {
+                self.link_esc_rpm.rpm_at(step.time_us)
+            } else {
+                None
+            },
             // The parameters' IMU offsets and hardware settings, as the firmware's control
             // task hands them over after a change.
             bench: core::mem::take(&mut self.config_changed).then(|| (&self.config).into()),

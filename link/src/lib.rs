@@ -49,6 +49,7 @@ extern crate std;
 pub mod bandwidth;
 pub mod command;
 pub mod command_wire;
+pub mod esc;
 pub mod flight_log;
 pub mod frame;
 pub mod ftp;

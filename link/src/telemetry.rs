@@ -3,7 +3,8 @@
 //! formation once the robots have moved to it; not a number until the positions are
 //! confirmed), `GLOBAL_POSITION_INT` (through the map origin,
 //! docs/ground-link.md#the-map-origin) and the ESC outputs (`ACTUATOR_OUTPUT_STATUS`, and
-//! `SERVO_OUTPUT_RAW` for MAVProxy: docs/ground-link.md#bring-up-commands), each on its own interval that a ground station
+//! `SERVO_OUTPUT_RAW` for MAVProxy: docs/ground-link.md#bring-up-commands), the ESCs' own
+//! telemetry (`ESC_STATUS`, `ESC_INFO`: [`crate::esc`]), each on its own interval that a ground station
 //! sets with `MAV_CMD_SET_MESSAGE_INTERVAL` (or asks for once with `MAV_CMD_REQUEST_MESSAGE`),
 //! as MAVLink's message interval protocol has it; the messages built from a
 //! [`VehicleSnapshot`], the vehicle's state after its last control step; and the take-off
@@ -16,10 +17,10 @@ use crate::MessageData;
 use crate::geo::GeoOrigin;
 use crate::hil::MAX_ROBOTS;
 use crate::msg::{
-    ACTUATOR_OUTPUT_STATUS_DATA, ATTITUDE_QUATERNION_DATA, DEBUG_FLOAT_ARRAY_DATA,
-    EXTENDED_SYS_STATE_DATA, GLOBAL_POSITION_INT_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA,
-    LOCAL_POSITION_NED_DATA, MavLandedState, MavResult, MavSysStatusSensor, MavVtolState,
-    SERVO_OUTPUT_RAW_DATA, SYS_STATUS_DATA,
+    ACTUATOR_OUTPUT_STATUS_DATA, ATTITUDE_QUATERNION_DATA, DEBUG_FLOAT_ARRAY_DATA, ESC_INFO_DATA,
+    ESC_STATUS_DATA, EXTENDED_SYS_STATE_DATA, GLOBAL_POSITION_INT_DATA, GPS_GLOBAL_ORIGIN_DATA,
+    HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, MavLandedState, MavResult, MavSysStatusSensor,
+    MavVtolState, SERVO_OUTPUT_RAW_DATA, SYS_STATUS_DATA,
 };
 use shared::control::thrust_map::ThrustMap;
 
@@ -40,10 +41,16 @@ pub enum Stream {
     ServoOutputRaw = 5,
     /// `ACTUATOR_OUTPUT_STATUS`: every ESC output, fractions of full command.
     ActuatorOutputStatus = 6,
+    /// `ESC_STATUS`: each rotor's RPM from its ESC ([`crate::esc`]; sent only while ESCs
+    /// report).
+    EscStatus = 7,
+    /// `ESC_INFO`: which ESCs answer, the rotors flown without ([`crate::esc`]; sent only
+    /// while ESCs report).
+    EscInfo = 8,
 }
 
 /// How many streams there are.
-pub const STREAMS: usize = 7;
+pub const STREAMS: usize = 9;
 /// `array_id` of the rail positions' `DEBUG_FLOAT_ARRAY`.
 pub const RAIL_ARRAY_ID: u16 = 1;
 /// `name` of the rail positions' `DEBUG_FLOAT_ARRAY`.
@@ -59,6 +66,8 @@ impl Stream {
         Stream::GlobalPositionInt,
         Stream::ServoOutputRaw,
         Stream::ActuatorOutputStatus,
+        Stream::EscStatus,
+        Stream::EscInfo,
     ];
 
     /// The MAVLink message id.
@@ -71,6 +80,8 @@ impl Stream {
             Self::GlobalPositionInt => GLOBAL_POSITION_INT_DATA::ID,
             Self::ServoOutputRaw => SERVO_OUTPUT_RAW_DATA::ID,
             Self::ActuatorOutputStatus => ACTUATOR_OUTPUT_STATUS_DATA::ID,
+            Self::EscStatus => ESC_STATUS_DATA::ID,
+            Self::EscInfo => ESC_INFO_DATA::ID,
         }
     }
 
@@ -80,13 +91,14 @@ impl Stream {
     }
 
     /// The interval at start and after a request for the default (interval 0), us: 1 Hz for
-    /// the status, 2 Hz for the rail positions, 4 Hz for the ESC outputs, 5 Hz for the global
-    /// position (a map's), 10 Hz for attitude and local position.
+    /// the status and the ESCs' information, 2 Hz for the rail positions, 4 Hz for the ESC
+    /// outputs and their RPM, 5 Hz for the global position (a map's), 10 Hz for attitude and
+    /// local position.
     pub const fn default_interval_us(self) -> u32 {
         match self {
-            Self::SysStatus => 1_000_000,
+            Self::SysStatus | Self::EscInfo => 1_000_000,
             Self::RailPositions => 500_000,
-            Self::ServoOutputRaw | Self::ActuatorOutputStatus => 250_000,
+            Self::ServoOutputRaw | Self::ActuatorOutputStatus | Self::EscStatus => 250_000,
             Self::GlobalPositionInt => 200_000,
             Self::AttitudeQuaternion | Self::LocalPositionNed => 100_000,
         }
@@ -107,7 +119,7 @@ pub struct Schedule {
     next_us: [u64; STREAMS],
     /// Bit `i` set: stream `i` is sent once at the next chance, on or off
     /// (`MAV_CMD_REQUEST_MESSAGE`).
-    once: u8,
+    once: u16,
 }
 
 impl Default for Schedule {
@@ -128,6 +140,8 @@ impl Schedule {
                 Stream::GlobalPositionInt.default_interval_us(),
                 Stream::ServoOutputRaw.default_interval_us(),
                 Stream::ActuatorOutputStatus.default_interval_us(),
+                Stream::EscStatus.default_interval_us(),
+                Stream::EscInfo.default_interval_us(),
             ],
             next_us: [0; STREAMS],
             once: 0,
@@ -163,7 +177,7 @@ impl Schedule {
     pub fn request_once(&mut self, message_id: u32) -> bool {
         match Stream::of_message(message_id) {
             Some(stream) => {
-                self.once |= 1 << stream as u8;
+                self.once |= 1 << stream as u16;
                 true
             }
             None => false,
@@ -264,6 +278,11 @@ pub struct VehicleSnapshot {
     pub route: RouteStatus,
     /// `EXTENDED_SYS_STATE`'s `landed_state` (`MAV_LANDED_STATE`).
     pub landed: u8,
+    /// Each robot's rotor RPM from its ESC's telemetry in the last control step (NaN: the
+    /// ESC did not answer, or there is no ESC telemetry).
+    pub esc_rpm: [f32; MAX_ROBOTS],
+    /// The rotors the vehicle flies without (found stopped), bit `i` for robot `i`.
+    pub rotors_out: u16,
 }
 
 /// Where the vehicle is along its route (docs/ground-link.md#missions).
@@ -320,6 +339,8 @@ impl VehicleSnapshot {
         mode: 0,
         route: RouteStatus::NONE,
         landed: MavLandedState::MAV_LANDED_STATE_ON_GROUND as u8,
+        esc_rpm: [f32::NAN; MAX_ROBOTS],
+        rotors_out: 0,
     };
 
     /// `EXTENDED_SYS_STATE`: the landed state (MAVSDK's `landed_state` and `in_air`).

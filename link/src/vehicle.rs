@@ -93,6 +93,8 @@ crc_extras!(
     SETUP_SIGNING_DATA,
     DEBUG_FLOAT_ARRAY_DATA,
     BATTERY_STATUS_DATA,
+    crate::msg::ESC_STATUS_DATA,
+    crate::msg::ESC_INFO_DATA,
     LOG_REQUEST_LIST_DATA,
     LOG_ENTRY_DATA,
     LOG_REQUEST_DATA_DATA,
@@ -196,6 +198,9 @@ pub enum Inbound {
         /// Its sender.
         from: Sender,
     },
+    /// `ESC_STATUS`: four ESCs' RPM. The vehicle takes it only in hardware-in-the-loop, from
+    /// the plant (on a board the ESCs answer over bidirectional DShot).
+    EscStatus(crate::esc::EscRpmReport),
     /// `SET_GPS_GLOBAL_ORIGIN` addressed to the vehicle: the map origin
     /// (docs/ground-link.md#the-map-origin), not yet checked.
     SetOrigin {
@@ -406,6 +411,11 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
         BATTERY_STATUS_DATA::ID => {
             battery_volts(frame.payload()).map_or(ignored, |volts| Inbound::Battery { volts, from })
         }
+        crate::msg::ESC_STATUS_DATA::ID => frame
+            .decode::<crate::msg::ESC_STATUS_DATA>()
+            .map_or(ignored, |m| {
+                Inbound::EscStatus(crate::esc::EscRpmReport::from(&m))
+            }),
         _ => ignored,
     }
 }

@@ -21,7 +21,8 @@ use shared::mission::params::{COUNT, ParamValues, TABLE};
 use test_support::flash::{Cut, CutFlash, PAGE, block_on};
 use test_support::rng::Rng;
 
-const PAGES: usize = 4;
+/// The Pixhawk's parameter range: 8 pages of its FRAM (`PARAM_RANGE` of its board).
+const PAGES: usize = 8;
 const RANGE: core::ops::Range<u32> = 0..(PAGE * PAGES) as u32;
 
 /// A random write: a parameter (any of the table, in its range) or the signing key.

@@ -39,7 +39,7 @@ use shared::flight::Route;
 use shared::mission::bringup::{BenchConfig, CalibrationFailure, CalibrationKind};
 use shared::mission::supervision::BatteryLevel;
 use shared::mission::{
-    CommandRefusal, HardwareFaults, Mission, MissionConfig, MissionPlanner,
+    CommandRefusal, EscRpm, HardwareFaults, Mission, MissionConfig, MissionPlanner,
     OperatorCommand as Command, Phase, Reason, Supervision, TickInput as MissionInput,
 };
 use shared::numbers::Fixed;
@@ -81,6 +81,9 @@ pub struct TickInput<'a> {
     pub loading: bool,
     /// A change of the ground station's route since the last step.
     pub route: Option<&'a RouteChange>,
+    /// Each rotor's RPM from its ESC this step (NaN: no answer), `None` without ESC
+    /// telemetry (docs/firmware.md#esc-telemetry).
+    pub esc_rpm: Option<EscRpm>,
     /// The parameters changed since the last step: the IMU's offsets and the hardware
     /// settings go in force now, with or without a payload.
     pub bench: Option<BenchConfig>,
@@ -441,7 +444,7 @@ impl Autonomy {
             mocap: input.mocap.as_ref().map(fix),
             command: command.map(self::command),
             faults: input.faults,
-            esc_rpm: None,
+            esc_rpm: input.esc_rpm,
             supervision: input.supervision,
         };
         let out = self.mission.step(&mission_input);
@@ -571,6 +574,8 @@ impl Autonomy {
             mode: status.mode,
             route: status.route,
             landed: status.landed,
+            esc_rpm: input.esc_rpm.unwrap_or([f32::NAN; MAX_ROBOTS]),
+            rotors_out: self.mission.flight().map_or(0, |f| f.rotors_out()),
             ..VehicleSnapshot::START
         };
         TickOutput {

@@ -873,6 +873,19 @@ async fn handle(
         Inbound::Battery { volts, .. } => {
             LINK_BATTERY_MV.store((volts * 1000.0) as u32, Ordering::Relaxed);
         }
+        // The plant's RPM, in HIL only (on a board the ESCs answer over DShot).
+        Inbound::EscStatus(rpm) if IN_HIL.load(Ordering::Relaxed) => {
+            let taken = super::LINK_ESC_RPM.lock(|inbox| {
+                let mut merged = inbox.get();
+                let taken = merged.receive(&rpm);
+                inbox.set(merged);
+                taken
+            });
+            if let Err(e) = taken {
+                reply(report(Severity::Warning, format_args!("{e}")));
+            }
+        }
+        Inbound::EscStatus(_) => {}
         Inbound::Heartbeat(_) | Inbound::Ignored { .. } => {}
     }
 }
@@ -1120,6 +1133,8 @@ struct Sending<W> {
     said: Said,
     /// [`STATUS_CHANGES`] when they were said.
     status_changes: u32,
+    /// `ESC_INFO`s sent (its `counter`).
+    esc_infos: u16,
 }
 
 /// What the send task last said of the mode, the route and the landed state.
@@ -1278,6 +1293,25 @@ impl<W: Write> Sending<W> {
                     // An unusable origin (said at start): nothing to send.
                     None => continue,
                 },
+                // Only while ESCs report: one message per four of them.
+                Stream::EscStatus | Stream::EscInfo => {
+                    if !link::esc::reporting(&vehicle) {
+                        continue;
+                    }
+                    for message in 0..link::esc::messages(vehicle.robots) {
+                        if stream == Stream::EscStatus {
+                            self.encode(&link::esc::esc_status(&vehicle, message));
+                        } else {
+                            let counter = self.esc_infos;
+                            self.encode(&link::esc::esc_info(&vehicle, message, counter));
+                        }
+                        self.flush().await;
+                    }
+                    if stream == Stream::EscInfo {
+                        self.esc_infos = self.esc_infos.wrapping_add(1);
+                    }
+                    continue;
+                }
             }
             self.flush().await;
         }
@@ -1481,6 +1515,7 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
         ),
         charged: true,
         home: Home::START,
+        esc_infos: 0,
         said: Said {
             mode: FlightMode::Ready.code(),
             route: RouteStatus::NONE,

@@ -132,6 +132,12 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 } else {
                     None
                 },
+                // In HIL the plant's RPM; on a board its ESCs' (bidirectional DShot).
+                esc_rpm: if sample.hil {
+                    super::LINK_ESC_RPM.lock(|inbox| inbox.get().rpm_at(step.time_us))
+                } else {
+                    <Selected as Board>::esc_rpm()
+                },
                 supervision: Supervision {
                     gcs_heartbeat: GCS_HEARTBEAT.swap(false, Ordering::Relaxed),
                     // In HIL the plant's pack; on a board its own measurement.

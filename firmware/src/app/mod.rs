@@ -203,6 +203,10 @@ pub static GCS_HEARTBEAT: AtomicBool = AtomicBool::new(false);
 /// The pack voltage the HIL plant last sent (`BATTERY_STATUS`), mV; `u32::MAX`: none yet.
 /// Taken only in HIL: on a board the pack is measured by its own ADC.
 pub static LINK_BATTERY_MV: AtomicU32 = AtomicU32::new(u32::MAX);
+/// The rotors' RPM the HIL plant last sent (`ESC_STATUS`, docs/firmware.md#esc-telemetry).
+/// Taken only in HIL: on a board the ESCs answer over bidirectional DShot.
+pub static LINK_ESC_RPM: Mutex<Cs, Cell<link::esc::EscRpmInbox>> =
+    Mutex::new(Cell::new(link::esc::EscRpmInbox::new()));
 
 /// The thread-mode wake-up interrupt fired since the executor last looked.
 static THREAD_WOKEN: AtomicBool = AtomicBool::new(false);

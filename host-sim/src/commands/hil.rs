@@ -119,6 +119,11 @@ pub struct HilArgs {
     /// BATTERY_STATUS drops to V volts); not `stepper-stall` (the link carries no stall report).
     #[arg(long, value_name = "KIND@SECONDS", value_parser = Injection::parse)]
     pub inject: Vec<Injection>,
+    /// The plant sends each rotor's RPM to the firmware (`ESC_STATUS`, before each step's
+    /// `HIL_SENSOR`), as ESCs with bidirectional DShot report it: the rotor monitor then reads
+    /// the RPM as well as the vehicle's response (docs/firmware.md#esc-telemetry).
+    #[arg(long)]
+    pub esc_telemetry: bool,
 }
 
 /// A MAVLink 2 signing key from 64 hexadecimal digits.
@@ -206,6 +211,7 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
         linger: linger.map(|s| Duration::from_secs_f64(f64::from(s))),
         confirm_rails: !args.unconfirmed_rails,
         gyro_bias,
+        esc_telemetry: args.esc_telemetry,
     };
     let json = args.json;
     let on_text: Box<dyn FnMut(&LoggedText) + Send> = Box::new(move |t: &LoggedText| {

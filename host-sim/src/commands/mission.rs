@@ -74,6 +74,10 @@ pub struct MissionArgs {
     /// counts, the last one of another kind.
     #[arg(long, value_name = "KIND@SECONDS", value_parser = Injection::parse)]
     inject: Vec<Injection>,
+    /// The ESCs report each rotor's RPM (bidirectional DShot): the rotor monitor reads it as
+    /// well as the vehicle's response (docs/failures.md#rotors-that-stop-in-flight).
+    #[arg(long)]
+    esc_telemetry: bool,
     /// Switch off the formation's in-flight adaptation to a load that shifts.
     #[arg(long)]
     no_adapt: bool,
@@ -149,6 +153,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
             config,
             mocap_lost_after_takeoff: mocap_lost_after,
             log: args.log.clone(),
+            esc_telemetry: args.esc_telemetry,
             ..MissionSetup::default()
         },
     );

@@ -81,6 +81,9 @@ pub struct HilSetup {
     /// The gyro's constant bias, rad/s per body axis, in place of the one drawn from the seed
     /// (`--gyro-bias`).
     pub gyro_bias: Option<[f32; 3]>,
+    /// The plant sends each rotor's RPM (`ESC_STATUS`) with every step, as ESCs with
+    /// bidirectional DShot would report it (`--esc-telemetry`).
+    pub esc_telemetry: bool,
     /// Failure injection in the plant, as `mission --inject` (`crate::inject`): rotors that
     /// stop, a load that shifts, a frozen or noisy IMU (in the `HIL_SENSOR` samples), motion
     /// capture lost, the ground link lost (the plant's heartbeat stops and nothing from a
@@ -101,6 +104,7 @@ impl Default for HilSetup {
             linger: None,
             confirm_rails: true,
             gyro_bias: None,
+            esc_telemetry: false,
             mocap_lost_after_takeoff: None,
             injections: Vec::new(),
         }
@@ -146,6 +150,8 @@ pub struct HilOutcome {
     pub positions: Vec<f32>,
     /// Each phase the firmware reported (`phase: NAME: ...`) and how long it lasted, s.
     pub phases: Vec<(String, f64)>,
+    /// When the take-off began, simulated s (`None`: no take-off).
+    pub takeoff_at_s: Option<f64>,
     /// Everything the firmware said.
     pub log: FirmwareLog,
 }
@@ -281,6 +287,10 @@ impl Autopilot for Firmware {
         }
         if self.session.steps().is_multiple_of(BATTERY_EVERY) {
             self.session.send_battery(sensed.battery_volts)?;
+        }
+        if let Some(rpm) = &sensed.esc_rpm {
+            self.session
+                .send_esc_rpm(sensed.time_us, rpm, self.robots)?;
         }
         if let Some(command) = sensed.command {
             // With the ground station starting the mission, the plant's own start is not sent.
@@ -424,6 +434,7 @@ pub fn run(
             time_limit: setup.duration_s.map_or(MISSION_TIME_LIMIT, |d| d as f32),
             // The rails confirmed with the first step, the start with the second.
             confirm_rails: setup.confirm_rails,
+            esc_telemetry: setup.esc_telemetry,
             gyro_bias: setup
                 .gyro_bias
                 .map(|[x, y, z]| shared::control::vector::Vec3::new(x, y, z)),
@@ -481,6 +492,7 @@ pub fn run(
             .iter()
             .map(|(n, d)| (n.clone(), f64::from(*d)))
             .collect(),
+        takeoff_at_s: record.takeoff_at.map(f64::from),
         lifts: record.lifts,
         log,
     })

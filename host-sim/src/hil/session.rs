@@ -66,6 +66,12 @@ pub struct FirmwareLog {
     pub heartbeats: u32,
     /// Each restart of the firmware after a reboot it acknowledged, in order.
     pub restarts: Vec<Restart>,
+    /// The `ESC_STATUS` messages it sent (four ESCs each).
+    pub esc_statuses: u32,
+    /// Each ESC's RPM in its last `ESC_STATUS`, by motor.
+    pub esc_rpm: [i32; link::hil::MAX_ROBOTS],
+    /// The ESCs its last `ESC_INFO`s flagged failed (bit `i` for motor `i`).
+    pub esc_failed: u16,
 }
 
 /// A restart of the firmware (a reboot it acknowledged, then silence, then a reply to a
@@ -221,6 +227,21 @@ impl Session {
             self.value(v.name.to_str().unwrap_or("?"), f64::from(v.value));
         } else if let Some(v) = frame.decode::<NAMED_VALUE_INT_DATA>() {
             self.value(v.name.to_str().unwrap_or("?"), f64::from(v.value));
+        } else if let Some(m) = frame.decode::<link::msg::ESC_STATUS_DATA>() {
+            self.log.esc_statuses += 1;
+            let first = usize::from(m.index);
+            if let Some(slots) = self.log.esc_rpm.get_mut(first..first + 4) {
+                slots.copy_from_slice(&m.rpm);
+            }
+        } else if let Some(m) = frame.decode::<link::msg::ESC_INFO_DATA>() {
+            for (i, flags) in m.failure_flags.iter().enumerate() {
+                let bit = 1u16.checked_shl(u32::from(m.index) + i as u32).unwrap_or(0);
+                if *flags != 0 {
+                    self.log.esc_failed |= bit;
+                } else {
+                    self.log.esc_failed &= !bit;
+                }
+            }
         } else if let Some(a) = frame.decode::<COMMAND_ACK_DATA>() {
             if a.command == MavCmd::MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN
                 && a.result == MavResult::MAV_RESULT_ACCEPTED
@@ -338,6 +359,27 @@ impl Session {
     /// Sends the simulated pack's voltage (`BATTERY_STATUS`).
     pub fn send_battery(&mut self, volts: f32) -> Result<()> {
         self.link.send(&link::vehicle::battery_status(volts))
+    }
+
+    /// Sends each rotor's RPM (`ESC_STATUS`, four ESCs a message, `robots` of them) stamped
+    /// with the step's time `time_us`, before the step's `HIL_SENSOR`: the plant's stand-in
+    /// for the ESCs' bidirectional DShot (docs/firmware.md#esc-telemetry).
+    pub fn send_esc_rpm(&mut self, time_us: u64, rpm: &[f32], robots: usize) -> Result<()> {
+        let per = link::esc::ESCS_PER_MESSAGE;
+        for (group, chunk) in rpm[..robots.min(rpm.len())].chunks(per).enumerate() {
+            let mut values = [0i32; 4];
+            for (v, &r) in values.iter_mut().zip(chunk) {
+                // The RPM rounded; `as` saturates.
+                *v = r.round() as i32;
+            }
+            self.link.send(&link::msg::ESC_STATUS_DATA {
+                time_usec: time_us,
+                rpm: values,
+                index: (group * per) as u8,
+                ..Default::default()
+            })?;
+        }
+        Ok(())
     }
 
     /// Cuts (or mends) the bridge from the real ground station, if there is one.

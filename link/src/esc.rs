@@ -1,0 +1,259 @@
+//! The ESCs' telemetry over MAVLink (docs/firmware.md#esc-telemetry): each rotor's RPM in,
+//! from the HIL plant as `ESC_STATUS` (the plant's stand-in for bidirectional DShot), and the
+//! ESCs' state out to the ground station as `ESC_STATUS` and `ESC_INFO`, four ESCs a message
+//! in motor order, as PX4 sends them (QGroundControl's ESC status page, MAVSDK's telemetry).
+
+use crate::hil::MAX_ROBOTS;
+use crate::msg::{ESC_INFO_DATA, ESC_STATUS_DATA, EscConnectionType};
+use crate::telemetry::VehicleSnapshot;
+
+/// ESCs in one `ESC_STATUS` or `ESC_INFO`.
+pub const ESCS_PER_MESSAGE: usize = 4;
+/// A reading counts for this long after its message's time, us (eight 400 Hz control steps):
+/// an ESC not heard of since reads as not answering.
+pub const RPM_MAX_AGE_US: u64 = 20_000;
+/// `ESC_INFO`'s `failure_flags` for a rotor the vehicle flies without
+/// (`ESC_FAILURE_GENERIC`): found stopped by the rotor monitor or its ESC.
+pub const FAILURE_ROTOR_OUT: u16 = 64;
+/// `ESC_INFO`'s `temperature` when the ESC gives none (`INT16_MAX`).
+pub const NO_TEMPERATURE: i16 = i16::MAX;
+
+const GROUPS: usize = MAX_ROBOTS / ESCS_PER_MESSAGE;
+
+/// What is wrong with a received `ESC_STATUS`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EscError {
+    /// `index` is not a multiple of four (the first ESC of its message).
+    IndexNotFirstOfFour(u8),
+    /// `index` beyond the robots the link carries.
+    IndexBeyond(u8),
+}
+
+impl core::fmt::Display for EscError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Self::IndexNotFirstOfFour(i) => write!(
+                f,
+                "ESC_STATUS index {i} is not the first of four ESCs (0, 4, 8 or 12)"
+            ),
+            Self::IndexBeyond(i) => write!(
+                f,
+                "ESC_STATUS index {i} is beyond the {MAX_ROBOTS} ESCs the vehicle has"
+            ),
+        }
+    }
+}
+
+/// What the vehicle reads of an `ESC_STATUS`: four ESCs' RPM and when.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EscRpmReport {
+    /// The first ESC's index (0, 4, 8 or 12).
+    pub index: u8,
+    /// The message's time, us.
+    pub time_us: u64,
+    /// Each ESC's RPM (negative: turning backwards).
+    pub rpm: [i32; ESCS_PER_MESSAGE],
+}
+
+impl From<&ESC_STATUS_DATA> for EscRpmReport {
+    fn from(m: &ESC_STATUS_DATA) -> Self {
+        Self {
+            index: m.index,
+            time_us: m.time_usec,
+            rpm: m.rpm,
+        }
+    }
+}
+
+/// The latest RPM each ESC reported, and when: `ESC_STATUS` messages in, each rotor's RPM
+/// for a control step out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EscRpmInbox {
+    rpm: [f32; MAX_ROBOTS],
+    /// Each message's `time_usec`, by its first ESC's index over four.
+    stamp_us: [u64; GROUPS],
+    /// Bit `g`: a message for ESCs `4g..4g+4` has come.
+    heard: u8,
+}
+
+impl Default for EscRpmInbox {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl EscRpmInbox {
+    /// Nothing heard yet.
+    pub const fn new() -> Self {
+        Self {
+            rpm: [f32::NAN; MAX_ROBOTS],
+            stamp_us: [0; GROUPS],
+            heard: 0,
+        }
+    }
+
+    /// Takes an `ESC_STATUS`'s RPM (voltage and current are not used), or says why not.
+    pub fn receive(&mut self, m: &EscRpmReport) -> Result<(), EscError> {
+        let first = usize::from(m.index);
+        if first % ESCS_PER_MESSAGE != 0 {
+            return Err(EscError::IndexNotFirstOfFour(m.index));
+        }
+        if first >= MAX_ROBOTS {
+            return Err(EscError::IndexBeyond(m.index));
+        }
+        let group = first / ESCS_PER_MESSAGE;
+        for (slot, &rpm) in self.rpm[first..first + ESCS_PER_MESSAGE]
+            .iter_mut()
+            .zip(&m.rpm)
+        {
+            *slot = rpm as f32;
+        }
+        self.stamp_us[group] = m.time_us;
+        self.heard |= 1 << group;
+        Ok(())
+    }
+
+    /// Each ESC's RPM at vehicle time `now_us` (NaN for one not heard of within
+    /// [`RPM_MAX_AGE_US`]), or `None` when none was.
+    pub fn rpm_at(&self, now_us: u64) -> Option<[f32; MAX_ROBOTS]> {
+        let mut out = [f32::NAN; MAX_ROBOTS];
+        let mut any = false;
+        for (group, &stamp) in self.stamp_us.iter().enumerate() {
+            let fresh = self.heard & (1 << group) != 0 && now_us.abs_diff(stamp) <= RPM_MAX_AGE_US;
+            if fresh {
+                let span = group * ESCS_PER_MESSAGE..(group + 1) * ESCS_PER_MESSAGE;
+                out[span.clone()].copy_from_slice(&self.rpm[span]);
+                any = true;
+            }
+        }
+        any.then_some(out)
+    }
+}
+
+/// Messages of four ESCs the vehicle's robots need.
+pub fn messages(robots: u8) -> usize {
+    usize::from(robots)
+        .min(MAX_ROBOTS)
+        .div_ceil(ESCS_PER_MESSAGE)
+}
+
+/// Whether any ESC reported its RPM in the last control step (the vehicle then sends
+/// `ESC_STATUS` and `ESC_INFO`).
+pub fn reporting(vehicle: &VehicleSnapshot) -> bool {
+    let robots = usize::from(vehicle.robots).min(MAX_ROBOTS);
+    vehicle.esc_rpm[..robots].iter().any(|r| r.is_finite())
+}
+
+/// `ESC_STATUS` of the ESCs from `4 * message` on: each one's RPM (0 for one that did not
+/// answer, as PX4 sends it), voltage and current not measured (0).
+pub fn esc_status(vehicle: &VehicleSnapshot, message: usize) -> ESC_STATUS_DATA {
+    let first = (message * ESCS_PER_MESSAGE).min(MAX_ROBOTS - ESCS_PER_MESSAGE);
+    let mut rpm = [0i32; ESCS_PER_MESSAGE];
+    for (out, &r) in rpm.iter_mut().zip(&vehicle.esc_rpm[first..]) {
+        // NaN as 0; `as` saturates the rest.
+        *out = if r.is_finite() { r as i32 } else { 0 };
+    }
+    ESC_STATUS_DATA {
+        time_usec: vehicle.time_us,
+        rpm,
+        index: first as u8,
+        ..Default::default()
+    }
+}
+
+/// `ESC_INFO` of the ESCs from `4 * message` on, its `counter`-th: how many ESCs there are,
+/// which answer (`info`, a bit per ESC of all of them as PX4 has it), and the rotors flown
+/// without ([`FAILURE_ROTOR_OUT`]); no temperatures, no error counts.
+pub fn esc_info(vehicle: &VehicleSnapshot, message: usize, counter: u16) -> ESC_INFO_DATA {
+    let robots = usize::from(vehicle.robots).min(MAX_ROBOTS);
+    let first = (message * ESCS_PER_MESSAGE).min(MAX_ROBOTS - ESCS_PER_MESSAGE);
+    let mut online = 0u8;
+    for (j, r) in vehicle.esc_rpm[..robots.min(8)].iter().enumerate() {
+        if r.is_finite() {
+            online |= 1 << j;
+        }
+    }
+    let mut failure_flags = [0u16; ESCS_PER_MESSAGE];
+    for (i, flags) in failure_flags.iter_mut().enumerate() {
+        if vehicle.rotors_out & (1 << (first + i)) != 0 {
+            *flags = FAILURE_ROTOR_OUT;
+        }
+    }
+    ESC_INFO_DATA {
+        time_usec: vehicle.time_us,
+        counter,
+        count: robots as u8,
+        connection_type: EscConnectionType::ESC_CONNECTION_TYPE_DSHOT,
+        info: online,
+        failure_flags,
+        temperature: [NO_TEMPERATURE; ESCS_PER_MESSAGE],
+        index: first as u8,
+        ..Default::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::string::ToString;
+
+    fn status(index: u8, time_us: u64, rpm: [i32; 4]) -> EscRpmReport {
+        EscRpmReport::from(&ESC_STATUS_DATA {
+            time_usec: time_us,
+            rpm,
+            index,
+            ..Default::default()
+        })
+    }
+
+    #[test]
+    fn two_messages_make_eight_rotors_and_an_old_one_reads_as_silent() {
+        let mut inbox = EscRpmInbox::new();
+        assert_eq!(inbox.rpm_at(0), None);
+        inbox.receive(&status(0, 1_000, [1, 2, 3, 4])).unwrap();
+        inbox.receive(&status(4, 1_000, [5, 6, 7, 8])).unwrap();
+        let rpm = inbox.rpm_at(2_500).unwrap();
+        assert_eq!(&rpm[..8], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]);
+        assert!(rpm[8..].iter().all(|r| r.is_nan()));
+        // Only the first four go on being sent: the others go silent after 20 ms.
+        inbox.receive(&status(0, 30_000, [9, 9, 9, 9])).unwrap();
+        let rpm = inbox.rpm_at(30_000).unwrap();
+        assert_eq!(&rpm[..4], &[9.0; 4]);
+        assert!(rpm[4..].iter().all(|r| r.is_nan()));
+        assert_eq!(inbox.rpm_at(60_000), None);
+    }
+
+    #[test]
+    fn a_message_for_no_group_of_four_is_refused_with_its_index() {
+        let mut inbox = EscRpmInbox::new();
+        let e = inbox.receive(&status(2, 0, [1; 4])).unwrap_err();
+        assert_eq!(e, EscError::IndexNotFirstOfFour(2));
+        assert!(e.to_string().contains("index 2"));
+        let e = inbox.receive(&status(16, 0, [1; 4])).unwrap_err();
+        assert_eq!(e, EscError::IndexBeyond(16));
+        assert!(e.to_string().contains("16"));
+        assert_eq!(inbox.rpm_at(0), None);
+    }
+
+    #[test]
+    fn the_ground_is_told_each_rpm_which_escs_answer_and_the_rotors_out() {
+        let mut vehicle = VehicleSnapshot::START;
+        vehicle.robots = 6;
+        assert!(!reporting(&vehicle));
+        vehicle.esc_rpm[..6].copy_from_slice(&[5000.0, 5100.0, f32::NAN, 5300.0, 1e12, 0.0]);
+        vehicle.rotors_out = 1 << 5;
+        assert!(reporting(&vehicle));
+        assert_eq!(messages(vehicle.robots), 2);
+        let first = esc_status(&vehicle, 0);
+        assert_eq!(first.index, 0);
+        assert_eq!(first.rpm, [5000, 5100, 0, 5300]);
+        let second = esc_status(&vehicle, 1);
+        assert_eq!(second.index, 4);
+        assert_eq!(second.rpm, [i32::MAX, 0, 0, 0]);
+        let info = esc_info(&vehicle, 1, 7);
+        assert_eq!((info.index, info.count, info.counter), (4, 6, 7));
+        assert_eq!(info.info, 0b11_1011);
+        assert_eq!(info.failure_flags, [0, FAILURE_ROTOR_OUT, 0, 0]);
+        assert_eq!(info.temperature, [NO_TEMPERATURE; 4]);
+    }
+}
