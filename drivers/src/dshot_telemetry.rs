@@ -41,6 +41,17 @@ pub const GCR: [u8; 16] = [
     0x19, 0x1B, 0x12, 0x13, 0x1D, 0x15, 0x16, 0x17, 0x1A, 0x09, 0x0A, 0x0B, 0x1E, 0x0D, 0x0E, 0x0F,
 ];
 
+/// Each quintet's nibble ([`GCR`] inverted), 0xFF for the 16 quintets that are no code.
+const NIBBLE: [u8; 32] = {
+    let mut table = [0xFF; 32];
+    let mut nibble = 0;
+    while nibble < 16 {
+        table[GCR[nibble] as usize] = nibble as u8;
+        nibble += 1;
+    }
+    table
+};
+
 /// What an ESC's answer says.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Answer {
@@ -194,10 +205,11 @@ pub fn decode(edges: &[u16], counts_per_bit: u16) -> Result<Answer, AnswerError>
     let mut value = 0u16;
     for index in 0..4u8 {
         let code = ((gcr >> (15 - 5 * u32::from(index))) & 0x1F) as u8;
-        let Some(nibble) = GCR.iter().position(|&c| c == code) else {
+        let nibble = NIBBLE[usize::from(code)];
+        if nibble > 0xF {
             return Err(AnswerError::InvalidQuintet { index, code });
-        };
-        value = (value << 4) | nibble as u16;
+        }
+        value = (value << 4) | u16::from(nibble);
     }
     if (value ^ (value >> 4) ^ (value >> 8) ^ (value >> 12)) & 0xF != 0xF {
         return Err(AnswerError::Checksum { value });
