@@ -21,7 +21,9 @@
 //!   `icm42688p -R 6`), see [`super::imu_spi`]. Its samples drive the control step. (The
 //!   BMI088 on PC14/PC15, yaw 180 deg, `-R 4`, is not used.)
 //! - ESCs: DShot600 (or PWM, OneShot125) on the eight FMU outputs (`timer_config.cpp`: TIM1 CH1-4 on PA8, PE11,
-//!   PE13, PE14; TIM4 CH3-4 on PD14, PD15; TIM5 CH1-2 on PA0, PA1), see [`super::escs`].
+//!   PE13, PE14; TIM4 CH3-4 on PD14, PD15; TIM5 CH1-2 on PA0, PA1), see [`super::escs`];
+//!   bidirectional DShot's answers captured through DMA2 streams 1-4 and the timers' own
+//!   update streams, FMU_CH6's by TIM4's interrupt.
 //! - Watchdog: the independent watchdog (IWDG1, [`WATCHDOG_TIMEOUT_US`]), started by the
 //!   first control step and fed by every one after it ([`Outputs::apply`]); the reset reason
 //!   (RCC_RSR) goes to the ground at start, a watchdog reset as an error.
@@ -109,6 +111,7 @@ impl Outputs {
             Ok(p) => self.protocol = p,
             Err(e) => refuse(format_args!("{e}")),
         }
+        super::escs::set_telemetry(settings.dshot_bidirectional, settings.motor_poles);
     }
 }
 
@@ -189,10 +192,17 @@ impl Board for Pixhawk6c {
         HardwareFaults {
             imu: super::imu_spi::FAULTED.load(core::sync::atomic::Ordering::Relaxed),
             stalled_robots: super::steppers::STALLED.load(core::sync::atomic::Ordering::Relaxed),
-            // No ESC telemetry is read yet (PWM outputs): the rotor monitor finds a stopped
-            // rotor from the vehicle's response.
+            // The ESCs' word is their RPM ([`Self::esc_rpm`]); the rotor monitor judges it.
             rotors_out: 0,
         }
+    }
+
+    /// The answers to the latest bidirectional DShot frame (`DSHOT_BIDIR_EN` with DShot600).
+    fn esc_rpm() -> Option<shared::mission::EscRpm> {
+        let rpm = super::escs::take_rpm()?;
+        Some(core::array::from_fn(|i| {
+            rpm.get(i).copied().unwrap_or(f32::NAN)
+        }))
     }
 }
 
@@ -281,6 +291,10 @@ bind_interrupts!(
     DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
     DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
     DMA2_STREAM0 => dma::InterruptHandler<peripherals::DMA2_CH0>;
+    DMA2_STREAM1 => dma::InterruptHandler<peripherals::DMA2_CH1>;
+    DMA2_STREAM2 => dma::InterruptHandler<peripherals::DMA2_CH2>;
+    DMA2_STREAM3 => dma::InterruptHandler<peripherals::DMA2_CH3>;
+    DMA2_STREAM4 => dma::InterruptHandler<peripherals::DMA2_CH4>;
     UART5 => usart::InterruptHandler<peripherals::UART5>;
     USART2 => usart::InterruptHandler<peripherals::USART2>;
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
@@ -473,6 +487,17 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
         dma1: p.DMA1_CH0,
         dma4: p.DMA1_CH1,
         dma5: p.DMA1_CH2,
+        capture: {
+            use super::escs::capture_stream;
+            use embassy_stm32::timer::{Ch2, Ch3, Ch4};
+            use peripherals::{TIM1, TIM5};
+            [
+                capture_stream::<TIM1, Ch2, _>(p.DMA2_CH1),
+                capture_stream::<TIM1, Ch3, _>(p.DMA2_CH2),
+                capture_stream::<TIM1, Ch4, _>(p.DMA2_CH3),
+                capture_stream::<TIM5, Ch2, _>(p.DMA2_CH4),
+            ]
+        },
     };
     // Steppers: TMC2209s on TELEM2 (UART5) and TELEM3 (USART2), TX through 1 kOhm and RX on
     // the drivers' single wire.
