@@ -28,15 +28,14 @@ use drivers::dshot::{self, BitTiming, SLOTS};
 use drivers::dshot_telemetry::{self as answer, Answer};
 use drivers::esc_gate::{EscCommand, EscGate};
 use drivers::pulse::{self, EscProtocol, PERIOD_400HZ_NS};
-use embassy_futures::join::join3;
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::typelevel::Binding;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
 use embassy_stm32::pac::timer::{TimGp16, regs};
-use embassy_stm32::peripherals::{DMA1_CH0, DMA1_CH1, DMA1_CH2, TIM1, TIM4, TIM5};
+use embassy_stm32::peripherals::{TIM1, TIM4, TIM5};
 use embassy_stm32::time::Hertz;
 use embassy_stm32::timer::simple_pwm::SimplePwm;
-use embassy_stm32::timer::{Ch1, Ch3, Channel, GeneralInstance4Channel, TimerChannel};
+use embassy_stm32::timer::{Channel, GeneralInstance4Channel, TimerChannel, UpDma};
 use embassy_stm32::{Peri, dma, pac};
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
@@ -107,7 +106,7 @@ pub fn command(protocol: EscProtocol, fractions: &[f32], armed: bool) {
     });
 }
 
-/// The three timers, their pins claimed, and a DMA stream each.
+/// The three timers, their pins claimed, and their DMA streams.
 pub struct EscTimers {
     /// FMU_CH1-4.
     pub tim1: SimplePwm<'static, TIM1>,
@@ -115,19 +114,30 @@ pub struct EscTimers {
     pub tim4: SimplePwm<'static, TIM4>,
     /// FMU_CH7-8 (CH1-2).
     pub tim5: SimplePwm<'static, TIM5>,
-    /// TIM1_UP's stream.
-    pub dma1: Peri<'static, DMA1_CH0>,
-    /// TIM4_UP's stream.
-    pub dma4: Peri<'static, DMA1_CH1>,
-    /// TIM5_UP's stream.
-    pub dma5: Peri<'static, DMA1_CH2>,
+    /// TIM1's, TIM4's and TIM5's update streams ([`update_stream`]): the frames' bursts, then
+    /// the captures of FMU_CH1, CH5 and CH7.
+    pub up: [(dma::Channel<'static>, u8, u8); 3],
     /// The capture streams of FMU_CH2-4 (TIM1 CH2-4) and FMU_CH8 (TIM5 CH2), with their
     /// requests ([`capture_stream`]).
     pub capture: [(dma::Channel<'static>, u8); 4],
 }
 
+/// A timer `T`'s update stream: the DMA channel, its update request, and the capture request of
+/// the timer's channel `C`, whose answers the same stream copies after the frame.
+pub fn update_stream<T, C, D>(stream: Peri<'static, D>) -> (dma::Channel<'static>, u8, u8)
+where
+    T: GeneralInstance4Channel,
+    C: TimerChannel,
+    D: UpDma<T> + embassy_stm32::timer::Dma<T, C>,
+    Irqs: Binding<D::Interrupt, dma::InterruptHandler<D>>,
+{
+    let up = UpDma::request(&*stream);
+    let capture = embassy_stm32::timer::Dma::request(&*stream);
+    (dma::Channel::new(stream, Irqs), up, capture)
+}
+
 /// A DMA stream for the captures of channel `C` of timer `T`, and its request.
-pub fn capture_stream<'a, T, C, D>(stream: Peri<'a, D>) -> (dma::Channel<'a>, u8)
+pub fn capture_stream<T, C, D>(stream: Peri<'static, D>) -> (dma::Channel<'static>, u8)
 where
     T: GeneralInstance4Channel,
     C: TimerChannel,
@@ -136,6 +146,35 @@ where
 {
     let request = stream.request();
     (dma::Channel::new(stream, Irqs), request)
+}
+
+/// Starts timer `r`'s frame: its channels `mask` on, each update event writing the next row of
+/// `burst` (a value per channel) to their compare registers through DMAR, as embassy's
+/// `waveform_up_multi_channel` does (the same DMA burst and FIFO), for all three timers with
+/// one function.
+#[inline(never)]
+fn start_burst<'a>(
+    r: TimGp16,
+    (dma, request, _): &'a mut (dma::Channel<'static>, u8, u8),
+    mask: u32,
+    burst: &'a [u16],
+) -> dma::Transfer<'a> {
+    let ccxe = (0..4)
+        .filter(|c| mask & (1 << c) != 0)
+        .fold(0, |e, c| e | (1 << (4 * c)));
+    r.ccer().modify(|w| w.0 |= ccxe);
+    r.dier().modify(|w| w.set_ude(true));
+    r.dcr().modify(|w| {
+        // CCR1 is register 13 (0x34); the burst writes one register per channel.
+        w.set_dba(13 + mask.trailing_zeros() as u8);
+        w.set_dbl(mask.count_ones() as u8 - 1);
+    });
+    let mut options = dma::TransferOptions::default();
+    options.fifo_threshold = Some(dma::FifoThreshold::Full);
+    options.mburst = dma::Burst::Incr4;
+    // SAFETY: the timer's DMA burst register, written by half-words from a buffer the
+    // transfer borrows.
+    unsafe { dma.write(*request, burst, r.dmar().as_ptr() as *mut u16, options) }
 }
 
 /// The channels each timer drives, first to last.
@@ -320,13 +359,14 @@ async fn hear_answers(
 ) -> [f32; OUTPUTS] {
     let r = timer_regs();
     let [c1, c2, c3, c4] = &mut t.capture;
+    let [u1, u4, u5] = &mut t.up;
     let mut streams = [
-        capture_stream::<TIM1, Ch1, _>(t.dma1.reborrow()),
+        (u1.0.reborrow(), u1.2),
         (c1.0.reborrow(), c1.1),
         (c2.0.reborrow(), c2.1),
         (c3.0.reborrow(), c3.1),
-        capture_stream::<TIM4, Ch3, _>(t.dma4.reborrow()),
-        capture_stream::<TIM5, Ch1, _>(t.dma5.reborrow()),
+        (u4.0.reborrow(), u4.2),
+        (u5.0.reborrow(), u5.2),
         (c4.0.reborrow(), c4.1),
     ];
     let mut jobs = streams.iter_mut().zip(edges.iter_mut()).zip(DMA_OUTPUTS);
@@ -468,31 +508,19 @@ pub async fn escs(mut t: EscTimers) {
                 let _ = dshot::fill_burst(&frames[0..4], timing(&t.tim1), &mut burst1);
                 let _ = dshot::fill_burst(&frames[4..6], timing(&t.tim4), &mut burst4);
                 let _ = dshot::fill_burst(&frames[6..8], timing(&t.tim5), &mut burst5);
-                let irqs = super::pixhawk6c::Irqs;
-                join3(
-                    t.tim1.waveform_up_multi_channel(
-                        t.dma1.reborrow(),
-                        irqs,
-                        TIM1_CHANNELS.0,
-                        TIM1_CHANNELS.1,
-                        &burst1,
-                    ),
-                    t.tim4.waveform_up_multi_channel(
-                        t.dma4.reborrow(),
-                        irqs,
-                        TIM4_CHANNELS.0,
-                        TIM4_CHANNELS.1,
-                        &burst4,
-                    ),
-                    t.tim5.waveform_up_multi_channel(
-                        t.dma5.reborrow(),
-                        irqs,
-                        TIM5_CHANNELS.0,
-                        TIM5_CHANNELS.1,
-                        &burst5,
-                    ),
-                )
-                .await;
+                let r = timer_regs();
+                let [up1, up4, up5] = &mut t.up;
+                let sending = [
+                    start_burst(r[0], up1, MASKS[0], &burst1),
+                    start_burst(r[1], up4, MASKS[1], &burst4),
+                    start_burst(r[2], up5, MASKS[2], &burst5),
+                ];
+                for transfer in sending {
+                    transfer.await;
+                }
+                for r in r {
+                    r.dier().modify(|w| w.set_ude(false));
+                }
                 let rpm = if bidirectional {
                     let bit = answer::answer_bit_counts(timing(&t.tim1).period);
                     Some(hear_answers(&mut t, &mut edges, bit, poles).await)

@@ -484,9 +484,16 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
             dshot,
             CountingMode::EdgeAlignedUp,
         ),
-        dma1: p.DMA1_CH0,
-        dma4: p.DMA1_CH1,
-        dma5: p.DMA1_CH2,
+        up: {
+            use super::escs::update_stream;
+            use embassy_stm32::timer::{Ch1, Ch3};
+            use peripherals::{TIM1, TIM4, TIM5};
+            [
+                update_stream::<TIM1, Ch1, _>(p.DMA1_CH0),
+                update_stream::<TIM4, Ch3, _>(p.DMA1_CH1),
+                update_stream::<TIM5, Ch1, _>(p.DMA1_CH2),
+            ]
+        },
         capture: {
             use super::escs::capture_stream;
             use embassy_stm32::timer::{Ch2, Ch3, Ch4};
