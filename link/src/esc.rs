@@ -116,6 +116,9 @@ impl EscRpmInbox {
     /// Each ESC's RPM at vehicle time `now_us` (NaN for one not heard of within
     /// [`RPM_MAX_AGE_US`]), or `None` when none was.
     pub fn rpm_at(&self, now_us: u64) -> Option<[f32; MAX_ROBOTS]> {
+        if self.heard == 0 {
+            return None;
+        }
         let mut out = [f32::NAN; MAX_ROBOTS];
         let mut any = false;
         for (group, &stamp) in self.stamp_us.iter().enumerate() {
@@ -137,19 +140,24 @@ pub fn messages(robots: u8) -> usize {
         .div_ceil(ESCS_PER_MESSAGE)
 }
 
-/// Whether any ESC reported its RPM in the last control step (the vehicle then sends
-/// `ESC_STATUS` and `ESC_INFO`).
-pub fn reporting(vehicle: &VehicleSnapshot) -> bool {
+/// Whether any of the vehicle's ESCs reported its RPM, `rpm` each robot's in the last control
+/// step that had any (the vehicle then sends `ESC_STATUS` and `ESC_INFO`).
+pub fn reporting(vehicle: &VehicleSnapshot, rpm: &[f32; MAX_ROBOTS]) -> bool {
     let robots = usize::from(vehicle.robots).min(MAX_ROBOTS);
-    vehicle.esc_rpm[..robots].iter().any(|r| r.is_finite())
+    rpm[..robots].iter().any(|r| r.is_finite())
 }
 
-/// `ESC_STATUS` of the ESCs from `4 * message` on: each one's RPM (0 for one that did not
-/// answer, as PX4 sends it), voltage and current not measured (0).
-pub fn esc_status(vehicle: &VehicleSnapshot, message: usize) -> ESC_STATUS_DATA {
+/// `ESC_STATUS` of the ESCs from `4 * message` on, `rpm` each robot's (NaN: no answer): each
+/// one's RPM (0 for one that did not answer, as PX4 sends it), voltage and current not
+/// measured (0).
+pub fn esc_status(
+    vehicle: &VehicleSnapshot,
+    esc_rpm: &[f32; MAX_ROBOTS],
+    message: usize,
+) -> ESC_STATUS_DATA {
     let first = (message * ESCS_PER_MESSAGE).min(MAX_ROBOTS - ESCS_PER_MESSAGE);
     let mut rpm = [0i32; ESCS_PER_MESSAGE];
-    for (out, &r) in rpm.iter_mut().zip(&vehicle.esc_rpm[first..]) {
+    for (out, &r) in rpm.iter_mut().zip(&esc_rpm[first..]) {
         // NaN as 0; `as` saturates the rest.
         *out = if r.is_finite() { r as i32 } else { 0 };
     }
@@ -161,14 +169,20 @@ pub fn esc_status(vehicle: &VehicleSnapshot, message: usize) -> ESC_STATUS_DATA 
     }
 }
 
-/// `ESC_INFO` of the ESCs from `4 * message` on, its `counter`-th: how many ESCs there are,
-/// which answer (`info`, a bit per ESC of all of them as PX4 has it), and the rotors flown
-/// without ([`FAILURE_ROTOR_OUT`]); no temperatures, no error counts.
-pub fn esc_info(vehicle: &VehicleSnapshot, message: usize, counter: u16) -> ESC_INFO_DATA {
+/// `ESC_INFO` of the ESCs from `4 * message` on, its `counter`-th, `rpm` each robot's (NaN:
+/// no answer): how many ESCs there are, which answer (`info`, a bit per ESC of all of them as
+/// PX4 has it), and the rotors flown without ([`FAILURE_ROTOR_OUT`]); no temperatures, no
+/// error counts.
+pub fn esc_info(
+    vehicle: &VehicleSnapshot,
+    rpm: &[f32; MAX_ROBOTS],
+    message: usize,
+    counter: u16,
+) -> ESC_INFO_DATA {
     let robots = usize::from(vehicle.robots).min(MAX_ROBOTS);
     let first = (message * ESCS_PER_MESSAGE).min(MAX_ROBOTS - ESCS_PER_MESSAGE);
     let mut online = 0u8;
-    for (j, r) in vehicle.esc_rpm[..robots.min(8)].iter().enumerate() {
+    for (j, r) in rpm[..robots.min(8)].iter().enumerate() {
         if r.is_finite() {
             online |= 1 << j;
         }
@@ -239,18 +253,19 @@ mod tests {
     fn the_ground_is_told_each_rpm_which_escs_answer_and_the_rotors_out() {
         let mut vehicle = VehicleSnapshot::START;
         vehicle.robots = 6;
-        assert!(!reporting(&vehicle));
-        vehicle.esc_rpm[..6].copy_from_slice(&[5000.0, 5100.0, f32::NAN, 5300.0, 1e12, 0.0]);
+        let mut rpm = [f32::NAN; MAX_ROBOTS];
+        assert!(!reporting(&vehicle, &rpm));
+        rpm[..6].copy_from_slice(&[5000.0, 5100.0, f32::NAN, 5300.0, 1e12, 0.0]);
         vehicle.rotors_out = 1 << 5;
-        assert!(reporting(&vehicle));
+        assert!(reporting(&vehicle, &rpm));
         assert_eq!(messages(vehicle.robots), 2);
-        let first = esc_status(&vehicle, 0);
+        let first = esc_status(&vehicle, &rpm, 0);
         assert_eq!(first.index, 0);
         assert_eq!(first.rpm, [5000, 5100, 0, 5300]);
-        let second = esc_status(&vehicle, 1);
+        let second = esc_status(&vehicle, &rpm, 1);
         assert_eq!(second.index, 4);
         assert_eq!(second.rpm, [i32::MAX, 0, 0, 0]);
-        let info = esc_info(&vehicle, 1, 7);
+        let info = esc_info(&vehicle, &rpm, 1, 7);
         assert_eq!((info.index, info.count, info.counter), (4, 6, 7));
         assert_eq!(info.info, 0b11_1011);
         assert_eq!(info.failure_flags, [0, FAILURE_ROTOR_OUT, 0, 0]);

@@ -278,9 +278,6 @@ pub struct VehicleSnapshot {
     pub route: RouteStatus,
     /// `EXTENDED_SYS_STATE`'s `landed_state` (`MAV_LANDED_STATE`).
     pub landed: u8,
-    /// Each robot's rotor RPM from its ESC's telemetry in the last control step (NaN: the
-    /// ESC did not answer, or there is no ESC telemetry).
-    pub esc_rpm: [f32; MAX_ROBOTS],
     /// The rotors the vehicle flies without (found stopped), bit `i` for robot `i`.
     pub rotors_out: u16,
 }
@@ -339,7 +336,6 @@ impl VehicleSnapshot {
         mode: 0,
         route: RouteStatus::NONE,
         landed: MavLandedState::MAV_LANDED_STATE_ON_GROUND as u8,
-        esc_rpm: [f32::NAN; MAX_ROBOTS],
         rotors_out: 0,
     };
 

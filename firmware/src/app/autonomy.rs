@@ -574,7 +574,6 @@ impl Autonomy {
             mode: status.mode,
             route: status.route,
             landed: status.landed,
-            esc_rpm: input.esc_rpm.unwrap_or([f32::NAN; MAX_ROBOTS]),
             rotors_out: self.mission.flight().map_or(0, |f| f.rotors_out()),
             ..VehicleSnapshot::START
         };

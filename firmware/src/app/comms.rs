@@ -875,12 +875,7 @@ async fn handle(
         }
         // The plant's RPM, in HIL only (on a board the ESCs answer over DShot).
         Inbound::EscStatus(rpm) if IN_HIL.load(Ordering::Relaxed) => {
-            let taken = super::LINK_ESC_RPM.lock(|inbox| {
-                let mut merged = inbox.get();
-                let taken = merged.receive(&rpm);
-                inbox.set(merged);
-                taken
-            });
+            let taken = super::LINK_ESC_RPM.lock(|inbox| inbox.borrow_mut().receive(&rpm));
             if let Err(e) = taken {
                 reply(report(Severity::Warning, format_args!("{e}")));
             }
@@ -1295,15 +1290,18 @@ impl<W: Write> Sending<W> {
                 },
                 // Only while ESCs report: one message per four of them.
                 Stream::EscStatus | Stream::EscInfo => {
-                    if !link::esc::reporting(&vehicle) {
+                    let Some(rpm) = super::ESC_RPM.lock(|r| r.get()) else {
+                        continue;
+                    };
+                    if !link::esc::reporting(&vehicle, &rpm) {
                         continue;
                     }
                     for message in 0..link::esc::messages(vehicle.robots) {
                         if stream == Stream::EscStatus {
-                            self.encode(&link::esc::esc_status(&vehicle, message));
+                            self.encode(&link::esc::esc_status(&vehicle, &rpm, message));
                         } else {
                             let counter = self.esc_infos;
-                            self.encode(&link::esc::esc_info(&vehicle, message, counter));
+                            self.encode(&link::esc::esc_info(&vehicle, &rpm, message, counter));
                         }
                         self.flush().await;
                     }

@@ -53,6 +53,8 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
     let mut log_ring = RingEnd::new();
     // The calibration under way: its command, for the acknowledgement of its end.
     let mut calibrating: Option<super::comms::PendingCommand> = None;
+    // The last step had ESC RPM.
+    let mut had_esc_rpm = false;
     loop {
         let sample: SensorSample = SENSOR.receive().await;
         let start = <Selected as Board>::cycle_count();
@@ -134,7 +136,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 },
                 // In HIL the plant's RPM; on a board its ESCs' (bidirectional DShot).
                 esc_rpm: if sample.hil {
-                    super::LINK_ESC_RPM.lock(|inbox| inbox.get().rpm_at(step.time_us))
+                    super::LINK_ESC_RPM.lock(|inbox| inbox.borrow().rpm_at(step.time_us))
                 } else {
                     <Selected as Board>::esc_rpm()
                 },
@@ -151,6 +153,12 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                     },
                 },
             };
+            // The RPM for the ground station: written only while there is some, and once
+            // when it ends (a vehicle without ESC telemetry pays nothing).
+            if input.esc_rpm.is_some() || had_esc_rpm {
+                super::ESC_RPM.lock(|r| r.set(input.esc_rpm));
+                had_esc_rpm = input.esc_rpm.is_some();
+            }
             let imu_failed = input.faults.imu;
             let mut out = autonomy.tick_logged(&input, &mut log_ring);
             if late {

@@ -205,8 +205,11 @@ pub static GCS_HEARTBEAT: AtomicBool = AtomicBool::new(false);
 pub static LINK_BATTERY_MV: AtomicU32 = AtomicU32::new(u32::MAX);
 /// The rotors' RPM the HIL plant last sent (`ESC_STATUS`, docs/firmware.md#esc-telemetry).
 /// Taken only in HIL: on a board the ESCs answer over bidirectional DShot.
-pub static LINK_ESC_RPM: Mutex<Cs, Cell<link::esc::EscRpmInbox>> =
-    Mutex::new(Cell::new(link::esc::EscRpmInbox::new()));
+pub static LINK_ESC_RPM: Mutex<Cs, core::cell::RefCell<link::esc::EscRpmInbox>> =
+    Mutex::new(core::cell::RefCell::new(link::esc::EscRpmInbox::new()));
+/// Each rotor's RPM of the last control step that had any, for the ground station
+/// (`ESC_STATUS`, `ESC_INFO`); `None` once a step has none.
+pub static ESC_RPM: Mutex<Cs, Cell<Option<shared::mission::EscRpm>>> = Mutex::new(Cell::new(None));
 
 /// The thread-mode wake-up interrupt fired since the executor last looked.
 static THREAD_WOKEN: AtomicBool = AtomicBool::new(false);

@@ -344,6 +344,8 @@ pub struct Mixer {
     effectiveness: Effectiveness,
     /// Columns of the mixing matrix (collective, roll, pitch, yaw), one thrust per rotor.
     columns: [[f32; MAX_ROBOTS]; 4],
+    /// One over the flown rotors' RMS arm, 1/m ([`Self::torque_scale`]).
+    torque_scale: Option<f32>,
 }
 
 impl Mixer {
@@ -399,6 +401,7 @@ impl Mixer {
             kind,
             count,
             max_thrust,
+            torque_scale: torque_scale(&a, count),
             effectiveness: a,
             columns,
         })
@@ -451,6 +454,7 @@ impl Mixer {
             kind: MixerKind::Allocation,
             count,
             max_thrust: self.max_thrust,
+            torque_scale: torque_scale(&a, count),
             effectiveness: a,
             columns,
         })
@@ -477,6 +481,14 @@ impl Mixer {
     pub fn columns_raw(&self) -> &[f32] {
         let raw = self.effectiveness.as_slice();
         raw.get(..4 * self.count).unwrap_or(raw)
+    }
+
+    /// One over the flown rotors' RMS arm (the root mean square of each flown rotor's roll
+    /// and pitch torque per newton), 1/m: torques times it are newtons, comparable with
+    /// thrusts; `None` when no flown rotor has an arm. Worked out when the mixer is built (a
+    /// square root, which the Cortex-M7 takes in software).
+    pub fn torque_scale(&self) -> Option<f32> {
+        self.torque_scale
     }
 
     /// The mixer's kind.
@@ -599,6 +611,18 @@ impl Mixer {
             saturation,
         }
     }
+}
+
+/// See [`Mixer::torque_scale`]: over the first `count` columns of `a` with thrust.
+fn torque_scale(a: &Effectiveness, count: usize) -> Option<f32> {
+    let (mut arms, mut counted) = (0.0f32, 0.0f32);
+    for c in a.as_slice().chunks_exact(4).take(count) {
+        if c[0] != 0.0 {
+            arms += c[1] * c[1] + c[2] * c[2];
+            counted += 1.0;
+        }
+    }
+    (counted > 0.0 && arms > 0.0).then(|| 1.0 / math::sqrt(arms / counted))
 }
 
 #[cfg(test)]

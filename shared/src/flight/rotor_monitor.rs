@@ -218,8 +218,6 @@ pub struct RotorMonitor {
     rpm_learned: f32,
     /// Ticks each rotor's RPM has been too low in a row.
     rpm_low: [u8; MAX_ROBOTS],
-    /// The flown rotors' mean squared arm (m^2) and one over its root (the torques' scale).
-    arms: (f32, f32),
 }
 
 impl Default for RotorMonitor {
@@ -251,7 +249,6 @@ impl RotorMonitor {
             rpm_ratio: [0.0; MAX_ROBOTS],
             rpm_learned: 0.0,
             rpm_low: [0; MAX_ROBOTS],
-            arms: (0.0, 0.0),
         }
     }
 
@@ -316,27 +313,6 @@ impl RotorMonitor {
             return [0.0; 3];
         }
         core::array::from_fn(|i| self.baseline[i] - self.reference[i])
-    }
-
-    /// One over the flown rotors' RMS arm, 1/m: torques times it are newtons, as the thrust
-    /// row. Its square root is taken again only when the arms change (a mixer rebuilt).
-    fn torque_scale(&mut self, mixer: &Mixer, n: usize) -> Option<f32> {
-        let (mut arms, mut counted) = (0.0f32, 0.0f32);
-        for i in 0..n {
-            let c = mixer.column(i);
-            if c[0] != 0.0 {
-                arms += c[1] * c[1] + c[2] * c[2];
-                counted += 1.0;
-            }
-        }
-        if !(counted > 0.0 && arms > 0.0) {
-            return None;
-        }
-        let mean = arms / counted;
-        if mean != self.arms.0 {
-            self.arms = (mean, 1.0 / math::sqrt(mean));
-        }
-        Some(self.arms.1)
     }
 
     fn restart(&mut self) {
@@ -432,7 +408,7 @@ impl RotorMonitor {
             return 0;
         }
         self.guard = math::max(self.guard - dt, 0.0);
-        let Some(scale) = self.torque_scale(input.mixer, n) else {
+        let Some(scale) = input.mixer.torque_scale() else {
             return 0;
         };
         if self.guard > config.resettle_time - config.blind_time {
