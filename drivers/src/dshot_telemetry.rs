@@ -20,8 +20,9 @@
 //!
 //! [`decode`] works from the timestamps of the line's edges (a timer's input capture on both
 //! edges, in timer counts), the first being the start bit's falling edge. Each interval
-//! between edges is rounded to whole bits, so every edge may sit up to a quarter bit from its
-//! place (and the ESC's clock be a few percent off) without changing the answer.
+//! between edges is rounded to whole bits, so an interval may be off by anything under half a
+//! bit without changing the answer: an edge up to a quarter bit from its place, or the ESC's
+//! clock a few percent off (the two together only while their sum stays under half a bit).
 
 use core::fmt;
 

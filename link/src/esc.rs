@@ -170,7 +170,7 @@ pub fn esc_status(
 }
 
 /// `ESC_INFO` of the ESCs from `4 * message` on, its `counter`-th, `rpm` each robot's (NaN:
-/// no answer): how many ESCs there are, which answer (`info`, a bit per ESC of all of them as
+/// no answer): how many ESCs there are, which answer (`info`, a bit per ESC of the first eight as
 /// PX4 has it), and the rotors flown without ([`FAILURE_ROTOR_OUT`]); no temperatures, no
 /// error counts.
 pub fn esc_info(

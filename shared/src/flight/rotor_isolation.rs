@@ -34,7 +34,7 @@ use crate::scenario::MAX_ROBOTS;
 pub const PAIR_MARGIN: f32 = 0.25;
 
 /// The rotors a change is judged against: a view of the mixer's columns and the rotors'
-/// expected thrusts (built each tick for nothing: nothing is copied).
+/// expected thrusts (borrowed, not built: the columns are read in place).
 #[derive(Clone, Copy, Debug)]
 pub struct Columns<'a> {
     /// Each rotor's column of the effectiveness matrix, four numbers per rotor (thrust N and
@@ -44,7 +44,8 @@ pub struct Columns<'a> {
     scale: f32,
     /// Each rotor's expected thrust, N.
     thrust: &'a [f32; MAX_ROBOTS],
-    /// Rotors that can be named (flown, turning, not known out), bit `i` for rotor `i`.
+    /// Rotors the caller lets be named (not known out), bit `i` for rotor `i`; of those, the
+    /// judgement takes the flown ones (a column) with at least `min_thrust`.
     eligible: u16,
     /// The least expected thrust of a rotor judged, N.
     min_thrust: f32,
@@ -76,8 +77,11 @@ impl<'a> Columns<'a> {
 
     /// Rotor `j`'s column (thrust, roll and pitch times the scale).
     pub fn column(&self, j: usize) -> [f32; 3] {
+        if j >= self.count {
+            return [0.0; 3];
+        }
         match self.raw.get(4 * j..4 * j + 3) {
-            Some(&[t, r, p]) if j < self.count => [t, r * self.scale, p * self.scale],
+            Some(&[t, r, p]) => [t, r * self.scale, p * self.scale],
             _ => [0.0; 3],
         }
     }
@@ -128,8 +132,8 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
         let a = columns.column(j);
         let t = columns.thrust[j];
         let aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-        // A rotor not flown (zero column) or barely turning is no candidate.
-        if a[0] == 0.0 || aa <= 0.0 || t < columns.min_thrust {
+        // A rotor not flown (zero column), barely turning, or not a number is no candidate.
+        if !(a[0] != 0.0 && aa > 0.0 && t >= columns.min_thrust) {
             continue;
         }
         let b = -(d[0] * a[0] + d[1] * a[1] + d[2] * a[2]);

@@ -378,10 +378,14 @@ impl FlightStack {
         self.monitor
             .mark_out(newly, &self.mixer, &RotorMonitorConfig::DEFAULT);
         // Not even thrust, roll and pitch left: fly on with the mixer there is (the lost
-        // rotor's share is lost) and land.
-        if let Ok(mixer) = self.mixer.without(self.monitor.out()) {
-            self.mixer = mixer;
-        }
+        // rotor's share is lost) and land; the rotors left hold nothing level then.
+        let rebuilt = match self.mixer.without(self.monitor.out()) {
+            Ok(mixer) => {
+                self.mixer = mixer;
+                true
+            }
+            Err(_) => false,
+        };
         let mut first = None;
         for robot in (0..n).filter(|&i| newly & (1 << i) != 0) {
             let event = RotorOut {
@@ -404,7 +408,7 @@ impl FlightStack {
             newly,
             out,
             left: (n as u32 - (out & all).count_ones()) as u8,
-            holdable: !hover.saturation.collective && !hover.saturation.roll_pitch,
+            holdable: rebuilt && !hover.saturation.collective && !hover.saturation.roll_pitch,
         })
     }
 

@@ -85,8 +85,9 @@ pub struct Mission {
     battery: BatteryMonitor,
     /// Time left of the hold after the ground link was lost in flight, s.
     gcs_hold: Option<f32>,
-    /// A notice that could not go out in its own tick (one goes out per tick).
-    notice: Option<Notice>,
+    /// Notices that could not go out in their own tick (one goes out per tick; a tick makes
+    /// at most three: the link's, the battery's, the rotors').
+    notices: heapless::Deque<Notice, 4>,
     /// A ground station's route (docs/ground-link.md#missions); empty: the payload
     /// description's target is flown.
     route: Route,
@@ -148,7 +149,7 @@ impl Mission {
             link: LinkMonitor::new(),
             battery: BatteryMonitor::new(),
             gcs_hold: None,
-            notice: None,
+            notices: heapless::Deque::new(),
             route: Route::EMPTY,
             route_first: 0,
             jump: None,
@@ -464,7 +465,7 @@ impl Mission {
         let battery_change = self
             .battery
             .update(input.supervision.battery_volts, dt, &sup);
-        let mut notice = self.notice.take();
+        let mut notice = self.notices.pop_front();
         let (reply, mut transition) = match input.command {
             Some(c) => self.command(c),
             None => (None, None),
@@ -483,7 +484,12 @@ impl Mission {
                 if notice.is_none() {
                     notice = Some(n);
                 } else {
-                    self.notice = Some(n);
+                    // Room for every tick's notices while one goes out per tick: the oldest
+                    // is dropped only if ticks of three came faster than one a tick.
+                    if self.notices.is_full() {
+                        self.notices.pop_front();
+                    }
+                    let _ = self.notices.push_back(n);
                 }
             }
         }
@@ -521,9 +527,12 @@ impl Mission {
         if matches!(self.phase, Phase::Flying(_))
             && let Some(found) = self.watch_rotors(input, &nav, &thrusts, dt)
         {
-            // Said this tick; another notice waits for the next.
+            // Said this tick; the one it displaces goes out next.
             if let Some(other) = notice.replace(found) {
-                self.notice.get_or_insert(other);
+                if self.notices.is_full() {
+                    self.notices.pop_back();
+                }
+                let _ = self.notices.push_front(other);
             }
         }
         let mut armed = matches!(
