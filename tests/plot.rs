@@ -260,7 +260,7 @@ fn a_log_cut_short_is_plotted_with_what_it_has_and_says_so() {
     let dir = temp_dir("cut");
     // Cut in flight (take-off is at 43 s of 60.5) and during the lifts.
     for (share, in_flight) in [(0.85, true), (0.3, false)] {
-        let cut = inside_a_record(&bytes, (bytes.len() as f64 * share) as usize);
+        let cut = inside_a_record(bytes, (bytes.len() as f64 * share) as usize);
         let log = log_file(&dir, &format!("cut-{share}.ulg"), &bytes[..cut]);
         let out = dir.join(format!("figures-{share}"));
         let run = host_sim(&["plot", path_str(&log), "--output", path_str(&out)]);
