@@ -157,6 +157,8 @@ pub struct Vehicle {
     link_battery_mv: u32,
     /// `LINK_ESC_RPM`: the plant's rotor RPM.
     link_esc_rpm: link::esc::EscRpmInbox,
+    /// comms.rs `FTP_REFUSED`: the sender whose FTP was last refused (0: none).
+    ftp_refused: u32,
     /// `PAYLOAD`: the newest description loaded into the planner, for the control task.
     payload: Option<(Scenario, MissionConfig)>,
     /// The job task's last accepted description.
@@ -235,6 +237,7 @@ impl Vehicle {
             gcs_heartbeat: false,
             link_battery_mv: u32::MAX,
             link_esc_rpm: link::esc::EscRpmInbox::new(),
+            ftp_refused: 0,
             payload: None,
             last: None,
             autonomy: Box::new(Autonomy::new()),
@@ -730,9 +733,14 @@ impl Vehicle {
             }
             Inbound::Ftp { message, from } if !verdict.trusted() => {
                 self.send_ftp(&link::ftp::refusal(&message), from);
-                self.report_text(Severity::Warning, "payload upload refused");
+                // Said once per sender in a row (comms.rs `FTP_REFUSED`).
+                let sender = 1 + (u32::from(from.system) << 8 | u32::from(from.component));
+                if core::mem::replace(&mut self.ftp_refused, sender) != sender {
+                    self.report_text(Severity::Warning, "payload upload refused");
+                }
             }
             Inbound::Ftp { message, from } => {
+                self.ftp_refused = 0;
                 let (answer, event) = self.ftp.handle(&message);
                 assert_eq!(
                     answer.seq,

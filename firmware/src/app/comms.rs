@@ -683,6 +683,10 @@ async fn store_origin(origin: &GeoOrigin, params: &mut ParamService, store: &mut
     announce_origin(params);
 }
 
+/// The sender whose MAVLink FTP was last refused (system << 8 | component, plus one; 0: none
+/// since the last FTP request answered).
+static FTP_REFUSED: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+
 async fn handle(
     inbound: Inbound,
     verdict: Verdict,
@@ -847,12 +851,18 @@ async fn handle(
                 message: link::ftp::refusal(&message),
                 to: from,
             });
-            reply(report(
-                Severity::Warning,
-                format_args!("payload upload refused: {}", verdict.reason()),
-            ));
+            // Said once per sender in a row: a ground station that retries its file reads
+            // (MAVProxy's) would fill its own console with the same line.
+            let sender = 1 + (u32::from(from.system) << 8 | u32::from(from.component));
+            if FTP_REFUSED.swap(sender, Ordering::Relaxed) != sender {
+                reply(report(
+                    Severity::Warning,
+                    format_args!("payload upload refused: {}", verdict.reason()),
+                ));
+            }
         }
         Inbound::Ftp { message, from } => {
+            FTP_REFUSED.store(0, Ordering::Relaxed);
             let (answer, event) = ftp.handle_with(&message, &metadata::FILES);
             bulk(Bulk::Ftp {
                 message: answer,
