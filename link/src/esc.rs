@@ -155,7 +155,7 @@ pub fn esc_status(
     esc_rpm: &[f32; MAX_ROBOTS],
     message: usize,
 ) -> ESC_STATUS_DATA {
-    let first = (message * ESCS_PER_MESSAGE).min(MAX_ROBOTS - ESCS_PER_MESSAGE);
+    let first = first_esc(message);
     let mut rpm = [0i32; ESCS_PER_MESSAGE];
     for (out, &r) in rpm.iter_mut().zip(&esc_rpm[first..]) {
         // NaN as 0; `as` saturates the rest.
@@ -180,7 +180,7 @@ pub fn esc_info(
     counter: u16,
 ) -> ESC_INFO_DATA {
     let robots = usize::from(vehicle.robots).min(MAX_ROBOTS);
-    let first = (message * ESCS_PER_MESSAGE).min(MAX_ROBOTS - ESCS_PER_MESSAGE);
+    let first = first_esc(message);
     let mut online = 0u8;
     for (j, r) in rpm[..robots.min(8)].iter().enumerate() {
         if r.is_finite() {
@@ -204,6 +204,11 @@ pub fn esc_info(
         index: first as u8,
         ..Default::default()
     }
+}
+
+/// The first ESC of message `message` (four ESCs a message; the last message at most).
+fn first_esc(message: usize) -> usize {
+    (message * ESCS_PER_MESSAGE).min(MAX_ROBOTS - ESCS_PER_MESSAGE)
 }
 
 #[cfg(test)]

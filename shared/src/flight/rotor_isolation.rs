@@ -111,7 +111,7 @@ pub struct Judging {
 /// The stopped rotors that explain a change `d` (thrust N, roll and pitch torque times the
 /// columns' scale), bit `i` for rotor `i`, if one or two do.
 pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how: Judging) -> u16 {
-    let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let dd = dot(d, d);
     // Zero, or NaN from a non-finite input: nothing to explain.
     if dd.is_nan() || dd <= 0.0 {
         return 0;
@@ -131,12 +131,12 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
     for j in (0..columns.count).filter(|&j| columns.eligible & (1 << j) != 0) {
         let a = columns.column(j);
         let t = columns.thrust[j];
-        let aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+        let aa = dot(&a, &a);
         // A rotor not flown (zero column), barely turning, or not a number is no candidate.
         if !(a[0] != 0.0 && aa > 0.0 && t >= columns.min_thrust) {
             continue;
         }
-        let b = -(d[0] * a[0] + d[1] * a[1] + d[2] * a[2]);
+        let b = -dot(d, &a);
         rotors[m] = j as u8;
         ta[m] = [t * a[0], t * a[1], t * a[2]];
         tb[m] = t * b;
@@ -162,7 +162,7 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
             for y in x + 1..m {
                 let (p, q) = (&ta[x], &ta[y]);
                 let v = [p[0] + q[0], p[1] + q[1], p[2] + q[2]];
-                let vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+                let vv = dot(&v, &v);
                 // -d . v, and mu = along / vv within the bounds.
                 let along = tb[x] + tb[y];
                 if vv <= 0.0 || along <= min * vv || along > max * vv {
@@ -196,6 +196,11 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
         (None, Some((j, k, _))) => (1 << j) | (1 << k),
         (None, None) => 0,
     }
+}
+
+/// The dot product of two changes or columns (thrust, roll, pitch; torques already scaled).
+pub(crate) fn dot(a: &[f32; 3], b: &[f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 #[cfg(test)]

@@ -59,7 +59,7 @@
 use crate::control::allocation::Mixer;
 use crate::control::vector::Vec3;
 use crate::control::vehicle::VehicleModel;
-use crate::flight::rotor_isolation::{Columns, Judging, explain};
+use crate::flight::rotor_isolation::{Columns, Judging, dot, explain};
 use crate::geometry::Vec2;
 use crate::math;
 use crate::scenario::MAX_ROBOTS;
@@ -422,7 +422,7 @@ impl RotorMonitor {
         let d = scaled(&change);
         // Squared sizes throughout: the software square root costs a few hundred
         // instructions a tick on the Cortex-M7.
-        let size2 = norm2(&d);
+        let size2 = dot(&d, &d);
         if size2 <= config.quiet * config.quiet {
             self.loud = 0.0;
             let gamma = math::clamp(dt / math::max(config.baseline_time, dt), 0.0, 1.0);
@@ -448,7 +448,7 @@ impl RotorMonitor {
                 .filter(|&j| self.out & (1 << j) == 0 && self.expected[j] >= config.min_thrust)
                 .fold(f32::INFINITY, |m, j| math::min(m, self.expected[j]));
             let shown = -drift[0] >= config.min_fraction * config.min_fraction * lightest;
-            if !shown || norm2(&drift) < least * least {
+            if !shown || dot(&drift, &drift) < least * least {
                 self.drifting = 0.0;
                 return 0;
             }
@@ -599,12 +599,6 @@ impl RotorMonitor {
         }
         found
     }
-}
-
-/// The squared norm of a change whose torques are already in newtons (times the torques'
-/// scale).
-fn norm2(v: &[f32; 3]) -> f32 {
-    v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
 }
 
 #[cfg(test)]

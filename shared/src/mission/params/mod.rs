@@ -76,6 +76,20 @@ macro_rules! param {
             set: |$c: &mut MissionConfig, v: f32| $field = v as _,
         }
     };
+    // A switch: 1 on, 0 off (a `bool` field; any value above one half is on).
+    (flag $name:literal, $doc:literal, |$c:ident| $field:expr) => {
+        ParamSpec {
+            name: $name,
+            unit: "-",
+            min: 0.0,
+            max: 1.0,
+            integer: true,
+            #[cfg(feature = "docs")]
+            doc: $doc,
+            get: |$c: &MissionConfig| if $field { 1.0 } else { 0.0 },
+            set: |$c: &mut MissionConfig, v: f32| $field = v > 0.5,
+        }
+    };
     // A whole-number parameter of the ground link (the map origin): no field of the
     // configuration; read with `ParamValues::get`.
     (link $name:literal, $unit:literal, $min:expr, $max:expr, $default:expr, $doc:literal) => {

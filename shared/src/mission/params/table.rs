@@ -838,40 +838,16 @@ pub static TABLE: [ParamSpec; COUNT] = [
         "accelerometer offset on z, taken off every sample (the level calibration, param5 2, measures it level at rest)",
         |c| c.sensors.accel[2]
     ),
-    ParamSpec {
-        name: "COM_MOT_TEST_EN",
-        unit: "-",
-        min: 0.0,
-        max: 1.0,
-        integer: true,
-        #[cfg(feature = "docs")]
-        doc: "motor tests (MAV_CMD_DO_MOTOR_TEST) allowed: 1 yes, 0 refused",
-        get: |c| {
-            if c.hardware.motor_test_enabled {
-                1.0
-            } else {
-                0.0
-            }
-        },
-        set: |c, v| c.hardware.motor_test_enabled = v > 0.5,
-    },
-    ParamSpec {
-        name: "DSHOT_BIDIR_EN",
-        unit: "-",
-        min: 0.0,
-        max: 1.0,
-        integer: true,
-        #[cfg(feature = "docs")]
-        doc: "bidirectional DShot: each ESC answers with its RPM, which the rotor monitor reads (1 on; BLHeli_32, AM32 or Bluejay ESCs; taken while disarmed)",
-        get: |c| {
-            if c.hardware.dshot_bidirectional {
-                1.0
-            } else {
-                0.0
-            }
-        },
-        set: |c, v| c.hardware.dshot_bidirectional = v > 0.5,
-    },
+    param!(
+        flag "COM_MOT_TEST_EN",
+        "motor tests (MAV_CMD_DO_MOTOR_TEST) allowed: 1 yes, 0 refused",
+        |c| c.hardware.motor_test_enabled
+    ),
+    param!(
+        flag "DSHOT_BIDIR_EN",
+        "bidirectional DShot: each ESC answers with its RPM, which the rotor monitor reads (1 on; BLHeli_32, AM32 or Bluejay ESCs; taken while disarmed)",
+        |c| c.hardware.dshot_bidirectional
+    ),
     param!(
         whole "MOT_POLE_COUNT",
         "-",
