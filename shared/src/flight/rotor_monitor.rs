@@ -36,7 +36,10 @@
 //!   [`RotorMonitorConfig::resettle_time`] a finding must show in the collective too.
 //! - A rotor that fades: its loss goes into the baseline as it grows; the baseline's drift
 //!   since the monitor settled (rebases along no rotor's column left out) is judged as a
-//!   change is, every [`DRIFT_EVERY`]th tick.
+//!   change is, every [`DRIFT_EVERY`]th tick: the rotor it points along is named once its
+//!   loss reaches half the thrust the rotor had when the drift was taken from (the
+//!   controller raises a fading rotor's command as it fades; sized against today's, the
+//!   neighbour whose column fits worse but reads a larger loss would be named first).
 //! - The ESCs' RPM, where the vehicle has it: a rotor whose RPM squared over its expected
 //!   thrust falls under half its own (learned in its first second of flight) is named in
 //!   [`RPM_CONFIRM_TIME`], whatever the response says.
@@ -218,6 +221,9 @@ pub struct RotorMonitor {
     rpm_learned: f32,
     /// Ticks each rotor's RPM has been too low in a row.
     rpm_low: [u8; MAX_ROBOTS],
+    /// Each rotor's expected thrust when the reference was taken, N: a fading rotor's loss
+    /// is sized against it (the controller raises a fading rotor's command as it fades).
+    reference_thrust: [f32; MAX_ROBOTS],
 }
 
 impl Default for RotorMonitor {
@@ -249,6 +255,7 @@ impl RotorMonitor {
             rpm_ratio: [0.0; MAX_ROBOTS],
             rpm_learned: 0.0,
             rpm_low: [0; MAX_ROBOTS],
+            reference_thrust: [0.0; MAX_ROBOTS],
         }
     }
 
@@ -285,6 +292,7 @@ impl RotorMonitor {
             }
         }
         self.reference = self.baseline;
+        self.reference_thrust = self.expected;
         self.confirming = 0.0;
         self.drifting = 0.0;
         self.loud = 0.0;
@@ -405,6 +413,7 @@ impl RotorMonitor {
         if self.wait > 0.0 {
             self.baseline = self.filtered;
             self.reference = self.filtered;
+            self.reference_thrust = self.expected;
             return 0;
         }
         self.guard = math::max(self.guard - dt, 0.0);
@@ -456,12 +465,18 @@ impl RotorMonitor {
             self.confirming = 0.0;
             return 0;
         }
-        let expected = self.expected;
+        // A drift is sized against the thrusts the rotors had when it was taken from: the
+        // controller raises a fading rotor's command as it fades.
+        let thrust = if drift_tick {
+            self.reference_thrust
+        } else {
+            self.expected
+        };
         let columns = Columns::new(
             n,
             input.mixer.columns_raw(),
             scale,
-            &expected,
+            &thrust,
             !self.out,
             config.min_thrust,
         );
@@ -520,8 +535,10 @@ impl RotorMonitor {
 
     /// A rotor that fades slowly: its loss goes into the baseline as it grows. The drift
     /// since the monitor settled is judged as a change is, the thrust row always required
-    /// (a slow torque is a load, or the COM believed elsewhere), and named once the same
-    /// rotors explain it for [`DRIFT_CONFIRM_TIME`].
+    /// (a slow torque is a load, or the COM believed elsewhere): the rotor whose column it
+    /// points along best, once that rotor's loss is large enough (`columns` carry the
+    /// thrusts it is sized against), named once the same rotor is found for
+    /// [`DRIFT_CONFIRM_TIME`].
     fn watch_drift(
         &mut self,
         input: &MonitorInput<'_>,
@@ -534,7 +551,20 @@ impl RotorMonitor {
             thrust_shown: true,
             pairs: false,
         };
-        let found = explain(drift, columns, config, judged);
+        // The rotor whose column the drift points along, named once its loss is large
+        // enough: sized first, a rotor that fits worse but reads larger would be found
+        // before the one fading.
+        let pointed = explain(
+            drift,
+            columns,
+            config,
+            Judging {
+                sized: false,
+                ..judged
+            },
+        );
+        let sized = explain(drift, columns, config, judged);
+        let found = if pointed == sized { sized } else { 0 };
         if found == 0 || found != self.drift_rotors {
             self.drift_rotors = found;
             self.drifting = 0.0;
