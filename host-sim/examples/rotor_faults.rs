@@ -67,8 +67,13 @@ fn main() -> Result<()> {
             let row = |c: &rotor_faults::FadeCase| {
                 format!(
                     "{:>7} {:>5} {}",
-                    c.detection_s()
-                        .map_or("never".to_string(), |s| format!("{s:.2} s")),
+                    c.detection_s().map_or_else(
+                        || match c.others_named().first() {
+                            Some(other) => format!("never (rotor {other} named instead)"),
+                            None => "never".to_string(),
+                        },
+                        |s| format!("{s:.2} s")
+                    ),
                     c.tilt_when_named_deg()
                         .map_or("-".to_string(), |t| format!("{t:.1}")),
                     if c.outcome.dropped { "DROPPED" } else { "held" }

@@ -193,6 +193,17 @@ impl FadeCase {
         Some(self.outcome.named_at(self.robot - 1)? - began)
     }
 
+    /// The robots named that were not fading (from 1): a neighbour whose column reads the
+    /// same drift, named in its place.
+    pub fn others_named(&self) -> Vec<usize> {
+        self.outcome
+            .rotors_found
+            .iter()
+            .map(|(r, _)| r + 1)
+            .filter(|&r| r != self.robot)
+            .collect()
+    }
+
     /// The largest tilt from the fade's start until the rotor was named, degrees (`None`
     /// if it never was).
     pub fn tilt_when_named_deg(&self) -> Option<f32> {

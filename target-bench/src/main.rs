@@ -311,6 +311,7 @@ fn rotor_monitor_ticks(
                 sized: true,
                 thrust_shown: !pairs,
                 pairs,
+                decisive: false,
             };
             let (count, named) = timer.instructions(|| explain(&d, &columns, &config, how));
             hprintln!(

@@ -33,6 +33,10 @@ use crate::scenario::MAX_ROBOTS;
 /// the single rotor leaves unexplained.
 pub const PAIR_MARGIN: f32 = 0.25;
 
+/// A decisive single rotor leaves less than this share of what the next best leaves
+/// unexplained.
+pub const DECISIVE_MARGIN: f32 = 0.5;
+
 /// The rotors a change is judged against: a view of the mixer's columns and the rotors'
 /// expected thrusts (borrowed, not built: the columns are read in place).
 #[derive(Clone, Copy, Debug)]
@@ -106,6 +110,10 @@ pub struct Judging {
     pub thrust_shown: bool,
     /// Pairs are candidates too (a slow drift is judged against single rotors only).
     pub pairs: bool,
+    /// The best single rotor must leave less than [`DECISIVE_MARGIN`] of what the next best
+    /// leaves unexplained (a slow drift carries the disturbance's wander, and neighbours'
+    /// columns are close: the answer waits until the drift has grown to tell them apart).
+    pub decisive: bool,
 }
 
 /// The stopped rotors that explain a change `d` (thrust N, roll and pitch torque times the
@@ -126,8 +134,10 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
     let mut tb = [0.0f32; MAX_ROBOTS];
     let mut m = 0;
     let mut lightest = f32::INFINITY;
-    // The best single rotor: its b_j^2 and |a_j|^2 (explained = b^2 / (|a|^2 dd)).
+    // The best single rotor: its b_j^2 and |a_j|^2 (explained = b^2 / (|a|^2 dd)); and the
+    // next best's.
     let mut single: Option<(usize, f32, f32)> = None;
+    let mut runner_up: Option<(f32, f32)> = None;
     for j in (0..columns.count).filter(|&j| columns.eligible & (1 << j) != 0) {
         let a = columns.column(j);
         let t = columns.thrust[j];
@@ -147,8 +157,14 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
         let small = if how.sized { min * t * aa } else { 0.0 };
         let fits = b > small && b <= max * t * aa;
         let shown = !how.thrust_shown || lost_collective * aa >= min * b;
-        if fits && shown && single.is_none_or(|(_, bb, aa0)| b * b * aa0 > bb * aa) {
+        if !(fits && shown) {
+            continue;
+        }
+        if single.is_none_or(|(_, bb, aa0)| b * b * aa0 > bb * aa) {
+            runner_up = single.map(|(_, bb, aa0)| (bb, aa0));
             single = Some((j, b * b, aa));
+        } else if runner_up.is_none_or(|(bb, aa0)| b * b * aa0 > bb * aa) {
+            runner_up = Some((b * b, aa));
         }
     }
     // Two rotors stopped together lose `mu (T_j a_j + T_k a_k)` as the change rises: one
@@ -182,8 +198,13 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
         }
     }
     let enough = |num: f32, den: f32| num >= config.min_explained * den * dd;
+    // Unexplained shares crosswise: dd - bb/aa < margin (dd - bb2/aa2), times aa aa2.
+    let decisive = |bb: f32, aa: f32| {
+        runner_up
+            .is_none_or(|(bb2, aa2)| (dd * aa - bb) * aa2 < DECISIVE_MARGIN * (dd * aa2 - bb2) * aa)
+    };
     let single = single
-        .filter(|&(_, bb, aa)| enough(bb, aa))
+        .filter(|&(_, bb, aa)| enough(bb, aa) && (!how.decisive || decisive(bb, aa)))
         .map(|(j, bb, aa)| (j, bb / (aa * dd)));
     let pair = pair
         .filter(|&(_, _, along2, vv)| enough(along2, vv))
@@ -244,6 +265,7 @@ mod tests {
         sized: true,
         thrust_shown: false,
         pairs: true,
+        decisive: false,
     };
 
     fn loss(columns: &Columns, lost: &[(usize, f32)]) -> [f32; 3] {
@@ -319,12 +341,38 @@ mod tests {
             sized: true,
             thrust_shown: true,
             pairs: true,
+            decisive: false,
         };
         let mut d = loss(&c, &[(6, 5.0)]);
         assert_eq!(explain(&d, &c, &config, guarded), 1 << 6);
         // The same torque with the collective unchanged: the recovery's, not a rotor's.
         d[0] = 0.0;
         assert_eq!(explain(&d, &c, &config, guarded), 0);
+    }
+
+    #[test]
+    fn a_decisive_answer_waits_until_one_rotor_clearly_fits_better_than_the_next() {
+        let r = rect();
+        let c = columns(&r, &FIVE);
+        let config = RotorMonitorConfig::DEFAULT;
+        let decisive = Judging {
+            sized: false,
+            thrust_shown: true,
+            pairs: false,
+            decisive: true,
+        };
+        // Rotor 3's loss alone: decisive.
+        let d = loss(&c, &[(3, 4.0)]);
+        assert_eq!(explain(&d, &c, &config, decisive), 1 << 3);
+        // Mostly rotor 3's, part its neighbour 1's (the disturbance's wander): rotor 3 fits
+        // best, but not clearly enough to name it.
+        let d = loss(&c, &[(3, 2.5), (1, 1.5)]);
+        let undecided = Judging {
+            decisive: false,
+            ..decisive
+        };
+        assert_eq!(explain(&d, &c, &config, undecided), 1 << 3);
+        assert_eq!(explain(&d, &c, &config, decisive), 0);
     }
 
     #[test]
