@@ -258,7 +258,7 @@ fn two_rotors_at_once_with_rpm() {
     }
 }
 
-/// Largest tilt before a fading rotor is named, degrees (measured at most 1.9).
+/// Largest tilt before a fading rotor is named, degrees (measured at most 1.6).
 const FADE_TILT_DEG: f32 = 20.0;
 
 /// A rotor fading over 4 s in the hover: named before the payload tilts [`FADE_TILT_DEG`],
