@@ -896,7 +896,14 @@ impl Vehicle {
         } else {
             None
         };
+        // The payload goes to the autonomy before the step, as the firmware's control task
+        // hands it over.
         let payload = self.payload.take();
+        let loaded_config = payload.as_ref().map(|(_, config)| *config);
+        let loads_payload = payload.is_some();
+        if let Some((scenario, config)) = payload {
+            self.autonomy.take_payload(scenario, config);
+        }
         let pending = self.commands.pop_front();
         let route = self.routes.pop_front();
         let input = TickInput {
@@ -908,7 +915,6 @@ impl Vehicle {
             },
             mocap: self.mocap.take(),
             command: pending.map(|p| p.command),
-            payload: payload.as_ref().map(|(s, c)| (s, *c)),
             job,
             faults: if hil {
                 HardwareFaults::NONE
@@ -926,7 +932,12 @@ impl Vehicle {
             },
             // The parameters' IMU offsets and hardware settings, as the firmware's control
             // task hands them over after a change.
-            bench: core::mem::take(&mut self.config_changed).then(|| (&self.config).into()),
+            // (Not in a step that loads a payload: the settings go in the next.)
+            bench: if loads_payload {
+                None
+            } else {
+                core::mem::take(&mut self.config_changed).then(|| (&self.config).into())
+            },
             supervision: Supervision {
                 gcs_heartbeat: core::mem::take(&mut self.gcs_heartbeat),
                 // The plant's pack in HIL; off HIL the board's ADC (none on the host).
@@ -938,12 +949,12 @@ impl Vehicle {
             },
         };
         let mut out = self.autonomy.tick(&input);
-        if let Some((_, config)) = &payload
+        if let Some(config) = loaded_config
             && !out.report.texts.iter().any(|t| t.text.contains("ignored"))
         {
             // Loaded: the mission is idle again, without a transition.
             assert_eq!(
-                *config, self.config,
+                config, self.config,
                 "the payload came with stale parameters"
             );
             self.phase = "idle".into();

@@ -67,9 +67,6 @@ pub struct TickInput<'a> {
     pub mocap: Option<MocapFix>,
     /// An operator command received since the last step.
     pub command: Option<OperatorCommand>,
-    /// A payload description received (and checked) since the last step, with the
-    /// configuration (from the parameters) the planner was loaded with.
-    pub payload: Option<(&'a Scenario, MissionConfig)>,
     /// The result of the job asked for `deadline_steps` ago, in exactly that step.
     pub job: Option<JobResult>,
     /// What the board's drivers report failed.
@@ -241,6 +238,8 @@ pub struct Autonomy {
     /// The mode, route and landed state last worked out for the ground.
     status: Status,
     loaded: bool,
+    /// A payload description came while the mission ran: the next step says it was ignored.
+    payload_ignored: bool,
     /// The mission's flight log.
     log: MissionLog,
 }
@@ -308,6 +307,7 @@ impl Autonomy {
                 landed: VehicleSnapshot::START.landed,
             },
             loaded: false,
+            payload_ignored: false,
             log: MissionLog::without_step_texts(),
         }
     }
@@ -402,6 +402,19 @@ impl Autonomy {
         }
     }
 
+    /// Takes a payload description received (and checked) since the last step, with the
+    /// configuration (from the parameters) the planner was loaded with, before the step:
+    /// loaded when the mission is idle or over (handed over, not copied), otherwise ignored
+    /// and the step says so.
+    pub fn take_payload(&mut self, scenario: Scenario, config: MissionConfig) {
+        if self.mission.phase() == Phase::Idle || self.state().is_over() {
+            self.mission.load_owned(scenario, config);
+            self.loaded = true;
+        } else {
+            self.payload_ignored = true;
+        }
+    }
+
     /// One control step, keeping no log.
     pub fn tick(&mut self, input: &TickInput<'_>) -> TickOutput {
         self.tick_logged(input, &mut NoRing)
@@ -410,16 +423,11 @@ impl Autonomy {
     /// One control step, its flight log (from the mission's start to its end) into `ring`.
     pub fn tick_logged(&mut self, input: &TickInput<'_>, ring: &mut impl LogRing) -> TickOutput {
         let mut report = Report::default();
-        if let Some((scenario, config)) = input.payload {
-            if self.mission.phase() == Phase::Idle || self.state().is_over() {
-                self.mission.load(scenario, config);
-                self.loaded = true;
-            } else {
-                report.text(
-                    Severity::Warning,
-                    format_args!("payload description ignored: the mission is running"),
-                );
-            }
+        if core::mem::take(&mut self.payload_ignored) {
+            report.text(
+                Severity::Warning,
+                format_args!("payload description ignored: the mission is running"),
+            );
         }
         if let Some(change) = input.route {
             self.change_route(change, &mut report);

@@ -102,6 +102,10 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             // in the channel by then.
             let loading = LOADING.load(Ordering::SeqCst);
             let payload = PAYLOAD.try_receive().ok();
+            let loads_payload = payload.is_some();
+            if let Some(p) = payload {
+                autonomy.take_payload(p.scenario, p.config);
+            }
             let pending = COMMANDS.try_receive().ok();
             let route = if ROUTE_SENT.load(Ordering::Acquire) {
                 let change = ROUTE.try_receive().ok();
@@ -118,7 +122,6 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 imu: sample.reading(),
                 mocap: MOCAP.try_take(),
                 command: pending.map(|p| p.command),
-                payload: payload.as_ref().map(|p| (&p.scenario, p.config)),
                 job,
                 faults: if sample.hil {
                     HardwareFaults::NONE
@@ -127,8 +130,10 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 },
                 loading,
                 route: route.as_ref(),
-                // The flag first: parameters set after it are in the configuration read.
-                bench: if CONFIG_CHANGED.load(Ordering::Acquire) {
+                // The flag first: parameters set after it are in the configuration read. Not
+                // in a step that loads a payload (at boot both wait): the two in one step
+                // exceed its budget, and the settings go in the next.
+                bench: if !loads_payload && CONFIG_CHANGED.load(Ordering::Acquire) {
                     CONFIG_CHANGED.store(false, Ordering::Release);
                     Some(BENCH_CONFIG.lock(|c| c.get()))
                 } else {

@@ -97,6 +97,10 @@ pub struct Mission {
     jump: Option<u8>,
     /// The operator holds the vehicle where it is in flight.
     held: bool,
+    /// The flight was built in the last tick: arming begins in this one (the build and the
+    /// phase's change, its report and log record, in one tick exceed the control step's
+    /// budget).
+    flight_built: bool,
     /// The bring-up side: the rails confirmed, a jog, a calibration, a motor test.
     bench: Bench,
 }
@@ -154,6 +158,7 @@ impl Mission {
             route_first: 0,
             jump: None,
             held: false,
+            flight_built: false,
             bench: Bench::IDLE,
         }
     }
@@ -163,13 +168,25 @@ impl Mission {
     /// start positions; whether their positions are known (confirmed) carries on too, since
     /// the steppers keep count of every move.
     pub fn load(&mut self, scenario: &Scenario, config: MissionConfig) {
+        self.scenario.clone_from(scenario);
+        self.reset(config);
+    }
+
+    /// [`Self::load`] with the description handed over, not copied (a copy of its
+    /// fixed-capacity lists costs the flight controller's step some 2,000 instructions).
+    pub fn load_owned(&mut self, scenario: Scenario, config: MissionConfig) {
+        self.scenario = scenario;
+        self.reset(config);
+    }
+
+    /// The rest of [`Self::load`], the description in place.
+    fn reset(&mut self, config: MissionConfig) {
         self.bench.jog = None;
         self.bench.motor_test = None;
-        self.scenario.clone_from(scenario);
         self.config = config;
         self.phase = Phase::Idle;
         self.phase_time = 0.0;
-        self.robots.clone_from(&scenario.robots.initial);
+        self.robots.clone_from(&self.scenario.robots.initial);
         self.rail_move = None;
         self.lift_plan = None;
         self.lift = None;
@@ -188,6 +205,7 @@ impl Mission {
         self.gcs_hold = None;
         self.jump = None;
         self.held = false;
+        self.flight_built = false;
     }
 
     /// Flies `route` instead of the payload description's target from the next start (an
@@ -378,6 +396,8 @@ impl Mission {
     }
 
     fn enter(&mut self, to: Phase, reason: Reason) -> Transition {
+        // A flight built but not yet armed is armed only from the rearrangement.
+        self.flight_built = false;
         let t = Transition {
             from: self.phase,
             to,
@@ -937,6 +957,9 @@ impl Mission {
     }
 
     fn rearranging(&mut self, nav: &NavState) -> Result<Option<Transition>, AbortReason> {
+        if self.flight_built {
+            return Ok(Some(self.enter(Phase::Arming, Reason::FlightReady)));
+        }
         if self.rail_move.is_some() {
             if self.follow_rail_move() {
                 self.request(JobRequest::BuildFlight {
@@ -975,7 +998,8 @@ impl Mission {
                 r.mass * r.count() as f32,
             )
         });
-        Ok(Some(self.enter(Phase::Arming, Reason::FlightReady)))
+        self.flight_built = true;
+        Ok(None)
     }
 
     fn fly(
