@@ -562,6 +562,12 @@ fn the_firmware_reads_the_escs_rpm_and_names_two_stopped_rotors_at_once() {
     // The ground station was told each ESC's RPM (at 4 Hz of the board's clock, which runs
     // slower than the lockstep's under QEMU): the last after the landing, all stopped.
     assert!(fw.log.esc_statuses > 0, "no ESC_STATUS");
+    assert_eq!(
+        fw.log.esc_failed,
+        (1 << 0) | (1 << 5),
+        "ESC_INFO flagged {:#b}, not rotors 1 and 6",
+        fw.log.esc_failed
+    );
     assert_eq!(&fw.log.esc_rpm[8..], &[0; 8], "robots beyond the eighth");
 }
 

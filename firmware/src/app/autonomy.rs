@@ -253,12 +253,14 @@ impl Default for Autonomy {
 /// Control steps between two workings-out of the ground's [`Status`].
 const STATUS_EVERY: u64 = 8;
 
-/// What the ground is shown of the mode, the route and the landing.
+/// What the ground is shown of the mode, the route, the landing and the rotors out.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Status {
     mode: u8,
     route: RouteStatus,
     landed: u8,
+    /// Rotors found stopped in flight, bit `i` for robot `i`.
+    rotors_out: u16,
 }
 
 /// The `STATUSTEXT` severity of a text's level.
@@ -305,6 +307,7 @@ impl Autonomy {
                 mode: 0,
                 route: RouteStatus::NONE,
                 landed: VehicleSnapshot::START.landed,
+                rotors_out: 0,
             },
             loaded: false,
             payload_ignored: false,
@@ -550,6 +553,7 @@ impl Autonomy {
                 mode: mode.code(),
                 route: self.route_status(mode),
                 landed: self.landed_state() as u8,
+                rotors_out: self.mission.flight().map_or(0, |f| f.rotors_out()),
             };
             status_changed = status != self.status;
             self.status = status;
@@ -582,7 +586,7 @@ impl Autonomy {
             mode: status.mode,
             route: status.route,
             landed: status.landed,
-            rotors_out: self.mission.flight().map_or(0, |f| f.rotors_out()),
+            rotors_out: status.rotors_out,
             ..VehicleSnapshot::START
         };
         TickOutput {

@@ -1142,12 +1142,13 @@ struct Sending<W> {
     esc_infos: u16,
 }
 
-/// What the send task last said of the mode, the route and the landed state.
+/// What the send task last said of the mode, the route, the landed state and the rotors out.
 #[derive(Clone, Copy, PartialEq)]
 struct Said {
     mode: u8,
     route: RouteStatus,
     landed: u8,
+    rotors_out: u16,
 }
 
 impl<W: Write> Sending<W> {
@@ -1206,10 +1207,11 @@ impl<W: Write> Sending<W> {
         self.flush().await;
     }
 
-    /// The mode, the route's progress and the landed state (docs/ground-link.md#missions):
-    /// each change at once (a new mode with a `HEARTBEAT` and `CURRENT_MODE`, an item reached
-    /// as `MISSION_ITEM_REACHED`), and with every heartbeat (`every_second`) the route's
-    /// `MISSION_CURRENT` and `EXTENDED_SYS_STATE`.
+    /// The mode, the route's progress, the landed state and the rotors out
+    /// (docs/ground-link.md#missions): each change at once (a new mode with a `HEARTBEAT` and
+    /// `CURRENT_MODE`, an item reached as `MISSION_ITEM_REACHED`, a rotor out as `ESC_INFO`),
+    /// and with every heartbeat (`every_second`) the route's `MISSION_CURRENT` and
+    /// `EXTENDED_SYS_STATE`.
     async fn mission_status(&mut self, every_second: bool) {
         let changes = STATUS_CHANGES.load(Ordering::Acquire);
         if !every_second && changes == self.status_changes {
@@ -1221,9 +1223,14 @@ impl<W: Write> Sending<W> {
             mode: vehicle.mode,
             route: vehicle.route,
             landed: vehicle.landed,
+            rotors_out: vehicle.rotors_out,
         };
         let before = self.said;
         self.said = now;
+        // A rotor found stopped: `ESC_INFO`'s failure flags at once (while the ESCs report).
+        if now.rotors_out != before.rotors_out {
+            telemetry(|t| t.request_once(link::msg::ESC_INFO_DATA::ID));
+        }
         if now.mode != before.mode {
             let mode = FlightMode::from_code(now.mode).unwrap_or(FlightMode::Ready);
             self.heartbeat().await;
@@ -1528,6 +1535,7 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
             mode: FlightMode::Ready.code(),
             route: RouteStatus::NONE,
             landed: VehicleSnapshot::START.landed,
+            rotors_out: 0,
         },
         status_changes: 0,
     };

@@ -70,7 +70,7 @@ pub struct FirmwareLog {
     pub esc_statuses: u32,
     /// Each ESC's RPM in its last `ESC_STATUS`, by motor.
     pub esc_rpm: [i32; link::hil::MAX_ROBOTS],
-    /// The ESCs its last `ESC_INFO`s flagged failed (bit `i` for motor `i`).
+    /// The ESCs any of its `ESC_INFO`s flagged failed (bit `i` for motor `i`).
     pub esc_failed: u16,
 }
 
@@ -235,11 +235,9 @@ impl Session {
             }
         } else if let Some(m) = frame.decode::<link::msg::ESC_INFO_DATA>() {
             for (i, flags) in m.failure_flags.iter().enumerate() {
-                let bit = 1u16.checked_shl(u32::from(m.index) + i as u32).unwrap_or(0);
                 if *flags != 0 {
-                    self.log.esc_failed |= bit;
-                } else {
-                    self.log.esc_failed &= !bit;
+                    self.log.esc_failed |=
+                        1u16.checked_shl(u32::from(m.index) + i as u32).unwrap_or(0);
                 }
             }
         } else if let Some(a) = frame.decode::<COMMAND_ACK_DATA>() {
