@@ -114,6 +114,30 @@ fn main() -> ! {
         report("multiply-add (timer overhead)", n);
     }
 
+    // MAVLink 2 signing: SHA-256 over the key, the frame and the signature's head, for every
+    // frame sent and checked on a signed link (the form of SHA-256 is the build's: unrolled,
+    // or compact with `--cfg sha2_backend_soft="compact"`).
+    {
+        use core::hint::black_box;
+        use link::MessageData;
+        use link::frame::{Encoder, Frame};
+        use link::msg::LOG_DATA_DATA;
+        let mut signing = link::signing::Signing::new();
+        signing.set_key([7; 32], 1_000_000_000, 0, 1);
+        let data = LOG_DATA_DATA {
+            ofs: 0,
+            id: 0,
+            count: 90,
+            data: [0x5a; 90],
+        };
+        let mut frame = Frame::default();
+        Encoder::new(1, 1).encode(&data, &mut frame);
+        let (n, _) = timer.instructions(|| {
+            signing.sign(black_box(&mut frame), LOG_DATA_DATA::EXTRA_CRC, 1_000);
+        });
+        report("MAVLink 2 signature of a LOG_DATA (102-byte frame)", n);
+    }
+
     // Cost of a mission text with three numbers (the steps that write one are the tick's
     // worst): shared::numbers instead of core's float formatting.
     {
