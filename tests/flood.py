@@ -63,6 +63,12 @@ RATE = 200
 # the flood's rate, the link's and the heartbeat's second are then the same second.
 SPEED = 4
 LONGEST_BEAT_GAP_S = 1.5
+# Wall seconds the plant waits for each lockstep reply in a flooded run (the default is 10).
+# Serving the flood keeps the firmware busy, and QEMU then emulates it slower than the wall's
+# clock: a parameter-list flood measured heartbeat gaps of 1.00 s on the vehicle's clock and
+# 3.3 to 4.4 s on the wall's, and once in CI, on a loaded two-core machine, a step waited more
+# than 10 s. A firmware that stalls still fails the run, after this long.
+FLOODED_REPLY_TIMEOUT_S = 60
 # Parameter-list requests after the flood, 2 s apart, before it counts as failed.
 LIST_TRIES = 10
 # The flooder's own system id: the plant (255) uploads the payload with FTP meanwhile.
@@ -155,7 +161,8 @@ def flooded_run(args, kind, clean):
     port = gs.free_udp_port()
     plant = subprocess.Popen(
         plant_command(args, ["--gcs", f"udp:127.0.0.1:{port}", "--linger", "30",
-                             "--speed", str(SPEED)]),
+                             "--speed", str(SPEED),
+                             "--reply-timeout", str(FLOODED_REPLY_TIMEOUT_S)]),
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         v = gs.Vehicle(port, system=FLOODER_SYSTEM)
