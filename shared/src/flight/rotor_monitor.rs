@@ -38,9 +38,9 @@
 //!   since the monitor settled (rebases along no rotor's column left out) is judged as a
 //!   change is, every [`DRIFT_EVERY`]th tick: the rotor it points along, clearly better than
 //!   the next, is named once its loss reaches half the thrust the rotor had when the drift
-//!   was taken from (the
-//!   controller raises a fading rotor's command as it fades; sized against today's, the
-//!   neighbour whose column fits worse but reads a larger loss would be named first).
+//!   was taken from (the controller raises a fading rotor's command as it fades; sized
+//!   against today's, the neighbour whose column fits worse but reads a larger loss would be
+//!   named first).
 //! - The ESCs' RPM, where the vehicle has it: a rotor whose RPM squared over its expected
 //!   thrust falls under half its own (learned in its first second of flight) is named in
 //!   [`RPM_CONFIRM_TIME`], whatever the response says.
@@ -541,9 +541,8 @@ impl RotorMonitor {
     /// since the monitor settled is judged as a change is, the thrust row always required
     /// (a slow torque is a load, or the COM believed elsewhere): the rotor whose column it
     /// points along best, clearly better than the next ([`Judging::decisive`]), once that
-    /// rotor's loss is large enough (`columns` carry the
-    /// thrusts it is sized against), named once the same rotor is found for
-    /// [`DRIFT_CONFIRM_TIME`].
+    /// rotor's loss is large enough (`columns` carry the thrusts it is sized against), named
+    /// once the same rotor is found for [`DRIFT_CONFIRM_TIME`].
     fn watch_drift(
         &mut self,
         input: &MonitorInput<'_>,
