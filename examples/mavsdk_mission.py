@@ -48,6 +48,8 @@ HOVER_S = 2.0
 # MAVLink numbers used below (MAV_CMD, MAV_FRAME).
 NAV_WAYPOINT, NAV_LOITER_TIME, NAV_LAND, NAV_TAKEOFF = 16, 19, 21, 22
 GLOBAL_RELATIVE_ALT_INT = 6
+# Horizontal speed below which the held vehicle counts as at rest, m/s.
+SETTLED_M_S = 0.05
 EARTH_RADIUS = 6_378_137.0
 
 
@@ -139,9 +141,11 @@ async def fly(url, log=print, hold_s=3.0):
         await drone.action.hold()
         await first(drone.telemetry.flight_mode(), 10, "the Hold mode",
                     lambda m: m == FlightMode.HOLD)
-        # The vehicle stops where its plan was when the hold came: a moment to settle there.
-        await asyncio.sleep(1.0)
-        a = await first(drone.telemetry.position_velocity_ned(), 10, "position")
+        # The vehicle stops where its plan was when the hold came: held from when it has
+        # come to rest there, for `hold_s` seconds (the measurement's window).
+        a = await first(drone.telemetry.position_velocity_ned(), 30, "the vehicle at rest",
+                        lambda p: math.hypot(p.velocity.north_m_s, p.velocity.east_m_s)
+                        < SETTLED_M_S)
         await asyncio.sleep(hold_s)
         b = await first(drone.telemetry.position_velocity_ned(), 10, "position")
         moved = math.dist((a.position.north_m, a.position.east_m),
@@ -156,7 +160,10 @@ async def fly(url, log=print, hold_s=3.0):
         await first(drone.telemetry.landed_state(), 600, "the landing",
                     lambda s: s == LandedState.ON_GROUND)
         log("landed")
-        await asyncio.sleep(1.0)
+        # The last item's progress may come after the landed state.
+        end = time.monotonic() + 30
+        while (not reached or max(reached) < len(mission)) and time.monotonic() < end:
+            await asyncio.sleep(0.1)  # polling the progress followed above
     finally:
         progress.cancel()
     if not reached or max(reached) < len(mission):

@@ -10,10 +10,11 @@ Run by tests/flood.rs (cargo test); by hand:
 
 First the mission flies with no ground station (`hil --json`): the clean run. Then, for each
 kind of flood, it flies again with this script as its ground station (`--gcs --linger 30`),
-which from the payload's acceptance to the mission's end sends `--rate` messages a second
-(default 200; wall time, the run paced at 4 times real time; at most rate x 120 of them, for
-at most 120 s) besides its own heartbeat once a
-second:
+which from the mission's start (the HEARTBEAT says it runs) to the mission's end sends `--rate` messages a second
+(default 200; seconds of the vehicle's clock, read from the time stamps of its telemetry, so
+the flood is as dense for the vehicle however slowly QEMU runs it on a loaded machine; the run
+paced at 4 times real time; at most rate x 120 of them) besides its own heartbeat once a
+second of the wall's:
 
 - `bytes`: random bytes, 1 to 300 in each datagram;
 - `mix`: bad parameter writes (a value out of range, not a number), unknown commands, FTP
@@ -48,13 +49,19 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import ground_station as gs  # noqa: E402  (pymavlink's absence exits 2 there)
-from ground_station import Failure, mavlink  # noqa: E402
+from ground_station import ABORTED, COMPLETED, Failure, mavlink  # noqa: E402
 
 KINDS = ("bytes", "mix", "param-list")
 # What must match the clean run exactly (the JSON keys of `hil --json`).
 RESULT_KEYS = ("delivered", "aborted", "estimate", "measurements", "lifts", "positions",
                "phases", "final_position_error_m", "dropped", "mission_state", "ticks")
+# The vehicle's attitude and local position come at 10 Hz of its clock, stamped with it.
+STAMP_INTERVAL_S = 0.1
+# The flood's length at most, s of the vehicle's clock.
 MAX_SECONDS = 120
+# Wall seconds a flooded mission may take at most: a backstop only (the plant fails a run whose
+# firmware stalls after FLOODED_REPLY_TIMEOUT_S); a starved QEMU runs many times slower.
+MAX_WALL_S = 900
 # Messages a second: a busy ground station's 200 (1,000 and 2,000 hold on an idle machine,
 # docs/failures.md).
 RATE = 200
@@ -73,8 +80,6 @@ FLOODED_REPLY_TIMEOUT_S = 60
 LIST_TRIES = 10
 # The flooder's own system id: the plant (255) uploads the payload with FTP meanwhile.
 FLOODER_SYSTEM = 254
-COMPLETED = 2  # MissionState::Completed, the heartbeat's custom_mode
-ABORTED = 3
 
 
 def plant_command(args, extra):
@@ -98,12 +103,14 @@ class Flooder:
         self.conn, self.kind, self.rate = conn, kind, rate
         self.random = random.Random(seed)
         self.sent = 0
-        self.started = None
+        self.started = self.now = None
 
     def due(self, now):
-        """Sends the messages due by `now` (the rate from the first call)."""
+        """Sends the messages due by `now`, s of the vehicle's clock (the rate from the first
+        call)."""
         if self.started is None:
             self.started = now
+        self.now = now
         due = min(int((now - self.started) * self.rate), self.rate * MAX_SECONDS)
         while self.sent < due:
             self.one()
@@ -158,36 +165,48 @@ def whole_list(v, kind):
 
 
 def flooded_run(args, kind, clean):
-    port = gs.free_udp_port()
+    # Listening before the plant starts: nothing the vehicle says first is lost.
+    v = gs.Vehicle(0, system=FLOODER_SYSTEM)
+    v.conn.target_system, v.conn.target_component = 1, 1
     plant = subprocess.Popen(
-        plant_command(args, ["--gcs", f"udp:127.0.0.1:{port}", "--linger", "30",
+        plant_command(args, ["--gcs", f"udp:127.0.0.1:{v.port}", "--linger", "30",
                              "--speed", str(SPEED),
                              "--reply-timeout", str(FLOODED_REPLY_TIMEOUT_S)]),
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        v = gs.Vehicle(port, system=FLOODER_SYSTEM)
-        v.conn.target_system, v.conn.target_component = 1, 1
-        if v.recv(["HEARTBEAT"], 60, lambda m: m.get_srcComponent() == 1) is None:
-            raise Failure(f"{kind}: no HEARTBEAT from the vehicle")
-        v.text_matching("accepted", 60)
+        # The plant uploads the payload description and starts the mission: the flood begins
+        # when the vehicle's HEARTBEAT says it runs (it comes each second, so none is missed).
+        try:
+            v.mission_state([gs.RUNNING], "started by the plant", 60)
+        except Failure as e:
+            raise Failure(f"{kind}: {e}")
         flooder = Flooder(v.conn, kind, args.rate, seed=KINDS.index(kind) + 1)
         beats_wall, beats_vehicle = [], []
         status = None
         state = None
         chunks = {}  # a long STATUSTEXT's chunks, by its id
         started = time.monotonic()
+        vehicle_s = None  # the vehicle's clock, from its telemetry's time stamps
         while state not in (COMPLETED, ABORTED):
-            now = time.monotonic()
-            if now - started > MAX_SECONDS:
-                raise Failure(f"{kind}: the mission did not end within {MAX_SECONDS} s")
+            if time.monotonic() - started > MAX_WALL_S:
+                raise Failure(f"{kind}: the mission did not end within {MAX_WALL_S} s")
             if plant.poll() is not None:
                 raise Failure(f"{kind}: host-sim ended during the flood: "
                               f"{plant.communicate()[1].strip()[-500:]}")
-            flooder.due(now)
+            if vehicle_s is not None:
+                # Between two stamps the vehicle's clock runs on at the pace the run is held
+                # to, at most to where the next stamp (10 Hz) would say: smooth when QEMU keeps
+                # pace, never ahead of the vehicle when it does not.
+                ahead = min((time.monotonic() - stamped_at) * SPEED, STAMP_INTERVAL_S)
+                flooder.due(vehicle_s + ahead)
             v.beat()
             m = v.conn.recv_match(blocking=True, timeout=0.002)
             while m is not None:
                 t = m.get_type()
+                stamp = getattr(m, "time_boot_ms", None)
+                if stamp is not None and m.get_srcSystem() == 1 and \
+                        stamp * 1e-3 > (vehicle_s or 0.0):
+                    vehicle_s, stamped_at = stamp * 1e-3, time.monotonic()
                 if t == "HEARTBEAT" and m.get_srcComponent() == 1:
                     beats_wall.append(time.monotonic())
                     state = m.custom_mode & 0xFF
@@ -231,7 +250,9 @@ def flooded_run(args, kind, clean):
     texts = ["".join(c) for i, c in sorted(chunks.items()) if i] + \
         [c for c in chunks.get(0, [])]
     told = [t for t in texts if t.startswith("link: in")]
-    print(f"  {kind}: {flooder.sent} messages sent in {time.monotonic() - started:.0f} s; "
+    span = (flooder.now - flooder.started) if flooder.started is not None else 0.0
+    print(f"  {kind}: {flooder.sent} messages sent over {span:.0f} s of the vehicle's clock "
+          f"({time.monotonic() - started:.0f} s wall); "
           f"radio dropped {link.get('dropped_frames', 0)} of "
           f"{link.get('dropped_frames', 0) + link.get('forwarded_frames', 0)} frames; "
           f"vehicle dropped {replies} replies, restarted {lists} parameter lists "

@@ -31,11 +31,18 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
    signed; then the power is cut (host-sim and QEMU killed). MAVProxy (headless, when
    installed; required with HIL_REQUIRED=1) then connects and fetches every parameter.
 2. restart (the plant signing its upload with the key): the key, the value and the payload
-   description are still there (an unsigned write is refused; `payload description restored
-   from storage`); the ground station starts the mission, a PARAM_SET in
-   flight is refused, the STATUSTEXTs are followed to the landing, and the plant's report shows
-   the parameter changed the mission (the pre-flight checks lasted MIS_CHECKS_T); the origin
-   is still the one set, and GLOBAL_POSITION_INT shows the vehicle in the air above it.
+   description are still there (an unsigned write is refused; the rail positions show the
+   description back in the mission; `payload description restored from storage` in the
+   plant's report); the ground station confirms the rails and starts the mission, a PARAM_SET
+   in flight is refused, the HEARTBEAT's mission state is followed to the end, and the
+   plant's report shows the phases in order and that the parameter changed the mission (the
+   pre-flight checks lasted MIS_CHECKS_T); the origin is still the one set, and
+   GLOBAL_POSITION_INT shows the vehicle in the air above it.
+
+The ground station listens before the plant starts and waits for the vehicle's state (the
+HEARTBEAT, the rail positions, a requested message), never for a progress text that may pass
+by before it listens; a wait that fails says what it waited for, what came instead, and the
+vehicle's last texts.
 
 Exit status 0 when everything holds; 2 with one line on stderr when pymavlink is missing
 (the Rust test turns that into a skip or, in CI, a failure); 1 for any failure, saying which.
@@ -54,6 +61,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import tomllib
 import zlib
 
 os.environ.setdefault("MAVLINK20", "1")
@@ -80,12 +88,43 @@ ORIGIN_INT = (515007123, -1275456, 12250)
 DEFAULT_ORIGIN = (473977420, 85455940, 488000)
 # How long MAVProxy is watched after its parameters came, s.
 MAVPROXY_WATCH_S = 8
+# The ground station's socket receive buffer, bytes. Unpaced, the vehicle's telemetry comes at
+# 15 to 20 times real time, and a script descheduled for a moment on a loaded machine must
+# find what came meanwhile, not have the kernel drop it (the default holds about 200 KB).
+RECEIVE_BUFFER = 4 * 1024 * 1024
+# The vehicle's mission states, the HEARTBEAT's custom_mode low byte (link::status).
+IDLE, RUNNING, COMPLETED, ABORTED = 0, 1, 2, 3
+STATE_NAMES = {IDLE: "idle", RUNNING: "running", COMPLETED: "completed", ABORTED: "aborted"}
+# Phases a delivered mission goes through, in order (a phase may come more than once).
+FLOWN_PHASES = ("preflight-checks", "select-pair", "lift", "decide-formation", "takeoff",
+                "landing", "disarmed")
+# MAVLink's id of DEBUG_FLOAT_ARRAY (the robots' rail positions, named `rail`).
+DEBUG_FLOAT_ARRAY_ID = 350
 BAD_VALUES = [("MAX_TILT", 5.0, "outside"), ("MAX_TILT", float("nan"), "finite"),
               ("MIS_CONFIRM", 1.5, "whole")]
 
 
 class Failure(Exception):
     """What did not hold."""
+
+
+def describe(m):
+    """A message for a failure's text: its type and fields (arrays without their trailing
+    zeros)."""
+    def value(v):
+        if isinstance(v, list):
+            while v and v[-1] == 0:
+                v = v[:-1]
+        return v
+    fields = ", ".join(f"{k} {value(v)}" for k, v in m.to_dict().items()
+                       if k != "mavpackettype")
+    return f"{m.get_type()} ({fields})"
+
+
+def scenario_robots(path):
+    """The robots' count of a scenario file."""
+    with open(path, "rb") as f:
+        return tomllib.load(f)["robots"]["count"]
 
 
 def free_udp_port():
@@ -98,9 +137,17 @@ class Vehicle:
     """The firmware as a ground station sees it, with every STATUSTEXT kept."""
 
     def __init__(self, port, dialect="common", system=255):
+        """Listens on local UDP `port` (0: a free one, then in `.port`)."""
         self.conn = mavutil.mavlink_connection(
             f"udpin:127.0.0.1:{port}", source_system=system, source_component=190,
             dialect=dialect)
+        self.port = self.conn.port.getsockname()[1]
+        # Robots of the payload the plant flies (set by `connect`).
+        self.robots = 0
+        try:
+            self.conn.port.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECEIVE_BUFFER)
+        except OSError:
+            pass  # the system's default: enough on an idle machine
         self.texts = []
         self.last_beat = 0.0
         # Message types kept whenever they come (by type, in order), whatever is awaited.
@@ -134,6 +181,63 @@ class Vehicle:
             if m.get_type() in types and (condition is None or condition(m)):
                 return m
         return None
+
+    def wait_for(self, what, types, condition, timeout, ask=None, every=2.0):
+        """Waits for the vehicle to show `what`: the next message of `types` meeting
+        `condition`, asking for it with `ask()` first and again every `every` s when `ask` is
+        given (a lost request or answer costs one retry, not the test). Fails saying what it
+        waited for, the last message of `types` that came instead, and the vehicle's last
+        texts."""
+        end = time.monotonic() + timeout
+        last = None
+        while time.monotonic() < end:
+            if ask is not None:
+                ask()
+            round_end = min(end, time.monotonic() + every) if ask is not None else end
+            while time.monotonic() < round_end:
+                m = self.recv(types, round_end - time.monotonic())
+                if m is None:
+                    break
+                if condition(m):
+                    return m
+                last = m
+        came = f"the last that came: {describe(last)}" if last is not None else \
+            f"no {' or '.join(types)} came"
+        raise Failure(f"waited {timeout} s for {what}; {came}; the vehicle's last texts: "
+                      f"{self.texts[-5:]}")
+
+    def request(self, message_id):
+        """Asks for one message (MAV_CMD_REQUEST_MESSAGE), not waiting for the answer."""
+        self.conn.mav.command_long_send(1, 1, mavlink.MAV_CMD_REQUEST_MESSAGE, 0, message_id,
+                                        0, 0, 0, 0, 0, 0)
+
+    def mission_state(self, states, what, timeout=60):
+        """Waits until the vehicle's HEARTBEAT says its mission is in one of `states` (the
+        custom_mode's low byte); returns that HEARTBEAT."""
+        return self.wait_for(
+            f"the mission {what} (HEARTBEAT state {' or '.join(STATE_NAMES[s] for s in states)})",
+            ["HEARTBEAT"],
+            lambda m: m.get_srcComponent() == 1 and m.custom_mode & 0xFF in states, timeout)
+
+    def payload_loaded(self, unconfirmed=False, timeout=60):
+        """Waits until the vehicle's mission holds a payload description of `self.robots`
+        robots: its `rail` DEBUG_FLOAT_ARRAY, asked for, has an entry for each (with no
+        description it has none: all zero); with `unconfirmed`, a not-a-number for each (the
+        rail positions not confirmed since the vehicle started). What a ground station waits
+        for after a restart before it confirms the rails: the description restored and handed
+        to the mission, not only accepted."""
+        robots = self.robots
+        if unconfirmed:
+            what = "not a number for each robot: the rails unconfirmed"
+            shown = lambda data: all(math.isnan(x) for x in data)  # noqa: E731
+        else:
+            what = "an entry for each robot"
+            shown = lambda data: any(x != 0.0 for x in data)  # noqa: E731 (NaN too)
+        return self.wait_for(
+            f"the payload description of {robots} robots in the mission (DEBUG_FLOAT_ARRAY "
+            f"rail: {what})",
+            ["DEBUG_FLOAT_ARRAY"], lambda m: m.name == "rail" and shown(m.data[:robots]),
+            timeout, ask=lambda: self.request(DEBUG_FLOAT_ARRAY_ID))
 
     def has_text(self, needle):
         # Long texts come in 50-byte chunks: look across them too.
@@ -413,7 +517,7 @@ def signing_checks(v):
           "and parameter write refused")
 
 
-def mavproxy_check(args, port, parameters):
+def mavproxy_check(args, parameters):
     """MAVProxy, headless, connects to the vehicle and fetches every parameter by itself
     (it reads no commands from stdin when --non-interactive, so this is what it is asked)."""
     mavproxy = shutil.which("mavproxy.py")
@@ -422,12 +526,12 @@ def mavproxy_check(args, port, parameters):
             raise Failure("MAVProxy is not installed (pip install MAVProxy) and HIL_REQUIRED=1")
         print("MAVProxy is not installed (pip install MAVProxy): its check skipped")
         return
-    plant = start_hil(args, port, ["--signing-key", SIGNING_KEY.hex()])
+    plant = start_hil(args, ["--signing-key", SIGNING_KEY.hex()], listen=False)
     want = f"Received {parameters} parameters"
     seen = []
     with tempfile.TemporaryDirectory(prefix="mavproxy-") as logs:
         proxy = subprocess.Popen(
-            [mavproxy, f"--master=udpin:127.0.0.1:{port}", "--source-system=255",
+            [mavproxy, f"--master=udpin:127.0.0.1:{plant.port}", "--source-system=255",
              "--non-interactive", f"--state-basedir={logs}"],
             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
             text=True)
@@ -466,11 +570,20 @@ def mavproxy_check(args, port, parameters):
           f"no refusal repeated over {MAVPROXY_WATCH_S} s")
 
 
-def start_hil(args, port, extra):
+def start_hil(args, extra, dialect="common", listen=True):
+    """`host-sim hil --gcs` on rect-ex1 with a ground station on a free local port. With
+    `listen` this script's ground station is bound there before the plant starts, so nothing
+    the vehicle says first is lost (MAVSDK and MAVProxy bind their own). Returns the plant
+    with `.port` and `.ground` (the listening Vehicle, or None)."""
+    ground = Vehicle(0, dialect) if listen else None
+    port = ground.port if ground else free_udp_port()
     cmd = [args.host_sim, "hil", "--scenario", args.scenario, "--qemu", args.elf,
            "--storage", args.storage, "--gcs", f"udp:127.0.0.1:{port}", "--ground-start",
-           "--json"] + extra
-    return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+           "--json"] + list(extra)
+    plant = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    plant.port, plant.ground = port, ground
+    plant.robots = scenario_robots(args.scenario)
+    return plant
 
 
 def delivered(plant):
@@ -486,10 +599,12 @@ def delivered(plant):
     return report["final_position_error_m"]
 
 
-def run_against_plant(name, description, checks, extra=(), failures=(Failure,)):
+def run_against_plant(name, description, checks, extra=(), failures=(Failure,),
+                      dialect="common", listen=True):
     """A check script's main: its arguments (--host-sim, --elf, --scenario), a plant on fresh
-    storage with `extra` arguments, `checks(port, plant)`, and one line saying whether all
-    held (exit 0) or what failed (exit 1; `failures` are the exceptions that say so)."""
+    storage with `extra` arguments ([`start_hil`]), `checks(plant)`, and one line saying
+    whether all held (exit 0) or what failed (exit 1; `failures` are the exceptions that say
+    so)."""
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--host-sim", required=True)
     parser.add_argument("--elf", required=True)
@@ -498,10 +613,9 @@ def run_against_plant(name, description, checks, extra=(), failures=(Failure,)):
     with tempfile.TemporaryDirectory(prefix=f"{name.replace(' ', '-')}-") as tmp:
         args.storage = tmp
         started = time.monotonic()
-        port = free_udp_port()
-        plant = start_hil(args, port, list(extra))
+        plant = start_hil(args, extra, dialect, listen)
         try:
-            checks(port, plant)
+            checks(plant)
         except failures as e:
             print(f"{name}: FAILED: {e}", file=sys.stderr)
             return 1
@@ -513,8 +627,10 @@ def run_against_plant(name, description, checks, extra=(), failures=(Failure,)):
     return 0
 
 
-def connect(port, plant, dialect="common"):
-    v = Vehicle(port, dialect)
+def connect(plant):
+    """The plant's listening ground station once the vehicle's HEARTBEAT came, aimed at it."""
+    v = plant.ground
+    v.robots = plant.robots
     hb = v.recv(["HEARTBEAT"], 60, lambda m: m.get_srcComponent() == 1)
     if hb is None:
         plant.kill()
@@ -581,10 +697,10 @@ def metadata_checks(v, param_count):
           f"its CRC-32 as the general file says, {len(names)} parameters")
 
 
-def first_run(args, port):
-    plant = start_hil(args, port, [])
+def first_run(args):
+    plant = start_hil(args, [])
     try:
-        v = connect(port, plant)
+        v = connect(plant)
         print("connected: HEARTBEAT from 1/1, MAV_AUTOPILOT_GENERIC")
         ack = v.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION)
         if ack.result != mavlink.MAV_RESULT_ACCEPTED:
@@ -653,15 +769,13 @@ def first_run(args, port):
         # The power cut: host-sim and, with it, QEMU die at once.
         plant.kill()
         plant.communicate()
-        v_conn = locals().get("v")
-        if v_conn is not None:
-            v_conn.conn.close()
+        plant.ground.conn.close()
 
 
-def second_run(args, port):
-    plant = start_hil(args, port, ["--signing-key", SIGNING_KEY.hex()])
+def second_run(args):
+    plant = start_hil(args, ["--signing-key", SIGNING_KEY.hex()])
     try:
-        v = connect(port, plant)
+        v = connect(plant)
         v.conn.setup_signing(SIGNING_KEY, sign_outgoing=False)
         if v.param_set("MAX_TILT", 0.3).param_value == 0.3:
             raise Failure("after the restart an unsigned PARAM_SET was taken: signing lost")
@@ -678,43 +792,40 @@ def second_run(args, port):
         if (o.latitude, o.longitude, o.altitude) != ORIGIN:
             raise Failure(f"after the restart the origin is {(o.latitude, o.longitude)}")
         print("after the restart the map origin is the one set")
-        v.text_matching("accepted", 60)
-        # The vehicle loads the description into its planner after it accepted it, and a start
-        # meanwhile is TEMPORARILY_REJECTED (with a STATUSTEXT): the command protocol's answer
-        # to try again, which a ground station does.
         # A restart forgets where the robots stand: the operator confirms the rails again (the
-        # plant confirms them too, as its set-up, but a ground station may be quicker).
+        # plant confirms them too, as its set-up, but a ground station may be quicker). The
+        # description is restored, checked, loaded into the planner and only then handed to
+        # the mission, so the ground station waits until the vehicle shows it (a rail
+        # position for each robot), not for a text that may come before it listens.
+        v.payload_loaded()
         confirm = v.command(CONFIRM_RAILS, 1)
         if confirm.result != mavlink.MAV_RESULT_ACCEPTED:
             raise Failure(f"the rails' confirmation acknowledged {confirm.result} "
                           f"(last texts: {v.texts[-3:]})")
+        # A start while the vehicle loads the description into its planner is
+        # TEMPORARILY_REJECTED (with a STATUSTEXT): the command protocol's answer to try again,
+        # which a ground station does.
         deadline = time.time() + 20
         while True:
             ack = v.command(mavlink.MAV_CMD_MISSION_START)
             if ack.result != mavlink.MAV_RESULT_TEMPORARILY_REJECTED or time.time() > deadline:
                 break
-            time.sleep(0.2)
+            time.sleep(0.2)  # the retry's pace, as a ground station's
         if ack.result != mavlink.MAV_RESULT_ACCEPTED:
             raise Failure(f"MISSION_START acknowledged {ack.result} (last texts: {v.texts[-3:]})")
-        v.text_matching("phase: preflight-checks", 20)
+        v.mission_state([RUNNING], "started", 20)
         answer = v.param_set("MAX_TILT", 0.3)
         if answer.param_value == 0.3:
             raise Failure("MAX_TILT changed while the mission runs")
         v.text_matching("running", 10)
         print("mission started; a PARAM_SET in flight refused")
-        seen = []
-        for phase in ["select-pair", "lift", "decide-formation", "takeoff", "landing",
-                      "disarmed"]:
-            v.text_matching(f"phase: {phase}", 900)
-            seen.append(phase)
-            print(f"  STATUSTEXT phase: {phase}")
-            if phase == "takeoff":
-                # In the air, on the map: above the origin, within metres of it.
-                up = v.expect(["GLOBAL_POSITION_INT"], 60, "GLOBAL_POSITION_INT in the air",
-                              lambda m: m.relative_alt > 300)
-                if abs(up.lat - ORIGIN[0]) > 1000 or abs(up.lon - ORIGIN[1]) > 1000:
-                    raise Failure(f"in the air at {up.lat}, {up.lon}: not near the origin")
-                print(f"  GLOBAL_POSITION_INT in the air: {up.relative_alt} mm above the origin")
+        # In the air, on the map: above the origin, within metres of it.
+        up = v.wait_for("GLOBAL_POSITION_INT in the air (over 0.3 m above the origin)",
+                        ["GLOBAL_POSITION_INT"], lambda m: m.relative_alt > 300, 900)
+        if abs(up.lat - ORIGIN[0]) > 1000 or abs(up.lon - ORIGIN[1]) > 1000:
+            raise Failure(f"in the air at {up.lat}, {up.lon}: not near the origin")
+        print(f"  GLOBAL_POSITION_INT in the air: {up.relative_alt} mm above the origin")
+        v.mission_state([COMPLETED, ABORTED], "over", 900)
         out, err = plant.communicate(timeout=120)
         try:
             report = json.loads(out)
@@ -722,6 +833,13 @@ def second_run(args, port):
             raise Failure(f"host-sim printed no JSON (exit {plant.returncode}): {err[-500:]}")
         if not any("restored from storage" in t["text"] for t in report["statustexts"]):
             raise Failure("the payload description was not restored from storage at the restart")
+        # The phases as the plant logged them from the vehicle's texts over the lockstep link,
+        # where none is lost.
+        names = [p["name"] for p in report["phases"]]
+        order = [names.index(n) if n in names else -1 for n in FLOWN_PHASES]
+        if -1 in order or order != sorted(order):
+            raise Failure(f"the mission's phases {names}: not {', '.join(FLOWN_PHASES)} in order")
+        print(f"  phases in order: {', '.join(FLOWN_PHASES)}")
         checks = [p for p in report["phases"] if p["name"] == "preflight-checks"]
         if not checks or abs(checks[0]["duration_s"] - CHECKS_VALUE) > 0.1:
             raise Failure(f"pre-flight checks lasted {checks}, {CHECKS_PARAM} = {CHECKS_VALUE}")
@@ -746,9 +864,9 @@ def main():
         args.storage = args.storage or tmp
         started = time.monotonic()
         try:
-            parameters = first_run(args, free_udp_port())
-            mavproxy_check(args, free_udp_port(), parameters)
-            second_run(args, free_udp_port())
+            parameters = first_run(args)
+            mavproxy_check(args, parameters)
+            second_run(args)
         except Failure as e:
             print(f"ground station: FAILED: {e}", file=sys.stderr)
             return 1

@@ -52,13 +52,6 @@ BLOCK = 90 * 512
 MAX_BEAT_GAP_S = 1.5
 
 
-def start_hil(args, port, extra=()):
-    cmd = [args.host_sim, "hil", "--scenario", args.scenario, "--qemu", args.elf,
-           "--storage", args.storage, "--gcs", f"udp:127.0.0.1:{port}", "--ground-start",
-           "--json", *extra]
-    return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-
-
 def stored_logs(storage):
     """The log files in the storage directory, by id."""
     logs = []
@@ -193,15 +186,14 @@ def mavproxy_download(args, log_path):
         print("MAVProxy is not installed (pip install MAVProxy): its check skipped")
         return
     want = open(log_path, "rb").read()
-    port = gs.free_udp_port()
     # On a busy machine MAVProxy falls behind, drops what it cannot read and asks again (up to
     # three minutes): the plant is paced to 4 times real time so that its 15 minutes of idle
     # steps outlast that.
-    plant = start_hil(args, port, ["--speed", "4"])
+    plant = gs.start_hil(args, ["--speed", "4"], listen=False)
     with tempfile.TemporaryDirectory(prefix="mavproxy-logs-") as state:
         out_file = os.path.join(state, "log0.ulg")
         proxy = subprocess.Popen(
-            [mavproxy, f"--master=udpin:127.0.0.1:{port}", "--source-system=255",
+            [mavproxy, f"--master=udpin:127.0.0.1:{plant.port}", "--source-system=255",
              f"--state-basedir={state}"],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
             text=True, bufsize=1, env={**os.environ, "PYTHONUNBUFFERED": "1"})
@@ -258,15 +250,11 @@ def with_plant(args, checks):
     """Runs `checks` on a vehicle restarted on the storage. The plant steps the idle vehicle
     for at most 15 minutes of its time: at full speed about a minute of the wall's, which the
     downloads and the checks after them come close to; paced at 8 times real time it is two."""
-    port = gs.free_udp_port()
-    plant = start_hil(args, port, ["--speed", "8"])
-    v = None
+    plant = gs.start_hil(args, ["--speed", "8"])
     try:
-        v = gs.connect(port, plant)
-        checks(v)
+        checks(gs.connect(plant))
     finally:
-        if v is not None:
-            v.conn.close()
+        plant.ground.conn.close()
         plant.kill()
         plant.communicate()
 

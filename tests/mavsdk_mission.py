@@ -27,13 +27,14 @@ import mavsdk_mission  # noqa: E402  (exits 2 without MAVSDK-Python)
 
 
 def main():
-    def checks(port, plant):
-        seen = asyncio.run(mavsdk_mission.fly(f"udpin://127.0.0.1:{port}", hold_s=1.0))
+    def checks(plant):
+        seen = asyncio.run(mavsdk_mission.fly(f"udpin://127.0.0.1:{plant.port}", hold_s=1.0))
         print(f"delivered {gs.delivered(plant):.3f} m from the target; "
               f"moved {seen['moved_while_held_m']:.3f} m while held")
 
     return gs.run_against_plant("mavsdk mission", __doc__.splitlines()[0], checks,
-                                ["--speed", "4"], (gs.Failure, mavsdk_mission.Failed))
+                                ["--speed", "4"], (gs.Failure, mavsdk_mission.Failed),
+                                listen=False)
 
 
 if __name__ == "__main__":

@@ -208,7 +208,7 @@ def ground_checks(v):
 
 
 def flight_checks(v, plant, mission):
-    v.text_matching("accepted", 60)
+    v.payload_loaded()
     deadline = time.time() + 30
     while True:
         ack = v.command(mavlink.MAV_CMD_DO_SET_MODE, 1, 4, 4)
@@ -242,15 +242,15 @@ def flight_checks(v, plant, mission):
 
 
 def main():
-    def checks(port, plant):
-        # The development dialect: pymavlink 2.4.50 has the standard modes' messages only
-        # there (MAVLink moved them to common in 2024).
-        v = gs.connect(port, plant, "development")
+    # The development dialect: pymavlink 2.4.50 has the standard modes' messages only there
+    # (MAVLink moved them to common in 2024).
+    def checks(plant):
+        v = gs.connect(plant)
         mission = ground_checks(v)
         flight_checks(v, plant, mission)
 
     return gs.run_against_plant("mission protocol", __doc__.splitlines()[0], checks,
-                                ["--speed", "4"])
+                                ["--speed", "4"], dialect="development")
 
 
 if __name__ == "__main__":

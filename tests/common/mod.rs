@@ -49,9 +49,40 @@ pub fn skip(test: &str, reason: &str) {
     let _ = writeln!(std::io::stderr(), "{test}: SKIPPED: {reason}");
 }
 
+/// With `HIL_LOAD=N` in the environment, `N` threads (0 or not a number: one per core) spin
+/// from the first firmware-in-the-loop test on, for as long as the test process runs: the HIL
+/// tests then run as on a loaded CI machine (QEMU, the plant and the ground station starved of
+/// their cores), so a test that races the vehicle fails on a developer's machine rather than
+/// now and then in CI (docs/build.md#tests-under-load).
+pub fn load_if_asked() {
+    static LOAD: std::sync::Once = std::sync::Once::new();
+    let Ok(asked) = std::env::var("HIL_LOAD") else {
+        return;
+    };
+    LOAD.call_once(|| {
+        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+        let threads = asked.trim().parse::<usize>().ok().filter(|&n| n > 0);
+        let threads = threads.unwrap_or(cores);
+        use std::io::Write;
+        let _ = writeln!(
+            std::io::stderr(),
+            "HIL_LOAD: {threads} spinning threads load the machine's {cores} cores"
+        );
+        for _ in 0..threads {
+            std::thread::spawn(|| {
+                let mut x = 0u64;
+                loop {
+                    x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+                }
+            });
+        }
+    });
+}
+
 /// The firmware's QEMU image if `test` can run (built first when it is missing or stale);
-/// otherwise [`skip`]s it.
+/// otherwise [`skip`]s it. Starts the load `HIL_LOAD` asks for ([`load_if_asked`]).
 pub fn image_or_skip(test: &str) -> Option<PathBuf> {
+    load_if_asked();
     let reason = if host_sim::hil::qemu::available() {
         match host_sim::hil::qemu::test_image(&workspace()) {
             Ok(elf) => return Some(elf),
