@@ -16,6 +16,7 @@ use core::fmt::Write as _;
 use shared::mission::params::{
     COUNT, NAME_LEN, ORIGIN, ORIGIN_LEN, ParamError, ParamValues, TABLE, check, find,
 };
+use shared::mission::drives::{BoardDrives, TooManyRobots};
 use shared::numbers::Num;
 
 use crate::geo::GeoOrigin;
@@ -92,7 +93,14 @@ pub enum Values {
 #[derive(Clone, Debug, Default)]
 pub struct ParamService {
     values: ParamValues,
+    /// The robots of the payload description in use and the board that drives them: an
+    /// `ESC_PROTOCOL` with which the board drives fewer is refused
+    /// (docs/hardware.md#robots-a-board-drives).
+    driven: Option<(usize, BoardDrives)>,
 }
+
+/// The parameter the board's rotor count depends on.
+const ESC_PROTOCOL: &str = "ESC_PROTOCOL";
 
 fn name_str(name: &[u8; NAME_LEN]) -> &str {
     let end = name.iter().position(|&b| b == 0).unwrap_or(NAME_LEN);
@@ -109,12 +117,30 @@ fn text(args: core::fmt::Arguments<'_>) -> Option<Text> {
 impl ParamService {
     /// A service whose values are `values`.
     pub fn new(values: ParamValues) -> Self {
-        Self { values }
+        Self {
+            values,
+            driven: None,
+        }
     }
 
     /// The values in force.
     pub fn values(&self) -> &ParamValues {
         &self.values
+    }
+
+    /// The payload description in use has `robots` robots and `drives` is the board: from now
+    /// on an `ESC_PROTOCOL` with which it drives fewer is refused (`robots` 0: none in use).
+    pub fn drive_robots(&mut self, robots: usize, drives: BoardDrives) {
+        self.driven = (robots > 0).then_some((robots, drives));
+    }
+
+    /// Why `value` for parameter `index` would leave robots of the payload in use undriven.
+    fn undriven(&self, index: usize, value: f32) -> Option<TooManyRobots> {
+        let (robots, drives) = self.driven?;
+        if TABLE[index].name != ESC_PROTOCOL || check(index, value).is_err() {
+            return None;
+        }
+        drives.check(robots, value as u8).err()
     }
 
     /// Answers `request`; `refuse_changes` says why no value may change now (the mission
@@ -161,21 +187,26 @@ impl ParamService {
                     return answer;
                 }
                 let old = self.values.get(i);
+                let refused = |why: &dyn core::fmt::Display| {
+                    text(format_args!(
+                        "param {} = {} refused ({why}); kept {} {}",
+                        spec.name,
+                        Num(value),
+                        Num(old.unwrap_or(f32::NAN)),
+                        spec.unit
+                    ))
+                };
+                if let Some(why) = self.undriven(i, value) {
+                    answer.text = refused(&why);
+                    return answer;
+                }
                 match self.values.set(i, value) {
                     Ok(()) => {
                         if old != Some(value) {
                             answer.changed = Some((i, value));
                         }
                     }
-                    Err(e) => {
-                        answer.text = text(format_args!(
-                            "param {} = {} refused ({e}); kept {} {}",
-                            spec.name,
-                            Num(value),
-                            Num(old.unwrap_or(f32::NAN)),
-                            spec.unit
-                        ));
-                    }
+                    Err(e) => answer.text = refused(&e),
                 }
             }
         }
@@ -319,6 +350,38 @@ mod tests {
         );
         assert_eq!(unknown.values, Values::None);
         assert!(unknown.text.is_some());
+    }
+
+    #[test]
+    fn an_esc_protocol_that_drives_fewer_robots_than_the_payload_has_is_refused() {
+        let mut s = ParamService::default();
+        let i = find(b"ESC_PROTOCOL").expect("exists");
+        let set = |value| ParamRequest::Set {
+            name: id("ESC_PROTOCOL"),
+            value,
+        };
+        // A board that drives 12 rotors with DShot600 but 8 with PWM, under a 12-robot payload.
+        let board = BoardDrives {
+            rotors: [12, 8, 12],
+            steppers: 12,
+        };
+        s.drive_robots(12, board);
+        let pwm = s.handle(&set(1.0), None);
+        assert_eq!(pwm.changed, None);
+        let t = pwm.text.expect("says why");
+        assert!(
+            t.contains("12 robots; this board drives 8 rotors (ESC_PROTOCOL PWM)"),
+            "{t}"
+        );
+        assert_eq!(s.value_message(i).map(|m| m.param_value), Some(0.0));
+        assert_eq!(s.handle(&set(2.0), None).changed, Some((i, 2.0)));
+        // With no payload in use any protocol goes.
+        s.drive_robots(0, board);
+        assert_eq!(s.handle(&set(1.0), None).changed, Some((i, 1.0)));
+        // A value out of range keeps its own reason.
+        s.drive_robots(12, board);
+        let t = s.handle(&set(7.0), None).text.expect("says why");
+        assert!(!t.contains("robots"), "{t}");
     }
 
     #[test]

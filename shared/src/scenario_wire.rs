@@ -36,6 +36,7 @@
 use heapless::{String, Vec};
 
 use crate::geometry::{MAX_VERTICES, PolygonError, Vec2};
+use crate::mission::drives::{BoardDrives, TooManyRobots};
 // The file's CRC-32 (zlib's), shared with the other files the vehicle checks.
 use crate::mission::params::metadata::crc32;
 use crate::scenario::{
@@ -152,14 +153,16 @@ impl core::fmt::Display for EncodeError {
 
 impl core::error::Error for EncodeError {}
 
-/// Why a received payload description was refused: damaged in transit, or a value that breaks
-/// a rule of [`Scenario::from_input`].
+/// Why a received payload description was refused: damaged in transit, a value that breaks
+/// a rule of [`Scenario::from_input`], or more robots than the board drives.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PayloadError {
     /// Not a well-formed file.
     Wire(WireError),
     /// Well-formed, but a value breaks a rule (names the key).
     Invalid(ScenarioError),
+    /// Valid, but the board does not drive all its robots.
+    Board(TooManyRobots),
 }
 
 impl core::fmt::Display for PayloadError {
@@ -167,6 +170,7 @@ impl core::fmt::Display for PayloadError {
         match self {
             Self::Wire(e) => write!(f, "{e}"),
             Self::Invalid(e) => write!(f, "{e}"),
+            Self::Board(e) => write!(f, "{e}"),
         }
     }
 }
@@ -238,10 +242,24 @@ impl WireScenario {
     }
 }
 
-/// Decodes `bytes` and checks the scenario: what the vehicle does with a received file.
+/// Decodes `bytes` and checks the scenario: whether a stored file is still a description.
 pub fn decode_and_check(bytes: &[u8]) -> Result<(WireScenario, Scenario), PayloadError> {
     let wire = decode(bytes).map_err(PayloadError::Wire)?;
     let scenario = wire.check().map_err(PayloadError::Invalid)?;
+    Ok((wire, scenario))
+}
+
+/// [`decode_and_check`], and the board `drives` all its robots with ESC protocol
+/// `esc_protocol`: what the vehicle does with a received file before it takes it.
+pub fn decode_for_board(
+    bytes: &[u8],
+    drives: &BoardDrives,
+    esc_protocol: u8,
+) -> Result<(WireScenario, Scenario), PayloadError> {
+    let (wire, scenario) = decode_and_check(bytes)?;
+    drives
+        .check(scenario.robots.count(), esc_protocol)
+        .map_err(PayloadError::Board)?;
     Ok((wire, scenario))
 }
 
@@ -609,6 +627,20 @@ mod tests {
         match decode_and_check(&buf[..n]) {
             Err(PayloadError::Invalid(e)) => assert_eq!(e.key, "estimation.resolution"),
             other => panic!("expected a refusal naming the key, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_description_with_more_robots_than_the_board_drives_is_refused_saying_both() {
+        let (buf, n) = encoded("rect-sim1", &rect_sim1());
+        let board = crate::mission::drives::PIXHAWK_6C;
+        assert!(decode_for_board(&buf[..n], &board, 0).is_ok(), "8 robots on 8 outputs");
+        let six = board.at_most(6);
+        match decode_for_board(&buf[..n], &six, 1) {
+            Err(PayloadError::Board(e)) => {
+                assert_eq!((e.robots, e.rotors, e.steppers, e.esc_protocol), (8, 6, 6, 1));
+            }
+            other => panic!("expected the board's refusal, got {other:?}"),
         }
     }
 

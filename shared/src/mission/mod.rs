@@ -5,6 +5,7 @@
 //! - [`config`]: the mission's tuning.
 //! - [`bringup`]: the IMU's calibrations and the motor test, on the bench.
 //! - [`hardware`]: the drivers' settings (ESCs, thrust map, steppers).
+//! - [`drives`]: how many robots a board drives, and the refusal of a payload with more.
 //! - [`machine`]: the tick side, stepped at 400 Hz.
 //! - [`jobs`]: the long computations the tick side hands off, and the planner that runs them.
 //! - [`params`]: the tunables as named parameters (the ground link serves them).
@@ -12,6 +13,7 @@
 
 pub mod bringup;
 pub mod config;
+pub mod drives;
 pub mod hardware;
 pub mod interface;
 pub mod jobs;
