@@ -390,3 +390,80 @@ fn the_ground_link_notes_list_the_parameters_the_firmware_serves() {
         "{rows} rows: {json}"
     );
 }
+
+#[test]
+fn validate_for_a_board_refuses_more_robots_than_it_drives_naming_both() {
+    let twelve = scenario_path("rect-12");
+    // The Pixhawk 6C drives eight: a twelve-robot description is refused before anyone flies.
+    let err = assert_refused(
+        &[
+            "validate",
+            "--scenario",
+            path_str(&twelve),
+            "--board",
+            "pixhawk6c",
+        ],
+        "pixhawk6c",
+    );
+    assert!(
+        err.contains(
+            "12 robots; this board drives 8 rotors (ESC_PROTOCOL DShot600) and 8 steppers"
+        ),
+        "{err}"
+    );
+    // QEMU's board and no board take it, as does the Pixhawk every paper case.
+    for board in [&["--board", "qemu"][..], &[]] {
+        let args = [&["validate", "--scenario", path_str(&twelve)][..], board].concat();
+        let (code, stdout, stderr) = run(&args);
+        assert_eq!(code, Some(0), "{args:?}: {stderr}");
+        assert!(stdout.contains("12 robots"), "{stdout}");
+    }
+    for case in [
+        "rect-sim1",
+        "rect-sim2",
+        "L-sim1",
+        "L-sim2",
+        "rect-ex1",
+        "rect-ex2",
+    ] {
+        let path = scenario_path(case);
+        let args = [
+            "validate",
+            "--scenario",
+            path_str(&path),
+            "--board",
+            "pixhawk6c",
+        ];
+        let (code, stdout, stderr) = run(&args);
+        assert_eq!(code, Some(0), "{case}: {stderr}");
+        assert!(
+            stdout.contains("pixhawk6c drives them: 8 rotors"),
+            "{stdout}"
+        );
+    }
+    // The QEMU board told to drive 0 or 17 robots: refused before anything starts.
+    for n in ["0", "17"] {
+        assert_refused(
+            &[
+                "hil",
+                "--scenario",
+                path_str(&twelve),
+                "--qemu",
+                "/no/such.elf",
+                "--max-robots",
+                n,
+            ],
+            "--max-robots",
+        );
+    }
+    // A board nobody has is a usage error naming the ones there are.
+    let (code, _, stderr) = run(&[
+        "validate",
+        "--scenario",
+        path_str(&twelve),
+        "--board",
+        "px4",
+    ]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("pixhawk6c, qemu"), "{stderr}");
+}

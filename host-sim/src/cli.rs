@@ -28,7 +28,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Read and check a scenario file; print its derived geometry (hull, rail, grid).
-    Validate(Common),
+    Validate(commands::validate::ValidateArgs),
     /// The model's lift-off thrust of one adjacent candidate pair for a given COM and mass.
     Lift(commands::lift::LiftArgs),
     /// Monte Carlo of the estimation: random (or given) truths, noisy model readings.
@@ -41,7 +41,7 @@ pub enum Command {
     Mission(commands::mission::MissionArgs),
     /// The mission with the firmware in the loop (PX4's HIL MAVLink messages, in lockstep):
     /// under QEMU, on a board over serial, or behind a TCP socket.
-    Hil(commands::hil::HilArgs),
+    Hil(Box<commands::hil::HilArgs>),
     /// The vehicle's parameters (MAVLink parameter protocol): name, unit, range, default.
     Params(commands::params::ParamsArgs),
     /// The one-page mission summary drawn from a flight log (ULog), saying what it lacks.
@@ -131,7 +131,7 @@ where
 {
     let cli = Cli::try_parse_from(args).map_err(CliError::Usage)?;
     match cli.command {
-        Command::Validate(common) => commands::validate::run(&common),
+        Command::Validate(args) => commands::validate::run(&args),
         Command::Lift(args) => commands::lift::run(&args),
         Command::Estimate(args) => commands::estimate::run(&args),
         Command::Formation(args) => commands::formation::run(&args),

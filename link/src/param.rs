@@ -13,10 +13,10 @@
 
 use core::fmt::Write as _;
 
+use shared::mission::drives::{BoardDrives, TooManyRobots};
 use shared::mission::params::{
     COUNT, NAME_LEN, ORIGIN, ORIGIN_LEN, ParamError, ParamValues, TABLE, check, find,
 };
-use shared::mission::drives::{BoardDrives, TooManyRobots};
 use shared::numbers::Num;
 
 use crate::geo::GeoOrigin;

@@ -51,6 +51,9 @@ pub enum Stream {
 
 /// How many streams there are.
 pub const STREAMS: usize = 9;
+/// Outputs in one `SERVO_OUTPUT_RAW` (its port).
+pub const SERVOS_PER_PORT: usize = 8;
+
 /// `array_id` of the rail positions' `DEBUG_FLOAT_ARRAY`.
 pub const RAIL_ARRAY_ID: u16 = 1;
 /// `name` of the rail positions' `DEBUG_FLOAT_ARRAY`.
@@ -482,11 +485,16 @@ impl VehicleSnapshot {
         }
     }
 
-    /// `SERVO_OUTPUT_RAW`: the first eight robots' ESC commands through `map` as the pulses
+    /// `SERVO_OUTPUT_RAW` of output port `port` (eight outputs a port, as PX4's MAIN 0 and
+    /// AUX 1): robots `8 * port` to `8 * port + 7`'s ESC commands through `map` as the pulses
     /// a PWM ESC would get, 1000 us (stopped) to 2000 us (full).
-    pub fn servo_output_raw(&self, map: &ThrustMap) -> SERVO_OUTPUT_RAW_DATA {
+    pub fn servo_output_raw(&self, map: &ThrustMap, port: u8) -> SERVO_OUTPUT_RAW_DATA {
         let c = self.esc_commands(map);
-        let us = |j: usize| 1000 + (c[j].clamp(0.0, 1.0) * 1000.0 + 0.5) as u16;
+        let first = SERVOS_PER_PORT * usize::from(port);
+        let us = |j: usize| {
+            let command = c.get(first + j).copied().unwrap_or(0.0);
+            1000 + (command.clamp(0.0, 1.0) * 1000.0 + 0.5) as u16
+        };
         SERVO_OUTPUT_RAW_DATA {
             time_usec: self.time_us as u32,
             servo1_raw: us(0),
@@ -497,8 +505,15 @@ impl VehicleSnapshot {
             servo6_raw: us(5),
             servo7_raw: us(6),
             servo8_raw: us(7),
-            port: 0,
+            port,
         }
+    }
+
+    /// The `SERVO_OUTPUT_RAW` ports the robots in use fill (at least one).
+    pub fn servo_ports(&self) -> u8 {
+        usize::from(self.robots)
+            .div_ceil(SERVOS_PER_PORT)
+            .clamp(1, MAX_ROBOTS / SERVOS_PER_PORT) as u8
     }
 
     /// `LOCAL_POSITION_NED`.
@@ -958,7 +973,7 @@ mod tests {
         assert!((status.actuator[0] - 0.2).abs() < 1e-5);
         assert!((status.actuator[1] - 0.4).abs() < 1e-5);
         assert_eq!(status.actuator[2], 0.0);
-        let raw = snap.servo_output_raw(&map);
+        let raw = snap.servo_output_raw(&map, 0);
         assert_eq!(
             (raw.servo1_raw, raw.servo2_raw, raw.servo3_raw),
             (1200, 1400, 1000)
@@ -971,7 +986,16 @@ mod tests {
                 .iter()
                 .all(|&a| a == 0.0)
         );
-        assert_eq!(snap.servo_output_raw(&map).servo1_raw, 1000);
+        assert_eq!(snap.servo_output_raw(&map, 0).servo1_raw, 1000);
+        // Robots past the eighth on the second port (AUX), as PX4 sends them.
+        snap.armed = true;
+        snap.robots = 12;
+        snap.thrust[9] = 0.16;
+        assert_eq!(snap.servo_ports(), 2);
+        let aux = snap.servo_output_raw(&map, 1);
+        assert_eq!((aux.port, aux.servo2_raw, aux.servo5_raw), (1, 1400, 1000));
+        snap.robots = 3;
+        assert_eq!(snap.servo_ports(), 1);
         for stream in [Stream::ServoOutputRaw, Stream::ActuatorOutputStatus] {
             assert_eq!(Stream::of_message(stream.message_id()), Some(stream));
         }

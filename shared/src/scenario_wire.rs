@@ -634,11 +634,17 @@ mod tests {
     fn a_description_with_more_robots_than_the_board_drives_is_refused_saying_both() {
         let (buf, n) = encoded("rect-sim1", &rect_sim1());
         let board = crate::mission::drives::PIXHAWK_6C;
-        assert!(decode_for_board(&buf[..n], &board, 0).is_ok(), "8 robots on 8 outputs");
+        assert!(
+            decode_for_board(&buf[..n], &board, 0).is_ok(),
+            "8 robots on 8 outputs"
+        );
         let six = board.at_most(6);
         match decode_for_board(&buf[..n], &six, 1) {
             Err(PayloadError::Board(e)) => {
-                assert_eq!((e.robots, e.rotors, e.steppers, e.esc_protocol), (8, 6, 6, 1));
+                assert_eq!(
+                    (e.robots, e.rotors, e.steppers, e.esc_protocol),
+                    (8, 6, 6, 1)
+                );
             }
             other => panic!("expected the board's refusal, got {other:?}"),
         }

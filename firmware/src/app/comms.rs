@@ -44,7 +44,9 @@ use shared::control::thrust_map::ThrustMap;
 use shared::mission::bringup::CalibrationKind;
 use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, TABLE, is_origin};
 use shared::scenario::Scenario;
-use shared::scenario_wire::{MAX_ENCODED_LEN, MAX_NAME_LEN, PayloadError, decode_and_check};
+use shared::scenario_wire::{
+    MAX_ENCODED_LEN, MAX_NAME_LEN, PayloadError, decode_and_check, decode_for_board,
+};
 use static_cell::StaticCell;
 
 /// The component metadata the FTP server serves (docs/ground-link.md#parameter-metadata),
@@ -544,6 +546,8 @@ async fn handle_param(
     } else {
         None
     };
+    let robots = usize::from(super::PAYLOAD_ROBOTS.load(Ordering::Relaxed));
+    params.drive_robots(robots, <Selected as Board>::drives());
     let answer = params.handle(&request, refuse_changes);
     if let Some((index, value)) = answer.changed {
         save_param(store, index, value).await;
@@ -1093,7 +1097,9 @@ async fn check_payload(file: &[u8], store: &mut Option<Store>) {
 /// room (`true`), else it is dropped (`false`: [`check_payload`] waits for room and comes
 /// again; the receive task is `TO_LOAD`'s only sender, so once is enough).
 fn hand_over(file: &[u8]) -> Result<bool, PayloadError> {
-    let (wire, scenario) = decode_and_check(file)?;
+    // The board must drive every robot with the ESC protocol in force.
+    let esc_protocol = MISSION_CONFIG.lock(|c| c.get().hardware.esc_protocol);
+    let (wire, scenario) = decode_for_board(file, &<Selected as Board>::drives(), esc_protocol)?;
     let received = Received {
         name: wire.name,
         scenario,
@@ -1295,7 +1301,14 @@ impl<W: Write> Sending<W> {
                     let table = MISSION_CONFIG.lock(|c| c.get().hardware.thrust_map);
                     let map = ThrustMap::new(table).unwrap_or_default();
                     if stream == Stream::ServoOutputRaw {
-                        self.encode(&vehicle.servo_output_raw(&map));
+                        // One message a port of eight outputs (robots 9 to 16 on the second);
+                        // the last is sent below, as every stream's.
+                        let last = vehicle.servo_ports() - 1;
+                        for port in 0..last {
+                            self.encode(&vehicle.servo_output_raw(&map, port));
+                            self.flush().await;
+                        }
+                        self.encode(&vehicle.servo_output_raw(&map, last));
                     } else {
                         self.encode(&vehicle.actuator_output_status(&map));
                     }

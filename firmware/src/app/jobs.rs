@@ -22,7 +22,7 @@ use super::autonomy::{Report, Severity, run_job};
 use super::comms::{Outbound, Received};
 use super::{
     JOB_REQUESTS, JOB_RESULTS, LOADING, LoadedPayload, MISSION_CONFIG, MISSION_STATE, OUTBOX,
-    RELOAD, TO_LOAD, offer_payload,
+    PAYLOAD_ROBOTS, RELOAD, TO_LOAD, offer_payload,
 };
 
 /// Why a received description was not loaded into the planner.
@@ -119,6 +119,7 @@ fn load(planner: &mut MissionPlanner, last: &mut Option<Received>) -> Option<Rep
                     grid.axis_len(2)
                 ),
             );
+            PAYLOAD_ROBOTS.store(received.scenario.robots.count() as u8, Ordering::Relaxed);
             offer_payload(LoadedPayload {
                 scenario: received.scenario.clone(),
                 config,

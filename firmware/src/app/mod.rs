@@ -56,6 +56,10 @@ pub static TO_LOAD: Channel<Cs, comms::Received, 1> = Channel::new();
 /// non-zero bit pattern, so its 1.7 KB would be a `.data` image in flash.)
 pub static PAYLOAD: Channel<Cs, LoadedPayload, 1> = Channel::new();
 
+/// Robots of the payload description last loaded into the planner (0: none yet): the
+/// parameter service refuses an `ESC_PROTOCOL` with which the board would drive fewer.
+pub static PAYLOAD_ROBOTS: core::sync::atomic::AtomicU8 = core::sync::atomic::AtomicU8::new(0);
+
 /// Hands `payload` to the autonomy in place of any the control task has not taken yet.
 pub fn offer_payload(payload: LoadedPayload) {
     PAYLOAD.clear();

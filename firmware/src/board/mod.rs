@@ -96,6 +96,10 @@ pub trait Board: 'static {
     /// operator plugs in by hand (the Pixhawk's USB), never a radio.
     fn key_setup_allowed() -> bool;
 
+    /// The robots it drives: rotors for each ESC protocol, and steppers. A payload
+    /// description with more robots is refused (docs/hardware.md#robots-a-board-drives).
+    fn drives() -> shared::mission::drives::BoardDrives;
+
     /// Whether the board keeps flight logs this run (it has a ring, and storage for them).
     fn keeps_logs() -> bool {
         Self::LOG_RING_BYTES > 0

@@ -135,6 +135,11 @@ impl ActuatorOutputs for Outputs {
 
 impl Board for Pixhawk6c {
     const NAME: &'static str = "pixhawk6c";
+
+    /// Its eight FMU outputs ([`super::escs`]) and eight steppers ([`super::steppers`]).
+    fn drives() -> shared::mission::drives::BoardDrives {
+        shared::mission::drives::PIXHAWK_6C
+    }
     const TICK_COST_NAME: &'static str = "tick_cyc";
     const BUSY_COST_NAME: &'static str = "busy_cyc";
     const TICK_COST_PER_COUNT: u32 = 1;

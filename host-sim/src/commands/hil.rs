@@ -19,9 +19,9 @@ use serde_json::json;
 
 use crate::cli::{Outcome, check_map_error, check_range, triple};
 use crate::hil::gcs::GcsBridge;
-use crate::hil::qemu::{Qemu, QemuLink};
+use crate::hil::qemu::{Guest, Qemu, QemuLink};
 use crate::hil::run::{HilOutcome, HilSetup, run as run_hil};
-use crate::hil::session::LoggedText;
+use crate::hil::session::{LoggedText, PayloadRefused};
 use crate::hil::transport::{Endpoint, Link};
 use crate::inject::{Fault, Injection};
 use crate::mission_run::MISSION_TIME_LIMIT;
@@ -57,6 +57,10 @@ pub struct HilArgs {
         requires = "qemu"
     )]
     pub qemu_link: QemuLink,
+    /// With --qemu: the board drives at most N robots (1 to 16; default all 16), as a Pixhawk
+    /// 6C drives 8: a payload description with more is refused (docs/hardware.md).
+    #[arg(long, value_name = "N", requires = "qemu")]
+    pub max_robots: Option<u32>,
     /// The firmware on a board (or QEMU's -serial pty) over this serial device.
     #[arg(long, value_name = "DEV")]
     pub serial: Option<String>,
@@ -196,6 +200,17 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
             "--inject {i}: the HIL link carries no stall report (StallGuard is the board's own driver); use mission"
         );
     }
+    let max_robots = args
+        .max_robots
+        .map(|n| {
+            let most = shared::scenario::MAX_ROBOTS as u32;
+            if (1..=most).contains(&n) {
+                Ok(n as u8)
+            } else {
+                Err(anyhow::anyhow!("--max-robots {n}: 1 to {most}"))
+            }
+        })
+        .transpose()?;
     let loaded = scenario_file::load(&args.scenario)?;
     crate::inject::check_robots(&args.inject, &loaded)?;
     let setup = HilSetup {
@@ -222,7 +237,11 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
         }
     });
     let (_qemu, mut link) = if let Some(elf) = &args.qemu {
-        let (qemu, link) = Qemu::start_with_storage(elf, args.storage.as_deref(), args.qemu_link)?;
+        let guest = Guest {
+            storage: args.storage.as_deref(),
+            max_robots,
+        };
+        let (qemu, link) = Qemu::start_guest(elf, &guest, args.qemu_link)?;
         (Some(qemu), link)
     } else if let Some(path) = &args.serial {
         let endpoint = Endpoint::Serial {
@@ -241,7 +260,16 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
     if !json {
         say!("hil on {}", loaded.name)?;
     }
-    let outcome = run_hil(&loaded, link, &setup, on_text)?;
+    let outcome = match run_hil(&loaded, link, &setup, on_text) {
+        Ok(outcome) => outcome,
+        Err(e) => {
+            // A refused description is an answer of the vehicle's: the report says it too.
+            if let (true, Some(refused)) = (json, e.downcast_ref::<PayloadRefused>()) {
+                print_json(refused_json(&loaded.name, refused))?;
+            }
+            return Err(e);
+        }
+    };
     if json {
         let mut report = to_json(&loaded.name, &outcome);
         let transport = match (&args.qemu, &args.serial) {
@@ -299,6 +327,28 @@ pub fn to_json(scenario: &str, o: &HilOutcome) -> serde_json::Value {
         // Each restart after a reboot the firmware acknowledged: the step it acknowledged at
         // and the step its new boot first answered.
         "restarts": o.log.restarts.iter().map(|r| json!({"acknowledged_at_step": r.acknowledged_at_step, "back_at_step": r.back_at_step})).collect::<Vec<_>>(),
+    })
+}
+
+/// The JSON report of a run whose payload description the firmware refused: the keys of
+/// `mission` (nothing flown), `firmware`, `ticks` (0) and `payload_refused` (the reason).
+fn refused_json(scenario: &str, refused: &PayloadRefused) -> serde_json::Value {
+    json!({
+        "scenario": scenario,
+        "firmware": refused.firmware,
+        "ticks": 0,
+        "payload_refused": refused.reason,
+        "estimate": null,
+        "measurements": 0,
+        "positions": [],
+        "delivered": false,
+        "aborted": null,
+        "lifts": [],
+        "dropped": false,
+        "final_position_error_m": null,
+        "phases": [],
+        "mission_state": MissionState::Idle.name(),
+        "statustexts": refused.texts.iter().map(|t| json!({"step": t.step, "text": t.text})).collect::<Vec<_>>(),
     })
 }
 

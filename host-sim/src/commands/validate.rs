@@ -1,16 +1,54 @@
-//! `host-sim validate`: reads and checks a scenario file, prints its derived geometry.
+//! `host-sim validate`: reads and checks a scenario file, prints its derived geometry; with
+//! `--board`, also whether that flight controller drives all its robots, as the vehicle checks
+//! a payload description before it takes it (docs/hardware.md#robots-a-board-drives).
 
-use anyhow::Result;
+use anyhow::{Result, bail};
+use clap::Args;
 use serde_json::json;
+use shared::mission::HardwareConfig;
+use shared::mission::drives::{self, BoardDrives};
 
 use crate::cli::{Common, Outcome};
 use crate::report::print_json;
 use crate::say;
 use crate::scenario_file::{self, LoadedScenario};
 
+/// Arguments of `validate`.
+#[derive(Debug, Args)]
+pub struct ValidateArgs {
+    /// The scenario file and `--json`.
+    #[command(flatten)]
+    pub common: Common,
+    /// The flight controller that is to fly it: `pixhawk6c` (8 rotors, 8 steppers) or `qemu`
+    /// (16); the ESC protocol is the default `ESC_PROTOCOL` (DShot600). Without it, the limit
+    /// of 16 robots every board's software takes.
+    #[arg(long, value_name = "BOARD", value_parser = parse_board)]
+    pub board: Option<(String, BoardDrives)>,
+}
+
+/// A board by name ([`drives::BOARDS`]).
+fn parse_board(name: &str) -> Result<(String, BoardDrives), String> {
+    drives::board(name)
+        .map(|d| (name.to_string(), d))
+        .ok_or_else(|| {
+            let known: Vec<&str> = drives::BOARDS.iter().map(|(n, _)| *n).collect();
+            format!("no board `{name}`; the boards are {}", known.join(", "))
+        })
+}
+
 /// Runs the command.
-pub fn run(common: &Common) -> Result<Outcome> {
+pub fn run(args: &ValidateArgs) -> Result<Outcome> {
+    let common = &args.common;
     let loaded = scenario_file::load(&common.scenario)?;
+    if let Some((name, board)) = &args.board {
+        let protocol = HardwareConfig::DEFAULT.esc_protocol;
+        if let Err(e) = board.check(loaded.scenario.robots.count(), protocol) {
+            bail!(
+                "{}: {name} refuses this payload description: {e}",
+                loaded.path.display()
+            );
+        }
+    }
     if common.json {
         print_json(report(&loaded))?;
         return Ok(Outcome::Done);
@@ -37,6 +75,15 @@ pub fn run(common: &Common) -> Result<Outcome> {
         s.estimation.axis_len(2),
         s.estimation.grid_points()
     )?;
+    if let Some((name, board)) = &args.board {
+        let protocol = HardwareConfig::DEFAULT.esc_protocol;
+        say!(
+            "  {name} drives them: {} rotors (ESC_PROTOCOL {}), {} steppers",
+            board.rotors(protocol),
+            drives::esc_protocol_name(protocol),
+            board.steppers
+        )?;
+    }
     Ok(Outcome::Done)
 }
 

@@ -193,23 +193,30 @@ pub fn available() -> bool {
         .is_ok_and(|s| s.success())
 }
 
+/// How the guest is started, besides its link.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Guest<'a> {
+    /// The firmware's parameter flash and flight logs kept in this directory (the file
+    /// [`PARAM_FLASH_FILE`] there outlives QEMU); `None`: in a directory of this run's own,
+    /// removed at the end, and no flight logs.
+    pub storage: Option<&'a Path>,
+    /// The board drives at most this many robots (`max-robots=N` on the guest's command
+    /// line; `None`: every robot the link carries).
+    pub max_robots: Option<u8>,
+}
+
 impl Qemu {
     /// Starts the firmware `elf` with an empty parameter flash, its MAVLink on `link`;
     /// returns QEMU and the plant's end of the link.
     pub fn start(elf: &Path, link: QemuLink) -> Result<(Self, Link)> {
-        Self::start_with_storage(elf, None, link)
+        Self::start_guest(elf, &Guest::default(), link)
     }
 
-    /// As [`Self::start`], with the parameter flash kept in `storage` (see
-    /// [`Self::launch_with_storage`]).
-    pub fn start_with_storage(
-        elf: &Path,
-        storage: Option<&Path>,
-        link: QemuLink,
-    ) -> Result<(Self, Link)> {
+    /// As [`Self::start`], the guest started as `guest` says.
+    pub fn start_guest(elf: &Path, guest: &Guest<'_>, link: QemuLink) -> Result<(Self, Link)> {
         match link {
             QemuLink::Uart => {
-                let (qemu, stream) = Self::launch_with_storage(elf, storage)?;
+                let (qemu, stream) = Self::launch_guest(elf, guest)?;
                 Ok((qemu, Link::over_tcp(stream)?))
             }
             QemuLink::Ethernet => {
@@ -227,7 +234,7 @@ impl Qemu {
                         plant,
                         qemu: qemu_addr,
                     },
-                    storage,
+                    guest,
                 )?;
                 Ok((qemu, Link::over_udp(socket, qemu_addr)?))
             }
@@ -237,16 +244,14 @@ impl Qemu {
     /// Starts the firmware `elf` with its UART connected to a TCP socket and an empty
     /// parameter flash; returns QEMU and the socket.
     pub fn launch(elf: &Path) -> Result<(Self, TcpStream)> {
-        Self::launch_with_storage(elf, None)
+        Self::launch_guest(elf, &Guest::default())
     }
 
-    /// As [`Self::launch`], with the firmware's parameter flash kept in `storage` (a
-    /// directory; the file [`PARAM_FLASH_FILE`] there outlives QEMU) or, for `None`, in a
-    /// directory of this run's own, removed at the end.
-    pub fn launch_with_storage(elf: &Path, storage: Option<&Path>) -> Result<(Self, TcpStream)> {
+    /// As [`Self::launch`], the guest started as `guest` says.
+    pub fn launch_guest(elf: &Path, guest: &Guest<'_>) -> Result<(Self, TcpStream)> {
         let listener = TcpListener::bind("127.0.0.1:0").context("cannot listen for QEMU's UART")?;
         let port = listener.local_addr()?.port();
-        let mut qemu = Self::spawn(elf, Serial::Tcp(port), storage)?;
+        let mut qemu = Self::spawn(elf, Serial::Tcp(port), guest)?;
         listener.set_nonblocking(true)?;
         let start = Instant::now();
         loop {
@@ -273,7 +278,7 @@ impl Qemu {
     /// Starts the firmware `elf` with its UART on a pseudo-terminal; returns QEMU and the
     /// terminal's path (a serial device for `--serial`).
     pub fn launch_pty(elf: &Path) -> Result<(Self, PathBuf)> {
-        let mut qemu = Self::spawn(elf, Serial::Pty, None)?;
+        let mut qemu = Self::spawn(elf, Serial::Pty, &Guest::default())?;
         let start = Instant::now();
         loop {
             let found = {
@@ -304,7 +309,8 @@ impl Qemu {
         }
     }
 
-    fn spawn(elf: &Path, serial: Serial, storage: Option<&Path>) -> Result<Self> {
+    fn spawn(elf: &Path, serial: Serial, guest: &Guest<'_>) -> Result<Self> {
+        let storage = guest.storage;
         if !elf.is_file() {
             bail!(
                 "firmware image {} not found (build it with `cargo fw-qemu`)",
@@ -350,6 +356,9 @@ impl Qemu {
         if storage.is_some() {
             words.push("flight-log=on");
         }
+        // A board that drives fewer robots than the link carries (docs/hardware.md).
+        let max_robots = guest.max_robots.map(|n| format!("max-robots={n}"));
+        words.extend(max_robots.as_deref());
         if !words.is_empty() {
             cmd.arg("-append").arg(words.join(" "));
         }

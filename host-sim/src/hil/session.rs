@@ -108,6 +108,30 @@ impl FirmwareLog {
     }
 }
 
+/// The firmware refused a payload description (`payload refused: REASON`): what a run that
+/// ends there reports.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PayloadRefused {
+    /// The board the firmware reported.
+    pub firmware: String,
+    /// Why, as the firmware said it.
+    pub reason: String,
+    /// Everything it said until then.
+    pub texts: Vec<LoggedText>,
+}
+
+impl std::fmt::Display for PayloadRefused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the firmware refused the payload description: {}",
+            self.reason
+        )
+    }
+}
+
+impl std::error::Error for PayloadRefused {}
+
 /// A session with the firmware over a [`Link`].
 pub struct Session {
     link: Link,
@@ -336,7 +360,13 @@ impl Session {
                 .find(|t| is_payload_verdict(&t.text))
             {
                 if !t.text.contains(" accepted") {
-                    bail!("the firmware refused the payload description: {}", t.text);
+                    let reason = t.text.split_once(": ").map_or(&*t.text, |(_, why)| why);
+                    return Err(PayloadRefused {
+                        firmware: self.log.board.clone().unwrap_or_default(),
+                        reason: reason.to_string(),
+                        texts: self.log.texts.clone(),
+                    }
+                    .into());
                 }
                 return Ok(t.text.clone());
             }

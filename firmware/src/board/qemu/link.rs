@@ -37,9 +37,9 @@ pub enum LinkTx {
     Ethernet(ethernet::EthernetTx),
 }
 
-/// Whether QEMU's command line for the image (`-append`, through semihosting's
-/// `SYS_GET_CMDLINE`) holds `word`.
-pub fn command_line_has(word: &[u8]) -> bool {
+/// Calls `f` with QEMU's command line for the image (`-append`, through semihosting's
+/// `SYS_GET_CMDLINE`), if it has one.
+fn with_command_line<R>(f: impl FnOnce(&[u8]) -> R) -> Option<R> {
     let mut text = [0u8; 256];
     let mut block = [text.as_mut_ptr() as usize, text.len()];
     // SAFETY: SYS_GET_CMDLINE writes at most `block[1]` bytes to `block[0]` and the length it
@@ -47,12 +47,28 @@ pub fn command_line_has(word: &[u8]) -> bool {
     let failed =
         unsafe { cortex_m_semihosting::syscall1(nr::GET_CMDLINE, block.as_mut_ptr() as usize) };
     if failed != 0 {
-        return false;
+        return None;
     }
     let len = block[1].min(text.len());
-    text[..len]
-        .split(|b| b.is_ascii_whitespace())
-        .any(|w| w == word)
+    Some(f(&text[..len]))
+}
+
+/// Whether QEMU's command line for the image holds `word`.
+pub fn command_line_has(word: &[u8]) -> bool {
+    with_command_line(|text| text.split(|b| b.is_ascii_whitespace()).any(|w| w == word))
+        .unwrap_or(false)
+}
+
+/// The decimal number after `prefix` (e.g. `max-robots=`) in a word of QEMU's command line
+/// for the image, if one is there and is a number.
+pub fn command_line_number(prefix: &[u8]) -> Option<u32> {
+    with_command_line(|text| {
+        let digits = text
+            .split(|b| b.is_ascii_whitespace())
+            .find_map(|w| w.strip_prefix(prefix))?;
+        core::str::from_utf8(digits).ok()?.parse().ok()
+    })
+    .flatten()
 }
 
 /// Brings up the link the command line picks (the UART when the Ethernet controller is

@@ -64,10 +64,16 @@ unsafe impl InterruptNumber for Irq {
     }
 }
 
-/// NVIC priorities (upper bits; smaller is more urgent): byte I/O and time first, then the
-/// control executor, then the link's, then the thread-mode wake-up.
-const PRIO_IO: u8 = 0x20;
-const PRIO_CONTROL: u8 = 0x40;
+/// NVIC priorities (upper bits; smaller is more urgent): the control executor first, then
+/// byte I/O and time, then the link's executor, then the thread-mode wake-up.
+///
+/// The control step comes before the I/O interrupts here (on the Pixhawk 6C they come first):
+/// its instruction count ([`QemuMps2An500::cycle_count`]) is then the step's alone, the same
+/// however the host's load places QEMU's timer alarms and received frames against it. An
+/// interrupt waits for the step's end, some 11 us of the guest's time; the UART's one
+/// received byte is not lost meanwhile (QEMU hands the next only once it is read).
+const PRIO_CONTROL: u8 = 0x20;
+const PRIO_IO: u8 = 0x40;
 const PRIO_LINK: u8 = 0x60;
 const PRIO_THREAD_WAKE: u8 = 0xE0;
 
@@ -85,6 +91,23 @@ static LINK_IS_ETHERNET: core::sync::atomic::AtomicBool =
 
 impl Board for QemuMps2An500 {
     const NAME: &'static str = "qemu-mps2-an500";
+
+    /// Every robot the link carries, or fewer when QEMU's command line says `max-robots=N`
+    /// (`host-sim hil --max-robots`): a board that drives fewer, whose refusals the tests fly.
+    fn drives() -> shared::mission::drives::BoardDrives {
+        use core::sync::atomic::{AtomicU8, Ordering};
+        use shared::mission::drives::QEMU_MPS2_AN500;
+        // Read once (a semihosting call); 0: not read yet.
+        static MAX_ROBOTS: AtomicU8 = AtomicU8::new(0);
+        let mut most = MAX_ROBOTS.load(Ordering::Relaxed);
+        if most == 0 {
+            let all = QEMU_MPS2_AN500.steppers;
+            most = link::command_line_number(b"max-robots=")
+                .map_or(all, |n| n.clamp(1, u32::from(all)) as u8);
+            MAX_ROBOTS.store(most, Ordering::Relaxed);
+        }
+        QEMU_MPS2_AN500.at_most(most)
+    }
     const TICK_COST_NAME: &'static str = "tick_insn";
     const BUSY_COST_NAME: &'static str = "busy_insn";
 
