@@ -904,6 +904,9 @@ impl Vehicle {
         if let Some((scenario, config)) = payload {
             self.autonomy.take_payload(scenario, config);
         }
+        if let Some(result) = job {
+            self.autonomy.deliver_job(result);
+        }
         let pending = self.commands.pop_front();
         let route = self.routes.pop_front();
         let input = TickInput {
@@ -915,7 +918,6 @@ impl Vehicle {
             },
             mocap: self.mocap.take(),
             command: pending.map(|p| p.command),
-            job,
             faults: if hil {
                 HardwareFaults::NONE
             } else {

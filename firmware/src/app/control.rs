@@ -18,7 +18,7 @@ use core::sync::atomic::Ordering;
 
 use link::hil::{Actuators, JobDeadline, VehicleClock};
 
-use super::autonomy::{Autonomy, CommandResult, JobResult, Severity, TickInput, TickOutput, Value};
+use super::autonomy::{Autonomy, CommandResult, Severity, TickInput, TickOutput, Value};
 use super::comms::{Outbound, SensorSample, StepMessages};
 use super::logger::RingEnd;
 use super::{
@@ -70,29 +70,28 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
         };
         IN_HIL.store(sample.hil, Ordering::Relaxed);
 
-        // The job's result, in exactly the step at its deadline.
+        // The job's result, in exactly the step at its deadline, handed straight from its
+        // channel to the autonomy: a result (up to the 2.8 KB flight model) never crosses a wait
+        // or a return, whose copies would cost the step over 1,000 instructions each.
         let mut held_counts: u32 = 0;
         let mut late = false;
-        let job = if deadline.is_due(step.index) {
+        if deadline.is_due(step.index) {
             deadline.taken();
-            match take_result(job_id) {
-                Some(result) => Some(result),
-                None if sample.hil => {
+            let mut delivered = deliver_result(job_id, autonomy);
+            if !delivered && sample.hil {
+                // In lockstep the step waits for it: the wait is the job's time, not the step's.
+                holds += 1;
+                while !delivered {
                     let before = <Selected as Board>::cycle_count();
-                    let result = wait_result(job_id).await;
-                    held_counts = <Selected as Board>::cycle_count().wrapping_sub(before);
-                    holds += 1;
-                    Some(result)
-                }
-                None => {
-                    // Off HIL the step cannot wait: the result, when it comes, is dropped.
-                    late = true;
-                    None
+                    JOB_RESULTS.ready_to_receive().await;
+                    held_counts = held_counts
+                        .wrapping_add(<Selected as Board>::cycle_count().wrapping_sub(before));
+                    delivered = deliver_result(job_id, autonomy);
                 }
             }
-        } else {
-            None
-        };
+            // Off HIL the step cannot wait: the result, when it comes, is dropped.
+            late = !delivered;
+        }
 
         // The step itself, in a block of its own: its payload, input and output (4 KB) are
         // gone before the wait for the link's queue below, so the task's future (a static)
@@ -122,7 +121,6 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 imu: sample.reading(),
                 mocap: MOCAP.try_take(),
                 command: pending.map(|p| p.command),
-                job,
                 faults: if sample.hil {
                     HardwareFaults::NONE
                 } else {
@@ -289,24 +287,16 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
     }
 }
 
-/// The result of job `id` if it is in; results of earlier jobs are dropped.
-fn take_result(id: u32) -> Option<JobResult> {
+/// Hands job `id`'s result to `autonomy` if it is in (results of earlier jobs are dropped);
+/// whether it was.
+fn deliver_result(id: u32, autonomy: &mut Autonomy) -> bool {
     while let Ok((got, result)) = JOB_RESULTS.try_receive() {
         if got == id {
-            return Some(result);
+            autonomy.deliver_job(result);
+            return true;
         }
     }
-    None
-}
-
-/// Waits for the result of job `id`, dropping results of earlier jobs.
-async fn wait_result(id: u32) -> JobResult {
-    loop {
-        let (got, result) = JOB_RESULTS.receive().await;
-        if got == id {
-            return result;
-        }
-    }
+    false
 }
 
 fn idle_output() -> TickOutput {
