@@ -418,14 +418,7 @@ fn validate_for_a_board_refuses_more_robots_than_it_drives_naming_both() {
         assert_eq!(code, Some(0), "{args:?}: {stderr}");
         assert!(stdout.contains("12 robots"), "{stdout}");
     }
-    for case in [
-        "rect-sim1",
-        "rect-sim2",
-        "L-sim1",
-        "L-sim2",
-        "rect-ex1",
-        "rect-ex2",
-    ] {
+    for case in common::PAPER_CASES {
         let path = scenario_path(case);
         let args = [
             "validate",

@@ -3,18 +3,9 @@
 //! `tests/broken-scenarios/` with their own test (`broken_scenarios.rs`).
 
 mod common;
-use common::{host_sim, scenario_path};
+use common::{PAPER_CASES, host_sim, scenario_path};
 
 use host_sim::scenario_file;
-
-const PAPER_CASES: [&str; 6] = [
-    "rect-sim1",
-    "rect-sim2",
-    "L-sim1",
-    "L-sim2",
-    "rect-ex1",
-    "rect-ex2",
-];
 
 #[test]
 fn every_paper_scenario_loads_with_the_grid_spec_md_defines() {

@@ -6,6 +6,16 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// The paper's cases (docs/system.md#paper-cases), by their files' names in `tests/scenarios/`.
+pub const PAPER_CASES: [&str; 6] = [
+    "rect-sim1",
+    "rect-sim2",
+    "L-sim1",
+    "L-sim2",
+    "rect-ex1",
+    "rect-ex2",
+];
+
 /// Path of `tests/scenarios/<name>.toml`.
 pub fn scenario_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
