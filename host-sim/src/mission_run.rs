@@ -203,14 +203,15 @@ pub struct Adaptation {
 
 impl Default for MissionSetup {
     /// Seed 1, an exact command-to-thrust map, the default mission, no failure, no command
-    /// but the start.
+    /// but the set-up the vehicle needs: the rails confirmed with the first tick and the start
+    /// with the second, as the firmware takes them (so `mission` and `hil` fly the same ticks).
     fn default() -> Self {
         Self {
             seed: 1,
             map_error: 1.0,
             config: MissionConfig::default(),
             mocap_lost_after_takeoff: None,
-            confirm_rails: false,
+            confirm_rails: true,
             commands: Vec::new(),
             time_limit: MISSION_TIME_LIMIT,
             load_shift: None,
