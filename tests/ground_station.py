@@ -29,7 +29,8 @@ Two runs of the firmware share one parameter flash (`--storage DIR`):
    value and a STATUSTEXT), MAVLink 2 signing set up (SETUP_SIGNING): the vehicle's frames
    signed, an unsigned start and an unsigned parameter write refused, one good value set
    signed; then the power is cut (host-sim and QEMU killed). MAVProxy (headless, when
-   installed; required with HIL_REQUIRED=1) then connects and fetches every parameter.
+   installed; required with HIL_REQUIRED=1) then connects and fetches every parameter, with
+   no FTP request left unanswered and no fence breach.
 2. restart (the plant signing its upload with the key): the key, the value and the payload
    description are still there (an unsigned write is refused; the rail positions show the
    description back in the mission; `payload description restored from storage` in the
@@ -562,12 +563,17 @@ def mavproxy_check(args, parameters):
         raise Failure(f"MAVProxy did not see the vehicle: {seen[-5:]}")
     if not any(want in line for line in seen):
         raise Failure(f"MAVProxy did not fetch the {parameters} parameters: {seen[-5:]}")
+    # Every request answered at connect: its FTP read of PX4's parameter file (a NAK, under
+    # the session MAVProxy named: it routes answers by it), and the geofence's SYS_STATUS bits.
+    for bad in ("FTP: request timed out", "fence breach"):
+        if any(bad in line for line in seen):
+            raise Failure(f"MAVProxy said {bad!r}: {[line for line in seen if bad in line][:2]}")
     refusals = [line for line in seen if "refused" in line or "denied" in line.lower()]
     repeated = {line for line in refusals if refusals.count(line) > 1}
     if repeated:
         raise Failure(f"MAVProxy's console repeats refusals: {sorted(repeated)[:3]}")
     print(f"MAVProxy (headless): vehicle 1:1 detected, {parameters} parameters fetched, "
-          f"no refusal repeated over {MAVPROXY_WATCH_S} s")
+          f"no refusal repeated over {MAVPROXY_WATCH_S} s, no FTP time-out, no fence breach")
 
 
 def start_hil(args, extra, dialect="common", listen=True):

@@ -5,9 +5,12 @@
 //! `session` u8, `opcode` u8, `size` u8, `req_opcode` u8, `burst_complete` u8, padding u8,
 //! `offset` u32 and up to [`DATA_LEN`] bytes of data. The ground side (client) sends commands;
 //! the vehicle (server) answers each with `ACK` or `NAK` (data\[0\] the error code) carrying
-//! `req_opcode` = the command's opcode and `seq_number` one more than the command's. A command
-//! repeated with the same `seq_number` (the client timed out) gets the same answer again,
-//! without being carried out twice.
+//! `req_opcode` = the command's opcode, `seq_number` one more than the command's, and the
+//! command's `session`. A session opened is the one the client named in its open command (as
+//! ArduPilot has it; QGroundControl and PX4's clients take the session from the answer, which
+//! is then the same; MAVProxy routes each answer to its operation by that session, and an
+//! answer with another one is lost to it). A command repeated with the same `seq_number` (the
+//! client timed out) gets the same answer again, without being carried out twice.
 //!
 //! [`Server`] is the vehicle's minimal server: one session, one writable file
 //! ([`PAYLOAD_PATH`]) held in RAM, and the opcodes `TerminateSession`, `ResetSessions`,
@@ -239,8 +242,8 @@ pub struct Server<const N: usize> {
     file: [u8; N],
     len: usize,
     session: Option<Session>,
-    next_session: u8,
-    last: Option<(u16, FtpMessage)>,
+    /// The last command (its [`Server::repeat_key`]) and its answer.
+    last: Option<((u16, u8, u8, u32), FtpMessage)>,
 }
 
 impl<const N: usize> Default for Server<N> {
@@ -269,7 +272,6 @@ impl<const N: usize> Server<N> {
             file: [0; N],
             len: 0,
             session: None,
-            next_session: 0,
             last: None,
         }
     }
@@ -302,16 +304,25 @@ impl<const N: usize> Server<N> {
         request: &FtpMessage,
         files: &[ReadOnlyFile],
     ) -> (FtpMessage, FileEvent) {
-        if let Some((seq, answer)) = self.last
-            && seq == request.seq
+        let key = Self::repeat_key(request);
+        if let Some((last, answer)) = self.last
+            && last == key
         {
             return (answer, FileEvent::None);
         }
         let (mut answer, event) = self.execute(request, files);
         answer.seq = request.seq.wrapping_add(1);
         answer.req_opcode = request.opcode;
-        self.last = Some((request.seq, answer));
+        answer.session = request.session;
+        self.last = Some((key, answer));
         (answer, event)
+    }
+
+    /// What a command repeated by its client (it timed out) has the same: its `seq_number`,
+    /// opcode, session and offset. Another client's command that only shares the
+    /// `seq_number` is carried out, not answered with the last answer.
+    fn repeat_key(request: &FtpMessage) -> (u16, u8, u8, u32) {
+        (request.seq, request.opcode, request.session, request.offset)
     }
 
     fn execute(&mut self, r: &FtpMessage, files: &[ReadOnlyFile]) -> (FtpMessage, FileEvent) {
@@ -351,8 +362,7 @@ impl<const N: usize> Server<N> {
                 if r.opcode == CREATE {
                     self.len = 0;
                 }
-                let id = self.next_session;
-                self.next_session = self.next_session.wrapping_add(1);
+                let id = r.session;
                 // A created file counts as written even if no data follows.
                 self.session = Some(Session {
                     id,
@@ -413,8 +423,7 @@ impl<const N: usize> Server<N> {
             };
             return nak(0, code);
         };
-        let id = self.next_session;
-        self.next_session = self.next_session.wrapping_add(1);
+        let id = r.session;
         self.session = Some(Session {
             id,
             access: Access::Read(index as u8),
@@ -728,6 +737,51 @@ mod tests {
         FtpMessage::from_payload(&answer.to_payload())
     }
 
+    #[test]
+    fn another_clients_command_with_the_same_number_is_carried_out_not_repeated() {
+        let mut server: Server<64> = Server::new();
+        let mut reset = FtpMessage::command(0, Opcode::ResetSessions);
+        reset.session = 3;
+        assert_eq!(server.handle(&reset).0.opcode, Opcode::Ack as u8);
+        // The same number from another client (another opcode and session): its own answer.
+        let mut open = FtpMessage::command(0, Opcode::OpenFileRO);
+        open.session = 210;
+        open.set_data(b"/no/such/file");
+        let answer = server.handle(&open).0;
+        assert_eq!(answer.nak_code(), Some(ErrorCode::FileNotFound));
+        assert_eq!(
+            (answer.req_opcode, answer.session),
+            (Opcode::OpenFileRO as u8, 210)
+        );
+    }
+
+    #[test]
+    fn every_answer_carries_the_session_the_client_named() {
+        // MAVProxy names a session of its own and routes each answer by it: an open of a file
+        // that is not there, and one that is, answer under that session.
+        let mut server: Server<64> = Server::new();
+        let mut missing = FtpMessage::command(0, Opcode::OpenFileRO);
+        missing.session = 210;
+        missing.set_data(b"@PARAM/param.pck");
+        let answer = server.handle_with(&missing, &FILES).0;
+        assert_eq!(answer.nak_code(), Some(ErrorCode::FileNotFound));
+        assert_eq!((answer.session, answer.seq, answer.req_opcode), (210, 1, 4));
+        let mut open = FtpMessage::command(2, Opcode::OpenFileRO);
+        open.session = 77;
+        open.set_data(FILES[0].path.as_bytes());
+        let answer = server.handle_with(&open, &FILES).0;
+        assert_eq!((answer.opcode, answer.session), (Opcode::Ack as u8, 77));
+        let read = server
+            .handle_with(&read_at(77, Opcode::ReadFile, 0, 0), &FILES)
+            .0;
+        assert_eq!((read.data(), read.session), (FILES[0].contents, 77));
+        let mut unknown = FtpMessage::command(4, Opcode::ListDirectory);
+        unknown.session = 9;
+        let answer = server.handle_with(&unknown, &FILES).0;
+        assert_eq!(answer.nak_code(), Some(ErrorCode::UnknownCommand));
+        assert_eq!(answer.session, 9);
+    }
+
     fn open_ro<const N: usize>(server: &mut Server<N>, seq: u16, path: &[u8]) -> FtpMessage {
         let mut open = FtpMessage::command(seq, Opcode::OpenFileRO);
         open.set_data(path);
@@ -850,9 +904,14 @@ mod tests {
             send(&mut server, 24, write).nak_code(),
             Some(ErrorCode::InvalidSession)
         );
-        // A second open replaces the read session (a client that lost it starts again).
-        let again = open_ro(&mut server, 26, b"/big.bin");
+        // A second open replaces the read session (a client that lost it starts again), here
+        // under another session id.
+        let mut open = FtpMessage::command(26, Opcode::OpenFileRO);
+        open.session = s.wrapping_add(1);
+        open.set_data(b"/big.bin");
+        let again = send(&mut server, 26, open);
         assert_eq!(again.opcode, Opcode::Ack as u8);
+        assert_eq!(again.session, s.wrapping_add(1));
         assert_eq!(
             send(&mut server, 28, read_at(s, Opcode::ReadFile, 0, 0)).nak_code(),
             Some(ErrorCode::InvalidSession)

@@ -23,6 +23,7 @@ use crate::msg::{
     MavVtolState, SERVO_OUTPUT_RAW_DATA, SYS_STATUS_DATA,
 };
 use shared::control::thrust_map::ThrustMap;
+use shared::scenario::{MAX_TARGET_DISTANCE, MAX_TARGET_HEIGHT};
 
 /// A message the vehicle streams.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -380,20 +381,28 @@ impl VehicleSnapshot {
     }
 
     /// `SYS_STATUS`: gyro, accelerometer, motion capture (as vision position), the motor
-    /// outputs and, once measured, the battery (its voltage; healthy above its low threshold);
-    /// health clear for a failed IMU or no recent fix. Current and remaining are not measured
+    /// outputs, the geofence and, once measured, the battery (its voltage; healthy above its
+    /// low threshold); health clear for a failed IMU, no recent fix, or the vehicle outside
+    /// the bounds it keeps its flights in. Current and remaining are not measured
     /// (-1, as MAVLink marks unknown values; so is a voltage not measured, `u16::MAX`).
     pub fn sys_status(&self) -> SYS_STATUS_DATA {
         let imu = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_GYRO
             | MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_ACCEL;
         let mocap = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_VISION_POSITION;
         let motors = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS;
-        let present = imu | mocap | motors;
-        let mut enabled = imu | mocap;
+        // The bounds every target and route item must keep (docs/ground-link.md#missions), as
+        // PX4 reports its geofence: always there and in force (MAVProxy and QGroundControl
+        // read a missing bit as a breach).
+        let fence = MavSysStatusSensor::MAV_SYS_STATUS_GEOFENCE;
+        let present = imu | mocap | motors | fence;
+        let mut enabled = imu | mocap | fence;
         if self.armed {
             enabled |= motors;
         }
         let mut health = motors;
+        if self.inside_bounds() {
+            health |= fence;
+        }
         if self.imu_healthy {
             health |= imu;
         }
@@ -419,6 +428,14 @@ impl VehicleSnapshot {
             battery_remaining: -1,
             ..Default::default()
         }
+    }
+
+    /// The vehicle is within the bounds its flights keep: [`MAX_TARGET_DISTANCE`] from the
+    /// origin and [`MAX_TARGET_HEIGHT`] above it.
+    pub fn inside_bounds(&self) -> bool {
+        let [north, east, down] = self.position;
+        north * north + east * east <= MAX_TARGET_DISTANCE * MAX_TARGET_DISTANCE
+            && -down <= MAX_TARGET_HEIGHT
     }
 
     /// `ATTITUDE_QUATERNION`.
@@ -835,6 +852,32 @@ mod tests {
         assert!(!resting.onboard_control_sensors_health.contains(vision));
         let battery = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_BATTERY;
         assert!(!resting.onboard_control_sensors_present.contains(battery));
+    }
+
+    #[test]
+    fn the_geofence_is_reported_as_px4_reports_it_and_breached_outside_the_bounds() {
+        let fence = MavSysStatusSensor::MAV_SYS_STATUS_GEOFENCE;
+        let at = |position| VehicleSnapshot {
+            position,
+            ..VehicleSnapshot::START
+        };
+        for inside in [[0.0, 0.0, 0.0], [19.0, -5.0, -9.5]] {
+            let st = at(inside).sys_status();
+            assert!(st.onboard_control_sensors_present.contains(fence));
+            assert!(st.onboard_control_sensors_enabled.contains(fence));
+            assert!(
+                st.onboard_control_sensors_health.contains(fence),
+                "{inside:?}"
+            );
+        }
+        for outside in [[15.0, 15.0, -1.0], [0.0, 0.0, -10.5]] {
+            let st = at(outside).sys_status();
+            assert!(st.onboard_control_sensors_present.contains(fence));
+            assert!(
+                !st.onboard_control_sensors_health.contains(fence),
+                "{outside:?}"
+            );
+        }
     }
 
     #[test]
