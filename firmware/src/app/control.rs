@@ -57,6 +57,12 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
     let mut had_esc_rpm = false;
     loop {
         let sample: SensorSample = SENSOR.receive().await;
+        if sample.hil {
+            // The plant waits for this step: the flight log's ring gets room for it first (a
+            // wait of the logger's, not the step's), so a HIL log is whole and the same as the
+            // simulator's however the host's load paces QEMU.
+            log_ring.wait_for_room().await;
+        }
         let start = <Selected as Board>::cycle_count();
         let step = match clock.on_sensor(sample.imu.time_us) {
             Ok(step) => step,

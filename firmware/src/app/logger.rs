@@ -156,6 +156,17 @@ impl RingEnd {
         Self { sender: None }
     }
 
+    /// Waits until the ring has room for a step, when there is a ring. Only in lockstep, where
+    /// the plant waits for the step anyway: a HIL log then loses nothing however the host's
+    /// load paces QEMU against the plant (on a board the step never waits: a full ring loses
+    /// the step's records, and a dropout says so).
+    pub async fn wait_for_room(&mut self) {
+        if let Some(sender) = self.sender() {
+            // A slot to fill (the one being filled, or a free one), not yet handed on.
+            let _ = sender.send().await;
+        }
+    }
+
     /// The ring's sender, once the logger task has handed it over.
     fn sender(&mut self) -> Option<&mut RingSender> {
         if self.sender.is_none() && LOGGING.load(Ordering::Relaxed) {
