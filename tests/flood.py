@@ -164,6 +164,13 @@ def whole_list(v, kind):
                   f"{'still comes' if heard else 'stopped too'})")
 
 
+def worst_step(report):
+    """The worst control step a run's report says, for people."""
+    worst = report.get("worst_tick") or {}
+    unit = "instructions" if worst.get("name") == "tick_insn" else "cycles"
+    return f"{worst.get('value', float('nan')):,.0f} {unit}" if worst else "not reported"
+
+
 def flooded_run(args, kind, clean):
     # Listening before the plant starts: nothing the vehicle says first is lost.
     v = gs.Vehicle(0, system=FLOODER_SYSTEM)
@@ -259,7 +266,7 @@ def flooded_run(args, kind, clean):
           f"({len(told)} texts said so, the last: {told[-1] if told else 'none'!r}); largest heartbeat gap {vehicle_gap:.2f} s on the "
           f"vehicle's clock, {wall_gap:.2f} s wall; then {len(params)} parameters in "
           f"{list_s:.1f} s ({tries} request{'s' if tries > 1 else ''}); delivered as the clean "
-          f"run")
+          f"run; worst control step {worst_step(report)} (clean run {worst_step(clean)})")
     return report
 
 
