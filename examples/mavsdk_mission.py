@@ -48,6 +48,8 @@ HOVER_S = 2.0
 # MAVLink numbers used below (MAV_CMD, MAV_FRAME).
 NAV_WAYPOINT, NAV_LOITER_TIME, NAV_LAND, NAV_TAKEOFF = 16, 19, 21, 22
 GLOBAL_RELATIVE_ALT_INT = 6
+# Longest a MAVSDK call may wait for the vehicle's answer, s.
+ANSWER_S = 60
 # Horizontal speed below which the held vehicle counts as at rest, m/s.
 SETTLED_M_S = 0.05
 EARTH_RADIUS = 6_378_137.0
@@ -86,6 +88,15 @@ async def first(stream, timeout, what, condition=lambda _: True):
         raise Failed(f"no {what} within {timeout} s")
 
 
+async def answered(call, what, timeout=ANSWER_S):
+    """What a MAVSDK call returns, within `timeout` seconds (a vehicle that went away would
+    leave it waiting)."""
+    try:
+        return await asyncio.wait_for(call, timeout)
+    except asyncio.TimeoutError:
+        raise Failed(f"no answer to {what} within {timeout} s")
+
+
 def free_tcp_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -102,7 +113,7 @@ async def fly(url, log=print, hold_s=3.0):
     q = await first(drone.telemetry.attitude_quaternion(), 60, "attitude")
     log(f"position {position.latitude_deg:.7f}, {position.longitude_deg:.7f}, "
         f"{position.relative_altitude_m:.2f} m; attitude w {q.w:.3f}")
-    origin = await drone.telemetry.get_gps_global_origin()
+    origin = await answered(drone.telemetry.get_gps_global_origin(), "the map origin")
     lat, lon = offset(origin.latitude_deg, origin.longitude_deg, *TARGET)
     mission = [
         item(0, NAV_TAKEOFF, z=HEIGHT),
@@ -110,7 +121,7 @@ async def fly(url, log=print, hold_s=3.0):
         item(2, NAV_LOITER_TIME, z=HEIGHT, param1=HOVER_S),
         item(3, NAV_LAND, lat, lon, 0.0),
     ]
-    await drone.mission_raw.upload_mission(mission)
+    await answered(drone.mission_raw.upload_mission(mission), "the mission's upload")
     log(f"mission of {len(mission)} items uploaded")
 
     reached = []
@@ -126,7 +137,7 @@ async def fly(url, log=print, hold_s=3.0):
         deadline = time.monotonic() + 60
         while True:
             try:
-                await drone.mission_raw.start_mission()
+                await answered(drone.mission_raw.start_mission(), "the mission's start")
                 break
             except Exception as e:  # MissionRawError(DENIED) while it loads
                 if time.monotonic() > deadline:
@@ -138,7 +149,7 @@ async def fly(url, log=print, hold_s=3.0):
         # On the way to the target (the take-off item reached), hold.
         await first(drone.mission_raw.mission_progress(), 120, "the take-off reached",
                     lambda p: p.current >= 1)
-        await drone.action.hold()
+        await answered(drone.action.hold(), "the hold")
         await first(drone.telemetry.flight_mode(), 10, "the Hold mode",
                     lambda m: m == FlightMode.HOLD)
         # The vehicle stops where its plan was when the hold came: held from when it has
@@ -153,7 +164,7 @@ async def fly(url, log=print, hold_s=3.0):
         log(f"held {hold_s:.0f} s: moved {moved:.3f} m")
         if moved > 0.1:
             raise Failed(f"the vehicle moved {moved:.2f} m while held")
-        await drone.mission_raw.start_mission()
+        await answered(drone.mission_raw.start_mission(), "the mission's resumption")
         await first(drone.telemetry.flight_mode(), 10, "the Mission mode again",
                     lambda m: m == FlightMode.MISSION)
         log("resumed")

@@ -85,7 +85,14 @@ fn a_hold_in_flight_stops_the_route_until_the_mission_mode_resumes_it() {
         (3.0..6.0).contains(&longer),
         "a 4 s hold made the mission {longer:.2} s longer"
     );
-    let replies: Vec<_> = autopilot.replies[1..].to_vec();
+    // The operator's, after the set-up's (the rails' confirmation and the start).
+    let replies: Vec<_> = autopilot
+        .replies
+        .iter()
+        .skip_while(|(c, _)| *c != OperatorCommand::Start)
+        .skip(1)
+        .cloned()
+        .collect();
     assert_eq!(
         replies,
         [

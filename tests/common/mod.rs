@@ -119,9 +119,17 @@ pub fn python_check(test: &str, script: &str) {
     }
 }
 
+/// Longest a Python check may run, s: a backstop only (each check's own waits are bounded
+/// and say what they waited for); past it the check and everything it started (the plant,
+/// QEMU, MAVProxy, mavsdk_server) are killed and the test fails saying so, rather than hold
+/// CI until its own limit.
+const PYTHON_CHECK_LIMIT_S: u64 = 900;
+
 /// [`python_check`] with the image `elf` already at hand and `extra` arguments for the script.
 pub fn run_python_check(test: &str, script: &str, elf: &Path, extra: &[&std::ffi::OsStr]) {
-    let output = match Command::new("python3")
+    use std::os::unix::process::CommandExt;
+    use std::process::Stdio;
+    let child = Command::new("python3")
         .arg(workspace().join(script))
         .arg("--host-sim")
         .arg(env!("CARGO_BIN_EXE_host-sim"))
@@ -130,13 +138,39 @@ pub fn run_python_check(test: &str, script: &str, elf: &Path, extra: &[&std::ffi
         .arg("--scenario")
         .arg(workspace().join("tests/scenarios/rect-ex1.toml"))
         .args(extra)
-        .output()
-    {
-        Ok(output) => output,
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        // Its own process group, so that the backstop ends whatever it started too.
+        .process_group(0)
+        .spawn();
+    let child = match child {
+        Ok(child) => child,
         Err(e) => return skip(test, &format!("python3 cannot be run ({e})")),
+    };
+    let pid = child.id() as libc::pid_t;
+    let (done, finished) = std::sync::mpsc::channel();
+    let waiter = std::thread::spawn(move || {
+        let output = child.wait_with_output();
+        let _ = done.send(());
+        output
+    });
+    let limit = std::time::Duration::from_secs(PYTHON_CHECK_LIMIT_S);
+    let timed_out = finished.recv_timeout(limit).is_err();
+    if timed_out {
+        // SAFETY: a signal to the process group this test started.
+        unsafe { libc::killpg(pid, libc::SIGKILL) };
+    }
+    let output = match waiter.join() {
+        Ok(Ok(output)) => output,
+        Ok(Err(e)) => panic!("{test}: its output could not be read ({e})"),
+        Err(_) => panic!("{test}: the thread reading its output failed"),
     };
     let stdout = String::from_utf8_lossy(&output.stdout);
     let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !timed_out,
+        "{test} still running after {PYTHON_CHECK_LIMIT_S} s, killed; it had said:\n{stdout}\n{stderr}"
+    );
     if output.status.code() == Some(PYTHON_PACKAGE_MISSING) {
         return skip(test, stderr.trim());
     }
