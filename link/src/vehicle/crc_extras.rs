@@ -1,0 +1,92 @@
+//! `CRC_EXTRA` of every message the link speaks, either direction: the table the frame parser
+//! checks each frame's CRC with ([`crate::frame::Parser`]); a message not in it is not
+//! taken. The deprecated messages older tools still send are in it.
+
+use mavlink::MessageData;
+
+use super::{SET_GPS_GLOBAL_ORIGIN_DATA, SET_MODE_DATA};
+use crate::msg::{
+    ACTUATOR_OUTPUT_STATUS_DATA, ATT_POS_MOCAP_DATA, ATTITUDE_QUATERNION_DATA,
+    AUTOPILOT_VERSION_DATA, BATTERY_STATUS_DATA, COMMAND_ACK_DATA, COMMAND_INT_DATA,
+    COMMAND_LONG_DATA, DEBUG_FLOAT_ARRAY_DATA, FILE_TRANSFER_PROTOCOL_DATA,
+    GLOBAL_POSITION_INT_DATA, GPS_GLOBAL_ORIGIN_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA,
+    HIL_SENSOR_DATA, HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, LOG_DATA_DATA, LOG_ENTRY_DATA,
+    LOG_ERASE_DATA, LOG_REQUEST_DATA_DATA, LOG_REQUEST_END_DATA, LOG_REQUEST_LIST_DATA,
+    MISSION_COUNT_DATA, MISSION_REQUEST_LIST_DATA, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA,
+    ODOMETRY_DATA, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA,
+    PARAM_VALUE_DATA, SETUP_SIGNING_DATA, STATUSTEXT_DATA, SYS_STATUS_DATA, TIMESYNC_DATA,
+};
+
+/// `MISSION_REQUEST` and `MISSION_SET_CURRENT`: deprecated, still sent by older tools
+/// (read by [`crate::mission::wire`]).
+#[allow(deprecated, non_camel_case_types)]
+type MISSION_REQUEST_DATA = crate::msg::MISSION_REQUEST_DATA;
+#[allow(deprecated, non_camel_case_types)]
+type MISSION_SET_CURRENT_DATA = crate::msg::MISSION_SET_CURRENT_DATA;
+
+macro_rules! crc_extras {
+    ($($m:ty),* $(,)?) => {
+        /// `CRC_EXTRA` of the messages this link speaks (either direction), `None` for others.
+        pub fn crc_extra(id: u32) -> Option<u8> {
+            match id {
+                $(<$m>::ID => Some(<$m>::EXTRA_CRC),)*
+                _ => None,
+            }
+        }
+    };
+}
+
+crc_extras!(
+    HEARTBEAT_DATA,
+    COMMAND_LONG_DATA,
+    COMMAND_INT_DATA,
+    COMMAND_ACK_DATA,
+    STATUSTEXT_DATA,
+    NAMED_VALUE_FLOAT_DATA,
+    NAMED_VALUE_INT_DATA,
+    HIL_SENSOR_DATA,
+    ATT_POS_MOCAP_DATA,
+    HIL_ACTUATOR_CONTROLS_DATA,
+    ACTUATOR_OUTPUT_STATUS_DATA,
+    FILE_TRANSFER_PROTOCOL_DATA,
+    AUTOPILOT_VERSION_DATA,
+    PARAM_REQUEST_LIST_DATA,
+    PARAM_REQUEST_READ_DATA,
+    PARAM_SET_DATA,
+    PARAM_VALUE_DATA,
+    MISSION_REQUEST_LIST_DATA,
+    MISSION_COUNT_DATA,
+    crate::msg::MISSION_ITEM_INT_DATA,
+    crate::msg::MISSION_REQUEST_INT_DATA,
+    MISSION_REQUEST_DATA,
+    crate::msg::MISSION_ACK_DATA,
+    crate::msg::MISSION_CLEAR_ALL_DATA,
+    MISSION_SET_CURRENT_DATA,
+    crate::msg::MISSION_CURRENT_DATA,
+    crate::msg::MISSION_ITEM_REACHED_DATA,
+    crate::msg::AVAILABLE_MODES_DATA,
+    crate::msg::CURRENT_MODE_DATA,
+    crate::msg::EXTENDED_SYS_STATE_DATA,
+    SET_MODE_DATA,
+    SYS_STATUS_DATA,
+    ATTITUDE_QUATERNION_DATA,
+    LOCAL_POSITION_NED_DATA,
+    ODOMETRY_DATA,
+    TIMESYNC_DATA,
+    SETUP_SIGNING_DATA,
+    DEBUG_FLOAT_ARRAY_DATA,
+    BATTERY_STATUS_DATA,
+    crate::msg::ESC_STATUS_DATA,
+    crate::msg::ESC_INFO_DATA,
+    LOG_REQUEST_LIST_DATA,
+    LOG_ENTRY_DATA,
+    LOG_REQUEST_DATA_DATA,
+    LOG_DATA_DATA,
+    LOG_ERASE_DATA,
+    LOG_REQUEST_END_DATA,
+    GLOBAL_POSITION_INT_DATA,
+    HOME_POSITION_DATA,
+    GPS_GLOBAL_ORIGIN_DATA,
+    SET_GPS_GLOBAL_ORIGIN_DATA,
+    crate::msg::COMPONENT_METADATA_DATA,
+);
