@@ -1,0 +1,149 @@
+//! The flight's supervision (docs/system.md#failsafes): what the ground link's and the
+//! battery's changes mean in the phase the mission is in (the monitors are
+//! [`crate::mission::supervision`]'s), and the rotors watched in flight for one that stops
+//! (the monitor is [`crate::flight::rotor_monitor`]'s).
+
+use super::Mission;
+use crate::control::navigator::NavState;
+use crate::flight::EscTelemetry;
+use crate::mission::interface::TickInput;
+use crate::mission::phases::{AbortReason, Phase, Transition};
+use crate::mission::supervision::{BatteryLevel, GcsLossAction, LinkChange, LinkResponse, Notice};
+use crate::scenario::MAX_ROBOTS;
+
+impl Mission {
+    /// What the ground link's and the battery's changes mean in this phase: a transition (on
+    /// the ground after the start: stop), the reason of a landing in place to begin (in
+    /// flight), and what to tell people.
+    pub(super) fn supervise(
+        &mut self,
+        link: Option<LinkChange>,
+        battery: Option<BatteryLevel>,
+        time_us: u64,
+        dt: f32,
+    ) -> (Option<Transition>, Option<AbortReason>, [Option<Notice>; 2]) {
+        let sup = self.config.supervision;
+        let on_ground = !matches!(
+            self.phase,
+            Phase::Idle | Phase::Disarmed | Phase::Aborted | Phase::Flying(_)
+        );
+        let cruising = self.cruising();
+        let watched = sup.gcs_action != GcsLossAction::Off;
+        let mut notices = [None, None];
+        let mut landing = None;
+        match link {
+            Some(LinkChange::Lost) if watched => {
+                if on_ground {
+                    return (Some(self.abort(AbortReason::GcsLost)), None, notices);
+                }
+                let response = match sup.gcs_action {
+                    _ if !cruising => LinkResponse::Nothing,
+                    GcsLossAction::HoldThenLand => {
+                        self.gcs_hold = Some(sup.gcs_hold_time);
+                        self.apply_hold();
+                        LinkResponse::Hold(sup.gcs_hold_time)
+                    }
+                    _ => LinkResponse::Continue,
+                };
+                notices[0] = Some(Notice::LinkLost {
+                    silent: self.link.silence(time_us).unwrap_or(0.0),
+                    response,
+                });
+            }
+            Some(LinkChange::Regained) if watched => {
+                let resumed = self.gcs_hold.take().is_some();
+                self.apply_hold();
+                notices[0] = Some(Notice::LinkRegained { resumed });
+            }
+            _ => {}
+        }
+        if let Some(left) = self.gcs_hold.as_mut() {
+            *left -= dt;
+            if *left <= 0.0 || !cruising {
+                self.gcs_hold = None;
+                self.apply_hold();
+                if cruising {
+                    landing = Some(AbortReason::GcsLost);
+                }
+            }
+        }
+        let volts = self.battery.volts().unwrap_or(0.0);
+        match battery {
+            Some(BatteryLevel::Low) if on_ground => {
+                return (
+                    Some(self.abort(AbortReason::BatteryLow { volts })),
+                    None,
+                    notices,
+                );
+            }
+            Some(BatteryLevel::Critical) if on_ground => {
+                return (
+                    Some(self.abort(AbortReason::BatteryCritical { volts })),
+                    None,
+                    notices,
+                );
+            }
+            Some(BatteryLevel::Critical) if cruising => {
+                self.gcs_hold = None;
+                self.held = false;
+                self.apply_hold();
+                landing = Some(AbortReason::BatteryCritical { volts });
+            }
+            Some(BatteryLevel::Critical) => {
+                notices[1] = Some(Notice::BatteryCritical {
+                    volts,
+                    threshold: sup.battery_critical,
+                });
+            }
+            Some(BatteryLevel::Low) => {
+                notices[1] = Some(Notice::BatteryLow {
+                    volts,
+                    threshold: sup.battery_low,
+                });
+            }
+            Some(BatteryLevel::Ok) | None => {}
+        }
+        (None, landing, notices)
+    }
+
+    /// After this tick's flight step: a rotor found stopped (or reported by its ESC) is flown
+    /// without from the next tick and the flight lands; the formation is not re-solved for
+    /// the rotors left (the adaptation gives up, a re-formation asked for is dropped).
+    /// Says which rotors were found and whether the rotors left hold a level hover.
+    pub(super) fn watch_rotors(
+        &mut self,
+        input: &TickInput,
+        nav: &NavState,
+        thrusts: &[f32; MAX_ROBOTS],
+        dt: f32,
+    ) -> Option<Notice> {
+        let flight = self.flight.as_mut()?;
+        let n = self.scenario.robots.count();
+        let reported = u16::from(input.faults.rotors_out);
+        // A frozen or noisy IMU makes a residual no rotor caused: once it is found, only the
+        // ESCs' word counts.
+        let imu_trusted =
+            !input.faults.imu && self.imu_detection.is_none() && !self.navigator.imu_dropped();
+        let found = flight.watch_rotors(
+            nav,
+            input.imu.accel,
+            &thrusts[..n],
+            EscTelemetry {
+                rpm: input.esc_rpm.as_ref().map(|r| &r[..n]),
+                stopped: reported,
+            },
+            imu_trusted,
+            dt,
+        )?;
+        if let Some(adapter) = self.adapter.as_mut() {
+            adapter.give_up();
+        }
+        self.pending = None;
+        Some(Notice::RotorsOut {
+            newly: found.newly,
+            earlier: found.out & !found.newly,
+            left: found.left,
+            holdable: found.holdable,
+        })
+    }
+}
