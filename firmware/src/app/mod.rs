@@ -11,7 +11,7 @@
 //! The tasks talk through the channels and signals below, never by shared mutable state. The
 //! autonomy sits behind one narrow seam, [`autonomy`]: the integration point of the mission.
 
-pub mod autonomy;
+pub use onboard::autonomy;
 pub mod comms;
 pub mod control;
 pub mod jobs;
