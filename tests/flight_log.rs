@@ -15,9 +15,9 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use flight_log::topics::Topic;
 use host_sim::mission_run::{self, MissionSetup};
 use host_sim::scenario_file;
-use link::flight_log::topics::Topic;
 use shared::mission::params::TABLE;
 
 /// Flies rect-ex1 with its log written to a fresh file; the mission's outcome and the log.

@@ -12,11 +12,11 @@ use common::{host_sim, scenario_path};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use flight_log::reader;
 use host_sim::log_summary::summarise;
 use host_sim::mission_figures;
 use host_sim::mission_run::{self, MissionOutcome, MissionSetup};
 use host_sim::scenario_file;
-use host_sim::ulog_read;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -204,7 +204,7 @@ fn plot_draws_the_missions_summary_from_its_log_and_the_two_agree() {
 fn the_page_from_the_log_holds_the_data_of_the_page_from_the_mission() {
     let (outcome, bytes) = flown();
     let loaded = scenario_file::load(&scenario_path("rect-ex1")).expect("loads");
-    let log = ulog_read::parse(bytes.clone()).expect("reads");
+    let log = reader::parse(bytes.clone()).expect("reads");
     let from_log = summarise(&log, "rect-ex1", Some(&loaded.scenario)).summary;
     let from_mission =
         mission_figures::summary("rect-ex1", outcome, loaded.scenario.robots.max_thrust);
@@ -376,7 +376,7 @@ fn no_cut_flipped_or_random_bytes_make_the_reader_or_the_page_panic() {
     let (_, bytes) = flown();
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let check = |b: Vec<u8>| {
-        if let Ok(log) = ulog_read::parse(b) {
+        if let Ok(log) = reader::parse(b) {
             let s = summarise(&log, "x", None);
             assert!(log.read <= log.len());
             assert!(s.summary.series.iter().all(|p| p.height.is_finite()));

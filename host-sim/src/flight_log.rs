@@ -1,13 +1,13 @@
-//! The simulator's flight log: the firmware's mission log (`link::flight_log`,
+//! The simulator's flight log: the firmware's mission log (the `flight-log` crate,
 //! docs/formats.md#flight-logs) run after each step, its ring emptied into the same keeper
 //! the firmware stores with, the keeper's storage one file. So a simulated mission's log holds
 //! what the firmware's would, and opens in the same tools.
 
 use anyhow::{Context, Result, anyhow};
-use link::flight_log::file::{LogInfo, SYS_NAME};
-use link::flight_log::keeper::{LogKeeper, LogStorage};
-use link::flight_log::session::{MissionLog, STEP_BYTES};
-use link::flight_log::stream::{LogRing, Splitter};
+use flight_log::file::{LogInfo, SYS_NAME};
+use flight_log::keeper::{LogKeeper, LogStorage};
+use flight_log::session::{MissionLog, STEP_BYTES};
+use flight_log::stream::{LogRing, Splitter};
 use shared::mission::{Mission, MissionConfig, TickInput, TickOutput};
 use std::fs::File;
 use std::io::{BufWriter, Write};

@@ -27,4 +27,3 @@ pub mod rotor_faults;
 pub mod scenario_file;
 pub mod thrust_calibration;
 pub mod trial_trace;
-pub mod ulog_read;

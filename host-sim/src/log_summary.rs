@@ -10,12 +10,12 @@
 //! payload's truth are not in the log; with the scenario they come from, the thrusts are in
 //! newtons and each lift stands beside the model's lift-off thrust.
 
-use link::flight_log::recorder::phase_from_code;
+use flight_log::reader::{Field, Stop, TopicData, Ulog};
+use flight_log::recorder::phase_from_code;
 use shared::scenario::Scenario;
 
 use crate::figures::mission_summary::{LiftBar, MissionSummary, Span, SummarySample};
 use crate::mission_run::model_lift;
-use crate::ulog_read::{Field, Stop, TopicData, Ulog};
 
 /// The name of logged phase number `code` (`phase 99` for one this firmware does not have).
 pub fn phase_name(code: u8) -> String {
@@ -457,7 +457,7 @@ mod tests {
 
     #[test]
     fn a_log_without_any_topic_says_what_each_panel_lacks() {
-        let log = crate::ulog_read::Ulog::default();
+        let log = Ulog::default();
         let s = summarise(&log, "x", None);
         for topic in ["vehicle_status", "lift", "vehicle_local_position"] {
             assert!(

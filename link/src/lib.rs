@@ -2,7 +2,6 @@
 //! what the firmware and the hardware-in-the-loop plant say to each other, and how.
 //!
 //! - [`bandwidth`]: the link's rate as a budget of bytes (what may wait goes within it).
-//! - [`flight_log`]: what the vehicle records of a mission, as ULog.
 //! - [`frame`]: MAVLink 2 framing: a byte-at-a-time parser that survives any byte stream, and
 //!   the encoder (the `mavlink` crate's message types, CRCs and payload encoding).
 //! - [`geo`]: the map origin: the local position to a latitude, longitude and altitude.
@@ -16,7 +15,8 @@
 //! - [`ftp`]: MAVLink FTP: the vehicle's minimal server (one writable file, the payload
 //!   description; read-only files, the parameter metadata) and the ground side's upload.
 //! - [`link_health`]: what the link dropped, counted for `SYS_STATUS` and told.
-//! - [`log_transfer`]: MAVLink's log protocol: the flight logs listed, downloaded, erased.
+//! - [`log_transfer`]: MAVLink's log protocol: the flight logs (the `flight-log` crate's
+//!   storage) listed, downloaded, erased.
 //! - [`mission`]: MAVLink's mission protocol: a ground station's route uploaded (checked,
 //!   atomic, with timeouts), downloaded, cleared, flown from an item; stored.
 //! - [`modes`]: the flight modes, in PX4's numbers and the standard modes protocol.
@@ -29,7 +29,6 @@
 //! - [`telemetry`]: `SYS_STATUS`, `ATTITUDE_QUATERNION`, `LOCAL_POSITION_NED`,
 //!   `GLOBAL_POSITION_INT` at set rates; `HOME_POSITION` and `GPS_GLOBAL_ORIGIN`.
 //! - [`timesync`]: `TIMESYNC`: the motion-capture computer's clock on the vehicle's.
-//! - [`ulog`]: PX4's ULog flight log format, each message's encoder.
 //! - [`vehicle`]: the vehicle's dispatch of received frames.
 //!
 //! Nothing here does I/O, allocates or panics on input: the firmware runs it under embassy on
@@ -50,7 +49,6 @@ pub mod bandwidth;
 pub mod command;
 pub mod command_wire;
 pub mod esc;
-pub mod flight_log;
 pub mod frame;
 pub mod ftp;
 pub mod geo;
@@ -69,7 +67,6 @@ pub mod status;
 pub mod store;
 pub mod telemetry;
 pub mod timesync;
-pub mod ulog;
 pub mod vehicle;
 
 /// The trait of every message type (its id, `CRC_EXTRA`, encoding).

@@ -13,8 +13,8 @@
 //! Each new request replaces the one being answered. The service does no I/O but the storage's:
 //! [`LogService::next`] says what to send next, and the caller decides how many a turn.
 
-use crate::flight_log::keeper::LogStorage;
 use crate::msg::{LOG_DATA_DATA, LOG_ENTRY_DATA, LOG_REQUEST_DATA_DATA, LOG_REQUEST_LIST_DATA};
+use flight_log::keeper::LogStorage;
 
 /// Bytes of log a `LOG_DATA` carries at most.
 pub const DATA_LEN: usize = 90;
@@ -293,7 +293,7 @@ impl LogService {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flight_log::keeper::tests::MemoryLogs;
+    use flight_log::memory::MemoryLogs;
     use std::vec::Vec;
 
     /// Logs of these sizes, each byte of log `i` at offset `o` being `(i * 7 + o) % 251`.

@@ -17,11 +17,12 @@
 
 use core::fmt::Write as _;
 
+use flight_log::recorder::step_texts;
+use flight_log::session::MissionLog;
+use flight_log::stream::{LogRing, NoRing};
+use flight_log::ulog::LogLevel;
 use heapless::Vec;
 pub use link::command::OperatorCommand;
-use link::flight_log::recorder::step_texts;
-use link::flight_log::session::MissionLog;
-use link::flight_log::stream::{LogRing, NoRing};
 pub use link::hil::{MAX_ROBOTS, MocapFix};
 use link::mission::wire::MissionProgress;
 use link::modes::FlightMode;
@@ -30,7 +31,6 @@ pub use link::status::MissionState;
 use link::status::Text;
 use link::telemetry::RouteStatus;
 use link::telemetry::VehicleSnapshot;
-use link::ulog::LogLevel;
 use shared::control::navigator::{ImuSample, MocapFix as Fix};
 use shared::control::trajectory::FlightPhase;
 use shared::control::vector::{Quat, Vec3};

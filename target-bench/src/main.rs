@@ -401,9 +401,9 @@ fn rotor_monitor_ticks(
 /// always has room), hovering with 8 rotors and the cascade's setpoints: the mean over a
 /// second of steps and the worst (the step that also writes a slower topic).
 fn flight_log_step(timer: &mut Timer, scenario: &shared::scenario::Scenario) {
-    use link::flight_log::session::MissionLog;
-    use link::flight_log::session::STEP_BYTES;
-    use link::flight_log::stream::LogRing;
+    use flight_log::session::MissionLog;
+    use flight_log::session::STEP_BYTES;
+    use flight_log::stream::LogRing;
     use shared::control::trajectory::FlightPhase;
     use shared::mission::{HardwareFaults, Mission, MissionConfig, Phase, Supervision, TickInput};
 
@@ -477,7 +477,7 @@ fn flight_log_step(timer: &mut Timer, scenario: &shared::scenario::Scenario) {
         heapless::String::try_from("phase: relax: lifted at 6.47 N per robot").unwrap_or_default();
     let (n, _) = timer.instructions(|| {
         log.step(&input, &out, &mission, 14.2, &mut ring, |sink| {
-            sink.text_str(link::ulog::LogLevel::Info, input.time_us, &said)
+            sink.text_str(flight_log::ulog::LogLevel::Info, input.time_us, &said)
         });
     });
     report("  a step with a 40-character text", n);

@@ -1,7 +1,7 @@
 //! The flight log's two ends (docs/formats.md#flight-logs): the ring of slots the control step
 //! builds the mission's log in (through [`RingEnd`]), never waiting, and the logger
 //! task in thread mode, below everything else, that reads it out into the board's log storage
-//! (`link::flight_log::keeper`: a numbered log per mission, written in blocks). What the
+//! (`flight_log::keeper`: a numbered log per mission, written in blocks). What the
 //! keeper reports (a log opened or closed, the storage failing) goes to the ground as a
 //! `STATUSTEXT`; the flight never waits on the storage.
 //!
@@ -20,10 +20,10 @@ use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::channel::{self, TrySendError};
 use embassy_sync::zerocopy_channel::{Channel, Receiver, Sender};
 use embassy_time::{Duration, Timer};
-use link::flight_log::file::{LogInfo, SYS_NAME};
-use link::flight_log::keeper::{KeeperEvent, LogKeeper, LogStorage};
-use link::flight_log::session::STEP_BYTES;
-use link::flight_log::stream::{LogRing, Splitter};
+use flight_log::file::{LogInfo, SYS_NAME};
+use flight_log::keeper::{KeeperEvent, LogKeeper, LogStorage};
+use flight_log::session::STEP_BYTES;
+use flight_log::stream::{LogRing, Splitter};
 use link::log_transfer::{LogNotice, LogReply, LogRequest, LogService};
 use link::telemetry::LogHealth;
 

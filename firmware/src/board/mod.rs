@@ -80,7 +80,7 @@ pub trait Board: 'static {
     /// other two ranges).
     const MISSION_RANGE: core::ops::Range<u32>;
     /// Where the flight logs are kept ([`NoLogStorage`] on a board without a driver for it).
-    type LogStorage: link::flight_log::keeper::LogStorage + Send + 'static;
+    type LogStorage: flight_log::keeper::LogStorage + Send + 'static;
     /// Bytes of the ring between the control step and the logger task (0: no flight log).
     /// At 400 Hz the mission's log comes at about 91 KB/s: 64 KiB hold 0.7 s of it.
     const LOG_RING_BYTES: usize;
@@ -237,7 +237,7 @@ impl core::fmt::Display for NoLogDriver {
     }
 }
 
-impl link::flight_log::keeper::LogStorage for NoLogStorage {
+impl flight_log::keeper::LogStorage for NoLogStorage {
     type Error = NoLogDriver;
     fn count(&mut self) -> Result<u16, NoLogDriver> {
         Ok(0)

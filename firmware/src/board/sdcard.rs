@@ -29,7 +29,7 @@ use embassy_futures::block_on;
 use embassy_stm32::sdmmc::sd::{Addressable, Card, CmdBlock, DataBlock, StorageDevice};
 use embassy_stm32::sdmmc::{self, Sdmmc};
 use embassy_stm32::time::Hertz;
-use link::flight_log::keeper::LogStorage;
+use flight_log::keeper::LogStorage;
 
 use super::LogRam;
 

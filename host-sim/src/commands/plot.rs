@@ -9,6 +9,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use flight_log::reader::{self, Stop, Ulog};
 use serde_json::json;
 
 use crate::cli::Outcome;
@@ -17,7 +18,6 @@ use crate::log_summary::{LogSummary, summarise};
 use crate::report::{file_stem, print_json};
 use crate::say;
 use crate::scenario_file;
-use crate::ulog_read::{self, Stop, Ulog};
 
 /// Arguments of `plot`.
 #[derive(Debug, Args)]
@@ -39,7 +39,7 @@ pub struct PlotArgs {
 
 /// Runs the command.
 pub fn run(args: &PlotArgs) -> Result<Outcome> {
-    let log = ulog_read::read_file(&args.log)?;
+    let log = reader::read_file(&args.log)?;
     if log.data_messages() == 0 {
         let why = match &log.stop {
             Some(Stop::Truncated { at }) => format!(", ending at byte {at} inside a message"),

@@ -5,7 +5,7 @@
 //! files from 0 up to the first missing one.
 
 use cortex_m_semihosting::{nr, syscall};
-use link::flight_log::keeper::LogStorage;
+use flight_log::keeper::LogStorage;
 
 /// The most logs kept (the names have three digits).
 const MAX_LOGS: u16 = 1000;

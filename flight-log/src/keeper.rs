@@ -92,7 +92,7 @@ impl LogKeeper {
                 self.failed = false;
                 let info = LogInfo { start_us, ..*info };
                 let mut result = Ok(());
-                // The definitions fit the message capacity (a link test writes them).
+                // The definitions fit the message capacity (`file`'s test writes them).
                 let _ = write_start(&info, config, &mut |bytes| {
                     if result.is_ok() {
                         result = self.put(storage, bytes);
@@ -169,64 +169,12 @@ impl LogKeeper {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
-    use crate::flight_log::stream::{LogSpace, LogWriter, Splitter};
-    use crate::flight_log::topics::Record;
+    use crate::memory::MemoryLogs;
+    use crate::stream::{LogSpace, LogWriter, Splitter};
+    use crate::topics::Record;
     use std::vec::Vec as StdVec;
-
-    /// Logs in memory; `fail_after` appends succeed, then every one fails.
-    #[derive(Default)]
-    pub(crate) struct MemoryLogs {
-        pub(crate) logs: StdVec<StdVec<u8>>,
-        pub(crate) writing: bool,
-        pub(crate) fail_after: Option<usize>,
-        pub(crate) appends: usize,
-    }
-
-    impl LogStorage for MemoryLogs {
-        type Error = &'static str;
-        fn count(&mut self) -> Result<u16, Self::Error> {
-            Ok(self.logs.len() as u16)
-        }
-        fn size(&mut self, id: u16) -> Result<u32, Self::Error> {
-            self.logs
-                .get(usize::from(id))
-                .map(|l| l.len() as u32)
-                .ok_or("no such log")
-        }
-        fn create(&mut self) -> Result<u16, Self::Error> {
-            self.logs.push(StdVec::new());
-            self.writing = true;
-            Ok(self.logs.len() as u16 - 1)
-        }
-        fn append(&mut self, bytes: &[u8]) -> Result<(), Self::Error> {
-            self.appends += 1;
-            if self.fail_after.is_some_and(|n| self.appends > n) {
-                return Err("card removed");
-            }
-            self.logs
-                .last_mut()
-                .ok_or("no log open")?
-                .extend_from_slice(bytes);
-            Ok(())
-        }
-        fn close(&mut self) -> Result<(), Self::Error> {
-            self.writing = false;
-            Ok(())
-        }
-        fn read(&mut self, id: u16, offset: u32, buf: &mut [u8]) -> Result<usize, Self::Error> {
-            let log = self.logs.get(usize::from(id)).ok_or("no such log")?;
-            let from = (offset as usize).min(log.len());
-            let n = buf.len().min(log.len() - from);
-            buf[..n].copy_from_slice(&log[from..from + n]);
-            Ok(n)
-        }
-        fn erase_all(&mut self) -> Result<(), Self::Error> {
-            self.logs.clear();
-            Ok(())
-        }
-    }
 
     /// Every byte the writer commits, with a kilobyte of room each time.
     struct Bytes(StdVec<u8>, [u8; 1024]);

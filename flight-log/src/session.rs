@@ -110,8 +110,8 @@ impl<R: LogSpace> RecordSink for Sink<'_, R> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flight_log::stream::{Piece, Splitter};
-    use crate::flight_log::topics::Topic;
+    use crate::stream::{Piece, Splitter};
+    use crate::topics::Topic;
     use shared::control::navigator::{ImuSample, MocapFix};
     use shared::control::trajectory::FlightPhase;
     use shared::control::vector::{Quat, Vec3};

@@ -13,8 +13,11 @@
 //! why. A corrupt stretch followed by a sync message is skipped and counted.
 
 use std::collections::HashMap;
+use std::format;
 use std::ops::Range;
 use std::path::Path;
+use std::string::{String, ToString};
+use std::vec::Vec;
 
 use anyhow::{Context, Result, bail};
 
@@ -576,6 +579,7 @@ impl Ulog {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::vec;
 
     fn message(kind: u8, payload: &[u8]) -> Vec<u8> {
         let mut m = (payload.len() as u16).to_le_bytes().to_vec();
