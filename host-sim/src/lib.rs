@@ -24,6 +24,7 @@ pub mod monte_carlo;
 pub mod plant;
 pub mod report;
 pub mod rotor_faults;
-pub mod scenario_file;
+/// Reading scenario files: the `scenario-toml` crate, which the fuzz targets share.
+pub use scenario_toml as scenario_file;
 pub mod thrust_calibration;
 pub mod trial_trace;

@@ -118,39 +118,25 @@ pub const MAX_JOG: f32 = 1.0;
 /// Magic number of a forced disarm (MAVLink `MAV_CMD_COMPONENT_ARM_DISARM`, param2).
 pub const FORCE_DISARM_MAGIC: f32 = 21196.0;
 
-/// What the operator asks of the mission.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum OperatorCommand {
-    /// Start the mission (the payload description must be loaded).
-    Start,
-    /// Stop the mission safely (on the ground: stop; in flight: land first).
-    Abort,
-    /// Land where the vehicle is.
-    LandNow,
-    /// Stop the rotors at once, wherever the vehicle is.
-    Kill,
-    /// Hold where the vehicle is in flight (the Hold mode).
-    Hold,
-    /// The Mission mode: start, or fly on after a hold.
-    Resume,
-    /// The robots stand at their start marks.
-    ConfirmRails,
-    /// Move a robot along the rail.
-    Jog {
-        /// The robot, from 1.
-        robot: u8,
-        /// How far, um.
-        micrometres: i32,
-    },
-    /// An IMU calibration at rest.
-    Calibrate(CalibrationKind),
-    /// Spin some rotors.
-    MotorTest(MotorTestRequest),
+/// What the operator asks of the mission: the mission's own command, which the link reads
+/// from `COMMAND_LONG`/`COMMAND_INT` ([`classify`]) and writes ([`CommandWire`]).
+pub use shared::mission::OperatorCommand;
+
+/// An operator command as MAVLink carries it: the command a ground station sends for it, and
+/// the one its acknowledgement names.
+pub trait CommandWire: Copy {
+    /// The MAVLink command it came as (for its acknowledgement).
+    fn mav_cmd(self) -> MavCmd;
+    /// The number of [`Self::mav_cmd`].
+    fn command_id(self) -> CommandId {
+        CommandId::of(self.mav_cmd())
+    }
+    /// The `COMMAND_LONG` a ground station sends for it (read back by [`classify`]).
+    fn to_command_long(self) -> COMMAND_LONG_DATA;
 }
 
-impl OperatorCommand {
-    /// The MAVLink command it came as (for its acknowledgement).
-    pub fn mav_cmd(self) -> MavCmd {
+impl CommandWire for OperatorCommand {
+    fn mav_cmd(self) -> MavCmd {
         match self {
             Self::Start => MavCmd::MAV_CMD_MISSION_START,
             Self::Abort => MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
@@ -164,53 +150,7 @@ impl OperatorCommand {
         }
     }
 
-    /// The number of [`Self::mav_cmd`].
-    pub fn command_id(self) -> CommandId {
-        CommandId::of(self.mav_cmd())
-    }
-}
-
-/// The mission's command for the link's (the same commands, one enum each side of the
-/// crate boundary).
-impl From<OperatorCommand> for shared::mission::OperatorCommand {
-    fn from(c: OperatorCommand) -> Self {
-        match c {
-            OperatorCommand::Start => Self::Start,
-            OperatorCommand::Abort => Self::Abort,
-            OperatorCommand::LandNow => Self::LandNow,
-            OperatorCommand::Kill => Self::Kill,
-            OperatorCommand::Hold => Self::Hold,
-            OperatorCommand::Resume => Self::Resume,
-            OperatorCommand::ConfirmRails => Self::ConfirmRails,
-            OperatorCommand::Jog { robot, micrometres } => Self::Jog { robot, micrometres },
-            OperatorCommand::Calibrate(kind) => Self::Calibrate(kind),
-            OperatorCommand::MotorTest(request) => Self::MotorTest(request),
-        }
-    }
-}
-
-/// The link's command for the mission's (as the HIL plant sends it).
-impl From<shared::mission::OperatorCommand> for OperatorCommand {
-    fn from(c: shared::mission::OperatorCommand) -> Self {
-        use shared::mission::OperatorCommand as Mission;
-        match c {
-            Mission::Start => Self::Start,
-            Mission::Abort => Self::Abort,
-            Mission::LandNow => Self::LandNow,
-            Mission::Kill => Self::Kill,
-            Mission::Hold => Self::Hold,
-            Mission::Resume => Self::Resume,
-            Mission::ConfirmRails => Self::ConfirmRails,
-            Mission::Jog { robot, micrometres } => Self::Jog { robot, micrometres },
-            Mission::Calibrate(kind) => Self::Calibrate(kind),
-            Mission::MotorTest(request) => Self::MotorTest(request),
-        }
-    }
-}
-
-impl OperatorCommand {
-    /// The `COMMAND_LONG` a ground station sends for it (read back by [`classify`]).
-    pub fn to_command_long(self) -> COMMAND_LONG_DATA {
+    fn to_command_long(self) -> COMMAND_LONG_DATA {
         match self {
             Self::Start => command_long(MavCmd::MAV_CMD_MISSION_START, 0.0, 0.0),
             Self::Abort => command_long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 0.0, 0.0),

@@ -120,11 +120,6 @@ fn received(sent: &COMMAND_LONG_DATA) -> CommandLong {
     CommandLong::deser(MavlinkVersion::V2, &bytes[..n]).expect("a COMMAND_LONG decodes")
 }
 
-/// The mission's command for the link's (as `firmware/src/app/autonomy.rs` converts it).
-fn to_mission(c: link::command::OperatorCommand) -> OperatorCommand {
-    c.into()
-}
-
 /// A parameter's name as `PARAM_SET` carries it; past the table, a name no parameter has.
 fn param_name(index: usize) -> [u8; NAME_LEN] {
     let name = TABLE
@@ -292,7 +287,7 @@ impl Vehicle {
                 // The queue holds one: a second command before the step is refused by the
                 // link (TEMPORARILY_REJECTED), the first kept.
                 if self.command.is_none() {
-                    self.command = Some(to_mission(c));
+                    self.command = Some(c);
                 }
             }
             other => prop_assert!(

@@ -39,8 +39,8 @@ use shared::flight::Route;
 use shared::mission::bringup::{BenchConfig, CalibrationFailure, CalibrationKind};
 use shared::mission::supervision::BatteryLevel;
 use shared::mission::{
-    CommandRefusal, EscRpm, HardwareFaults, Mission, MissionConfig, MissionPlanner,
-    OperatorCommand as Command, Phase, Reason, Supervision, TickInput as MissionInput,
+    CommandRefusal, EscRpm, HardwareFaults, Mission, MissionConfig, MissionPlanner, Phase, Reason,
+    Supervision, TickInput as MissionInput,
 };
 use shared::numbers::Fixed;
 use shared::scenario::Scenario;
@@ -283,10 +283,6 @@ fn level(severity: Severity) -> LogLevel {
     }
 }
 
-fn command(c: OperatorCommand) -> Command {
-    c.into()
-}
-
 fn fix(f: &MocapFix) -> Fix {
     let [w, x, y, z] = f.attitude;
     Fix {
@@ -455,7 +451,7 @@ impl Autonomy {
                 accel: Vec3::new(input.imu.accel[0], input.imu.accel[1], input.imu.accel[2]),
             },
             mocap: input.mocap.as_ref().map(fix),
-            command: command.map(self::command),
+            command,
             faults: input.faults,
             esc_rpm: input.esc_rpm,
             supervision: input.supervision,

@@ -7,3 +7,4 @@
 
 pub mod autonomy;
 pub mod link_service;
+pub mod payload_loading;

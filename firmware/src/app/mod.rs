@@ -30,7 +30,6 @@ use link::signing::Signing;
 use link::telemetry::{Schedule, VehicleSnapshot};
 use link::timesync::TimeSync;
 use shared::mission::MissionConfig;
-use shared::scenario::Scenario;
 use static_cell::StaticCell;
 
 use crate::board::{Parts, Selected};
@@ -120,13 +119,7 @@ pub static RELOAD: Signal<Cs, ()> = Signal::new();
 /// not yet started (and the job task then skips the reload) or the flag.
 pub static LOADING: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
 
-/// A payload description loaded into the planner, and the configuration it was loaded with.
-pub struct LoadedPayload {
-    /// The description.
-    pub scenario: Scenario,
-    /// The configuration.
-    pub config: MissionConfig,
-}
+pub use onboard::payload_loading::LoadedPayload;
 /// A job for the thread-mode task, numbered by the control task.
 pub static JOB_REQUESTS: Channel<Cs, (u32, autonomy::JobRequest), 1> = Channel::new();
 /// Results of jobs, with their numbers.

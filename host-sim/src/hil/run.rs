@@ -28,7 +28,7 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use anyhow::{Result, bail};
-use link::command::OperatorCommand as LinkCommand;
+use link::command::CommandWire;
 use link::hil::{ImuSample, MocapFix};
 use link::msg::{MavCmd, MavResult, MavSeverity};
 use link::status::{MissionState, PHASE_PREFIX};
@@ -159,7 +159,7 @@ pub struct HilOutcome {
 /// A command of the plant's own set-up that must be accepted with the step that takes it.
 #[derive(Clone, Copy, Debug)]
 struct Awaited {
-    command: LinkCommand,
+    command: OperatorCommand,
     /// Acknowledgements and texts logged before it went.
     acks_before: usize,
     texts_before: usize,
@@ -222,7 +222,7 @@ struct Firmware {
     was_running: bool,
     ground_start: bool,
     /// Commands to send, one a step (the firmware takes one a step).
-    queue: VecDeque<LinkCommand>,
+    queue: VecDeque<OperatorCommand>,
     /// The set-up command sent with this step, whose acceptance is checked after it.
     awaited: Option<Awaited>,
     confirm_rails: bool,
@@ -237,8 +237,8 @@ impl Firmware {
         let log = self.session.log();
         let cmd = awaited.command.mav_cmd();
         let what = match awaited.command {
-            LinkCommand::Start => "the mission start",
-            LinkCommand::ConfirmRails => "the rail confirmation (MAV_CMD_USER_1, param1 = 1)",
+            OperatorCommand::Start => "the mission start",
+            OperatorCommand::ConfirmRails => "the rail confirmation (MAV_CMD_USER_1, param1 = 1)",
             _ => "a command of the plant's",
         };
         match log.acks[awaited.acks_before..]
@@ -271,7 +271,7 @@ impl Firmware {
                 .upload_payload(&self.payload, PAYLOAD_TIMEOUT)?;
         }
         if self.confirm_rails {
-            self.queue.push_front(LinkCommand::ConfirmRails);
+            self.queue.push_front(OperatorCommand::ConfirmRails);
         }
         Ok(())
     }
@@ -295,11 +295,14 @@ impl Autopilot for Firmware {
         if let Some(command) = sensed.command {
             // With the ground station starting the mission, the plant's own start is not sent.
             if !(self.ground_start && command == OperatorCommand::Start) {
-                self.queue.push_back(command.into());
+                self.queue.push_back(command);
             }
         }
         if let Some(command) = self.queue.pop_front() {
-            if matches!(command, LinkCommand::Start | LinkCommand::ConfirmRails) {
+            if matches!(
+                command,
+                OperatorCommand::Start | OperatorCommand::ConfirmRails
+            ) {
                 let log = self.session.log();
                 self.awaited = Some(Awaited {
                     command,

@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Result, anyhow, bail};
 use link::MessageData;
-use link::command::{OperatorCommand, command_long};
+use link::command::{CommandWire, OperatorCommand, command_long};
 use link::frame::{Frame, Integrity};
 use link::ftp::{FtpMessage, PAYLOAD_PATH, Progress, Upload};
 use link::hil::{Actuators, ImuSample, MocapFix, Reply, ReplyMatcher};

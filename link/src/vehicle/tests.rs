@@ -2,7 +2,7 @@
 //! the plant sends it, parsed and dispatched.
 
 use super::*;
-use crate::command::{FORCE_DISARM_MAGIC, OperatorCommand, command_long};
+use crate::command::{CommandWire, FORCE_DISARM_MAGIC, OperatorCommand, command_long};
 use crate::frame::{Encoder, Parser};
 use crate::ftp::Opcode;
 use crate::msg::{MISSION_REQUEST_LIST_DATA, MavCmd};

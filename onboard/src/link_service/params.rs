@@ -1,4 +1,4 @@
-//! Parameters over the link (docs/ground-link.md#parameters): the store read at the start,
+//! Parameters over the link (docs/firmware.md#parameters): the store read at the start,
 //! reads and writes answered, a changed value stored before its `PARAM_VALUE` goes out (so a
 //! ground station that saw the answer may cut the power), a calibration's offsets set as
 //! their parameters.

@@ -1,4 +1,4 @@
-//! The payload description's upload over MAVLink FTP (docs/ground-link.md#the-payload-upload):
+//! The payload description's upload over MAVLink FTP (docs/firmware.md#payload-upload):
 //! every request answered (refused unsigned once signing is on, said once per sender in a
 //! row), a file written whole decoded and checked with the host's checks and for this board's
 //! outputs, handed to the job task and stored; the stored one is put in force at the start.

@@ -1,4 +1,4 @@
-//! The link's signing key (docs/ground-link.md#signing): restored from the store at the
+//! The link's signing key (docs/firmware.md#signing): restored from the store at the
 //! start, set or cleared by `SETUP_SIGNING` on a link that may set it, stored before it is
 //! said to be in force.
 

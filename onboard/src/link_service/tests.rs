@@ -12,7 +12,7 @@ use std::vec::Vec;
 
 use embassy_futures::block_on;
 use link::MessageData;
-use link::command::OperatorCommand as LinkCommand;
+use link::command::CommandWire;
 use link::frame::{Encoder, Frame};
 use link::mission::stored::{self, MAX_STORED_LEN};
 use link::mission::wire::WireItem;
@@ -233,7 +233,7 @@ fn every_message_request_branch_is_answered() {
 fn operator_commands_queue_for_the_control_task_until_it_is_full() {
     let mut b = Bench::new();
     for _ in 0..queue_ports::COMMANDS_CAPACITY {
-        b.send(&LinkCommand::Abort.to_command_long());
+        b.send(&OperatorCommand::Abort.to_command_long());
     }
     assert_eq!(b.io.commands.len(), queue_ports::COMMANDS_CAPACITY);
     assert!(
@@ -242,7 +242,7 @@ fn operator_commands_queue_for_the_control_task_until_it_is_full() {
             .all(|c| c.command == OperatorCommand::Abort)
     );
     assert!(b.replies().is_empty(), "the control task acknowledges them");
-    b.send(&LinkCommand::Abort.to_command_long());
+    b.send(&OperatorCommand::Abort.to_command_long());
     assert_eq!(
         acks(&b.replies()),
         [MavResult::MAV_RESULT_TEMPORARILY_REJECTED]
