@@ -1,4 +1,4 @@
-//! The host's scenario TOML loader (`host-sim/src/scenario_file.rs`, `parse`): any text as a
+//! The host's scenario TOML loader (the `scenario-toml` crate's `parse`, which the simulator uses): any text as a
 //! scenario file. Never a panic; an accepted scenario encodes as a payload description that
 //! the vehicle's decoder and checks accept too (the host and the vehicle refuse the same).
 #![no_main]
@@ -12,7 +12,7 @@ fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    let Ok(loaded) = fuzz::scenario_file::parse(text, Path::new("fuzz.toml")) else {
+    let Ok(loaded) = scenario_toml::parse(text, Path::new("fuzz.toml")) else {
         return;
     };
     let mut out = [0u8; MAX_ENCODED_LEN];

@@ -1,6 +1,6 @@
 //! A flash in RAM for the parameter store, shaped as the Pixhawk 6C's FRAM (`firmware`'s
 //! `board::fram`: 32 KiB, 1 KiB pages, 4-byte writes, parameters in the first 8 pages and the
-//! payload description's two slots in the next 2), with NOR semantics: a write can only
+//! payload description's two slots in the next 2, the stored mission's two in the 2 after), with NOR semantics: a write can only
 //! clear bits (`sequential-storage` never needs more), an erase sets a page to `0xFF`.
 
 use embedded_storage_async::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
@@ -13,6 +13,8 @@ pub const PAGE: usize = 1024;
 pub const PARAM_RANGE: core::ops::Range<u32> = 0..(8 * PAGE) as u32;
 /// The payload description's range (the Pixhawk 6C's `PAYLOAD_RANGE`).
 pub const PAYLOAD_RANGE: core::ops::Range<u32> = (8 * PAGE) as u32..(10 * PAGE) as u32;
+/// The stored mission's range (the Pixhawk 6C's `MISSION_RANGE`).
+pub const MISSION_RANGE: core::ops::Range<u32> = (10 * PAGE) as u32..(12 * PAGE) as u32;
 
 /// The flash: its bytes, blank (`0xFF`) at first.
 #[derive(Clone, Debug, PartialEq, Eq)]

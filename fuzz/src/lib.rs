@@ -1,25 +1,20 @@
 //! What the fuzz targets (`fuzz_targets/`) run, and the seed corpora they start from. See
 //! `fuzz/README.md`.
 //!
-//! Two source files of crates that do not build here are compiled in as they are, so the
-//! targets run exactly their code:
-//! - `firmware/src/app/autonomy.rs` ([`autonomy`]): the firmware's seam to the mission (the
-//!   firmware crate itself only builds for the Cortex-M7: embassy, cortex-m);
-//! - `host-sim/src/scenario_file.rs` ([`scenario_file`]): the host's scenario TOML loader
-//!   (host-sim itself pulls rapier3d and plotters, many minutes to build instrumented).
-//!
-//! Both use only `link`, `shared`, `heapless`, and `std`, `anyhow`, `serde`, `toml`; should
-//! either start using more, this crate needs it too (CI's `.ci/fuzz` builds it).
+//! The targets call the code the vehicle and the simulator run, from their crates: the
+//! firmware's receive service and autonomy seam (`onboard`), the payload description's
+//! decoder and checks (`shared`), the host's scenario loader (`scenario-toml`). What is this
+//! crate's own: the harness that plays the firmware's other tasks ([`vehicle`], [`tasks`]), a
+//! ground side that reads back what the vehicle sends ([`ground`]), a flash in RAM
+//! ([`flash`]), and the seeds.
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-#[path = "../../firmware/src/app/autonomy.rs"]
-pub mod autonomy;
 pub mod flash;
+pub mod ground;
 pub mod options;
-#[path = "../../host-sim/src/scenario_file.rs"]
-pub mod scenario_file;
 pub mod seeds;
+pub mod tasks;
 pub mod vehicle;
 
 /// A gyro reading of a vehicle at rest at step `i`: noise of about 0.6 mrad/s, as a real

@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use link::MessageData;
-use link::command::{MotorTestRequest, OperatorCommand, command_long};
+use link::command::{CommandWire, MotorTestRequest, OperatorCommand, command_long};
 use link::frame::{Encoder, Frame};
 use link::ftp::{FtpMessage, Opcode, PAYLOAD_PATH, Progress, Server, Upload};
 use link::hil::{ImuSample, MocapFix};
@@ -48,7 +48,7 @@ pub const SCENARIOS: [(&str, &str); 6] = [
 /// A scenario file read by the host's loader and encoded as the vehicle receives it.
 pub fn encoded_scenario(toml: &str) -> Vec<u8> {
     let loaded =
-        crate::scenario_file::parse(toml, Path::new("seed.toml")).expect("the test scenarios load");
+        scenario_toml::parse(toml, Path::new("seed.toml")).expect("the test scenarios load");
     let mut out = vec![0u8; MAX_ENCODED_LEN];
     let len = encode_scenario(&loaded.name, &loaded.scenario, &mut out).expect("it encodes");
     out.truncate(len);

@@ -1,25 +1,23 @@
-//! The flight controller's MAVLink input handling as one synchronous host program: what the
-//! firmware's link task does with each byte (`firmware/src/app/comms.rs`, `receive` and
-//! `handle`), with its control task (`control.rs`: one step of the autonomy per IMU sample,
-//! the job's result at its deadline) and its job task (`jobs.rs`: the planner loaded with
-//! each accepted payload description, and again when a parameter changes) behind it.
+//! The flight controller's MAVLink input handling as one synchronous host program: the
+//! firmware's own receive service (`onboard::link_service::LinkService`, which the firmware's
+//! link task calls) over [`QueuePorts`], with the firmware's control task (one step of
+//! `onboard::autonomy` per IMU sample, the job's result at its deadline) and job task
+//! (`onboard::payload_loading` and the planner) played behind it ([`crate::tasks`]), and a
+//! ground side that reads back every frame the vehicle sends ([`crate::ground`]).
 //!
-//! The firmware's tasks are embassy tasks that only build for the Cortex-M7, so they are not
-//! called here: this module calls the same `link` and `shared` functions they call, in the
-//! same order, and the firmware's own autonomy seam ([`crate::autonomy`], compiled from
-//! `firmware/src/app/autonomy.rs` as it is). Channels become queues of the same capacity
-//! and each task's turn comes in the order the firmware gives it (a frame's handling, then
-//! the control steps it causes, a job run at once and taken at its deadline, as in lockstep
-//! HIL). The parameters' store runs on a [`MemFlash`] shaped as the Pixhawk 6C's FRAM.
-//!
-//! Every frame the vehicle sends goes through a ground-side parser (and, once signing is on,
-//! the ground's signature check), so the send side's encoding is checked as well.
+//! A branch added to the service is fuzzed as it is: this harness calls the service, not a
+//! copy of it. What is its own: the order the firmware's tasks take their turns (a frame's
+//! handling, then the control steps it causes, a job run at once and taken at its deadline,
+//! as in lockstep HIL), the board's IMU driver, and the invariants.
 //!
 //! [`Vehicle`] panics, with the reason, when one of these invariants breaks:
 //! - a frame the vehicle ignores, or one it does not trust (signing on, unsigned or bad
-//!   signature), changes nothing: parameters, the FTP file, queued commands;
+//!   signature), changes nothing: parameters, the FTP file, queued commands, the telemetry
+//!   rates, the signing state;
 //! - a refused parameter write leaves the value in force; every value in force is one the
-//!   table accepts; no value changes while the mission runs;
+//!   table accepts; no value changes while the mission runs, nor a mission but by a
+//!   set-current;
+//! - the harness's parser and the service's find the same frames;
 //! - every command taken is acknowledged;
 //! - the rotors are armed only in the phases that spin them (lift, arming, flight), with
 //!   thrust only in lift and flight, every thrust a finite fraction in `[0, 1]`, every rail
@@ -29,46 +27,30 @@
 //! - after the input, a restart finds in the store exactly the parameters, the signing key
 //!   and the payload description in force (unless the store reported an error).
 
-use std::collections::VecDeque;
-
-use crate::autonomy::RouteChange;
 use embassy_futures::block_on;
-use link::MessageData;
-use link::command::{Request, ack};
-use link::command_wire::CommandId;
 use link::frame::{Encoder, Frame, Integrity, Parser};
-use link::ftp::{FileEvent, FtpMessage, Server};
-use link::geo::{GeoOrigin, OriginError};
-use link::hil::{ImuSample, JobDeadline, MAX_ROBOTS, MocapFix, VehicleClock};
-use link::log_transfer::LogRequest;
-use link::mission::{Context as MissionContext, MissionEvent, MissionService, Outcome};
-use link::msg::{
-    AUTOPILOT_VERSION_DATA, GPS_GLOBAL_ORIGIN_DATA, HOME_POSITION_DATA, MavResult, MavSeverity,
-    TIMESYNC_DATA,
-};
-use link::param::{ParamService, Values, value_message};
-use link::param_lists::ParamLists;
+use link::ftp::{FtpMessage, Opcode};
+use link::hil::{JobDeadline, VehicleClock};
+use link::mission::wire::MissionMessage;
 use link::signing::{KEY_LEN, Signing, Verdict};
-use link::status::{MissionState, PHASE_PREFIX, chunks, heartbeat, named_float, named_int};
-use link::store::ParamStore;
-use link::telemetry::{Home, Schedule, gps_global_origin};
-use link::timesync::{Received as SyncReceived, TimeSync};
-use link::vehicle::{Inbound, Sender, crc_extra, dispatch};
-use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, check, is_origin};
-use shared::mission::{HardwareFaults, MissionConfig, MissionPlanner, Supervision};
-use shared::scenario::Scenario;
+use link::status::MissionState;
+use link::store::{ParamStore, StoreError};
+use link::vehicle::{Inbound, crc_extra, dispatch};
+use onboard::autonomy::{Autonomy, JobResult, Report, Severity};
+use onboard::link_service::{LINK_ID, LinkService, Outbound, QueuePorts};
+use onboard::payload_loading::{LoadedPayload, PayloadLoader};
+use shared::mission::MissionPlanner;
+use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, check};
 use shared::scenario_wire::{MAX_ENCODED_LEN, decode_and_check};
 
-use crate::autonomy::{
-    Autonomy, CommandResult, ImuReading, JobResult, OperatorCommand, Report, Severity, TickInput,
-    Value,
-};
-use crate::flash::{MemFlash, PARAM_RANGE, PAYLOAD_RANGE};
+use crate::flash::{MISSION_RANGE, MemFlash, PARAM_RANGE, PAYLOAD_RANGE};
+
+pub use crate::options::Options;
 
 /// The payload description's checksum (`shared::scenario_wire`'s).
 const CRC32: crc::Crc<u32, crc::NoTable> =
     crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
-/// Largest payload description file the vehicle takes (the firmware's `FILE_CAPACITY`).
+/// Largest payload description file the vehicle takes.
 pub const FILE_CAPACITY: usize = MAX_ENCODED_LEN;
 /// The signing key a seed's "key stored" option puts in the store before the start.
 pub const SEED_KEY: [u8; KEY_LEN] = [7; KEY_LEN];
@@ -81,107 +63,44 @@ pub const TICK_US: u64 = 2_500;
 /// Most steps the IMU driver takes in one run (50 s of the mission): bounds the time of one
 /// fuzz input (about 0.1 s) without a plant to fly, the mission never gets further.
 pub const MAX_DRIVER_STEPS: u64 = 20_000;
-/// Oldest a motion-capture fix may be for its own stamp to be used (comms.rs), us.
-const MAX_FIX_AGE_US: u64 = 150_000;
-/// The link id the vehicle signs with.
-const LINK_ID: u8 = 0;
-/// Capacity of the firmware's `COMMANDS` channel.
-const COMMANDS_CAPACITY: usize = 4;
-/// Phases whose rotors may be armed (by their names in `phase: NAME: reason` texts).
-const ARMED_PHASES: [&str; 7] = [
-    "lift",
-    "arming",
-    "takeoff",
-    "trajectory",
-    "hover",
-    "landing",
-    "touchdown",
-];
-/// Phases whose rotors may push (armed, not idling on the ground before take-off).
-const THRUST_PHASES: [&str; 6] = [
-    "lift",
-    "takeoff",
-    "trajectory",
-    "hover",
-    "landing",
-    "touchdown",
-];
-/// Phases of a mission that is not running (idle, or over).
-const STOPPED_PHASES: [&str; 3] = ["idle", "disarmed", "aborted"];
 
-pub use crate::options::Options;
-
-/// An operator command waiting for the control task (comms.rs `PendingCommand`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct PendingCommand {
-    command: OperatorCommand,
-    mav_cmd: CommandId,
-}
-
-/// The vehicle: the link task's state, the control task's and the job task's.
+/// The vehicle: the receive service and what it hands to, the control task's state and the
+/// job task's, and the ground side.
 pub struct Vehicle {
-    options: Options,
-    /// The board's clock (embassy's `Instant`), us.
-    now_us: u64,
-    next_beat_us: u64,
-    frames: u32,
-    driver_steps: u64,
-    parser: Parser,
-    signing: Signing,
-    timesync: TimeSync,
-    telemetry: Schedule,
-    ftp: Box<Server<FILE_CAPACITY>>,
-    mission: Box<MissionService>,
-    /// Route changes for the control task (`ROUTE`, capacity 2).
-    routes: VecDeque<RouteChange>,
-    params: ParamService,
-    /// The parameter lists in flight.
-    lists: ParamLists,
-    store: Option<ParamStore<MemFlash>>,
-    /// `MISSION_CONFIG`.
-    config: MissionConfig,
-    /// `CONFIG_CHANGED`.
-    config_changed: bool,
+    pub(crate) options: Options,
+    pub(crate) service: Box<LinkService<MemFlash>>,
+    pub(crate) io: QueuePorts,
+    /// The harness's own parser, beside the service's: which frame comes, to check the
+    /// invariants around its handling.
+    mirror: Parser,
+    pub(crate) next_beat_us: u64,
+    pub(crate) frames: u32,
+    pub(crate) driver_steps: u64,
     /// A store operation failed: a restart may legitimately find older values.
     store_failed: bool,
     /// What a restart must find in the store.
     stored_key: Option<[u8; KEY_LEN]>,
     stored_payload: Option<Vec<u8>>,
-    /// `COMMANDS`.
-    commands: VecDeque<PendingCommand>,
-    /// `MOCAP`.
-    mocap: Option<MocapFix>,
-    /// `GCS_HEARTBEAT`: a ground station's heartbeat since the last control step.
-    gcs_heartbeat: bool,
-    /// `LINK_BATTERY_MV`: the plant's pack, mV (`u32::MAX`: none heard).
-    link_battery_mv: u32,
-    /// `LINK_ESC_RPM`: the plant's rotor RPM.
-    link_esc_rpm: link::esc::EscRpmInbox,
-    /// comms.rs `FTP_REFUSED`: the sender whose FTP was last refused (0: none).
-    ftp_refused: u32,
+    /// The job task: the planner and the last description accepted.
+    pub(crate) planner: Box<MissionPlanner>,
+    pub(crate) loader: Box<PayloadLoader>,
     /// `PAYLOAD`: the newest description loaded into the planner, for the control task.
-    payload: Option<(Scenario, MissionConfig)>,
-    /// The job task's last accepted description.
-    last: Option<Scenario>,
-    autonomy: Box<Autonomy>,
-    planner: Box<MissionPlanner>,
-    clock: VehicleClock,
-    deadline: JobDeadline,
-    job_id: u32,
-    job_result: Option<(u32, JobResult)>,
-    /// `MISSION_STATE`, `ARMED`, `IN_HIL`.
-    mission_state: MissionState,
-    armed: bool,
-    in_hil: bool,
+    pub(crate) payload: Option<LoadedPayload>,
+    /// The control task.
+    pub(crate) autonomy: Box<Autonomy>,
+    pub(crate) clock: VehicleClock,
+    pub(crate) deadline: JobDeadline,
+    pub(crate) job_id: u32,
+    pub(crate) job_result: Option<(u32, JobResult)>,
     /// The phase as the vehicle last reported it (`phase: NAME: reason`).
-    phase: String,
+    pub(crate) phase: String,
     /// The send side.
-    encoder: Encoder,
-    frame: Frame,
-    text_id: u16,
-    ground: Parser,
-    ground_signing: Signing,
-    /// Frames sent, and control steps taken (for the seed generator's checks).
+    pub(crate) encoder: Encoder,
+    pub(crate) frame: Frame,
+    pub(crate) text_id: u16,
+    pub(crate) ground: Parser,
+    pub(crate) ground_signing: Signing,
+    /// Frames sent (for the seed generator's checks).
     pub sent: u32,
     /// Control steps taken.
     pub steps: u64,
@@ -197,8 +116,8 @@ pub fn stored_payload() -> &'static [u8] {
 }
 
 impl Vehicle {
-    /// The vehicle after its start with `options`: the store opened and read, the signing key
-    /// and payload description restored (comms.rs `receive` before its loop).
+    /// The vehicle after its start with `options`: the store opened and read, the signing key,
+    /// payload description and mission restored (the firmware's receive task before its loop).
     pub fn start(options: Options) -> Self {
         let mut flash = MemFlash::new();
         if options.payload_stored || options.key_stored {
@@ -211,44 +130,27 @@ impl Vehicle {
             }
             flash = store.into_flash().expect("the flash back");
         }
+        let mut io = QueuePorts::new();
+        io.key_setup_allowed = options.key_setup_allowed;
         let mut v = Self {
             options,
-            now_us: 0,
+            service: Box::new(LinkService::new(&[])),
+            io,
+            mirror: Parser::new(crc_extra),
             next_beat_us: 0,
             frames: 0,
             driver_steps: 0,
-            parser: Parser::new(crc_extra),
-            signing: Signing::new(),
-            timesync: TimeSync::new(),
-            telemetry: Schedule::new(),
-            ftp: Box::new(Server::new()),
-            mission: Box::new(MissionService::new()),
-            routes: VecDeque::with_capacity(2),
-            params: ParamService::new(ParamValues::DEFAULT),
-            lists: ParamLists::new(),
-            store: None,
-            config: MissionConfig::DEFAULT,
-            config_changed: false,
             store_failed: false,
             stored_key: None,
             stored_payload: None,
-            commands: VecDeque::with_capacity(COMMANDS_CAPACITY),
-            mocap: None,
-            gcs_heartbeat: false,
-            link_battery_mv: u32::MAX,
-            link_esc_rpm: link::esc::EscRpmInbox::new(),
-            ftp_refused: 0,
-            payload: None,
-            last: None,
-            autonomy: Box::new(Autonomy::new()),
             planner: Box::new(MissionPlanner::UNLOADED),
+            loader: Box::new(PayloadLoader::new()),
+            payload: None,
+            autonomy: Box::new(Autonomy::new()),
             clock: VehicleClock::new(),
             deadline: JobDeadline::new(),
             job_id: 0,
             job_result: None,
-            mission_state: MissionState::Idle,
-            armed: false,
-            in_hil: false,
             phase: "idle".into(),
             encoder: Encoder::new(link::VEHICLE_SYSTEM_ID, link::VEHICLE_COMPONENT_ID),
             frame: Frame::default(),
@@ -259,23 +161,34 @@ impl Vehicle {
             steps: 0,
             phases: Vec::new(),
         };
-        v.send_identity();
-        v.open_params(flash);
-        v.restore_signing();
-        v.restore_payload();
+        v.send_outbound(&Outbound::Identity);
+        block_on(v.service.start(open(flash), &mut v.io));
+        if v.io.signing.enabled() {
+            v.stored_key = Some(SEED_KEY);
+            v.ground_key(SEED_KEY, SEED_KEY_TIMESTAMP);
+        }
+        if v.io.to_load.is_some() {
+            v.stored_payload = Some(v.service.payload_file().to_vec());
+        }
+        v.other_tasks();
         v
     }
 
     /// Takes the received bytes `stream`, one at a time, as the link task does.
     pub fn receive(&mut self, stream: &[u8]) {
         for &byte in stream {
-            self.now_us += BYTE_US;
+            self.io.now_us += BYTE_US;
             self.heartbeat_due();
-            let Some((frame, integrity)) = self.parser.push(byte) else {
+            let before = self.io.parsed.frames;
+            let Some((frame, integrity)) = self.mirror.push(byte) else {
+                block_on(self.service.receive(&[byte], &mut self.io));
+                assert_eq!(before, self.io.parsed.frames, "the parsers disagree");
                 continue;
             };
             let frame = frame.clone();
-            let verdict = self.signing.check(&frame, self.now_us);
+            // The verdict the service will reach: its check on a copy of the signing state.
+            let mut probe = self.io.signing;
+            let verdict = probe.check(&frame, self.io.now_us);
             let inbound = dispatch(&frame, integrity);
             if integrity == Integrity::Unverified {
                 assert!(
@@ -283,7 +196,15 @@ impl Vehicle {
                     "an unverified frame was dispatched: {inbound:?}"
                 );
             }
-            self.handle_checked(inbound, verdict);
+            if self.options.fix_payload_checksum {
+                self.fix_payload_checksum(&inbound, verdict);
+            }
+            // The signing state after the service's check of this frame, which a frame may change.
+            let checked = Checked::before(self, &inbound, verdict, probe);
+            block_on(self.service.receive(&[byte], &mut self.io));
+            assert_eq!(before + 1, self.io.parsed.frames, "the parsers disagree");
+            checked.after(self, &inbound);
+            self.other_tasks();
             self.frames = self.frames.saturating_add(1);
             if self.options.imu_driver {
                 for _ in 0..self.options.ticks {
@@ -295,9 +216,42 @@ impl Vehicle {
         }
     }
 
+    /// With [`Options::fix_payload_checksum`]: before an upload's close reaches the service,
+    /// its last four bytes are written as the CRC-32 of the rest, as a ground station with a
+    /// well-formed file of those contents would have.
+    fn fix_payload_checksum(&mut self, inbound: &Inbound, verdict: Verdict) {
+        let Inbound::Ftp { message, from } = inbound else {
+            return;
+        };
+        if message.opcode != Opcode::TerminateSession as u8 || !verdict.trusted() {
+            return;
+        }
+        let file = self.service.payload_file();
+        let Some(n) = file.len().checked_sub(4) else {
+            return;
+        };
+        let crc = CRC32.checksum(&file[..n]);
+        let mut write = FtpMessage::command(message.seq.wrapping_sub(1), Opcode::WriteFile);
+        write.session = message.session;
+        write.offset = n as u32;
+        write.set_data(&crc.to_le_bytes());
+        let fix = Inbound::Ftp {
+            message: write,
+            from: *from,
+        };
+        block_on(self.service.handle(fix, verdict, &mut self.io));
+        self.other_tasks();
+    }
+
+    /// The ground station takes the vehicle's key at the same moment (its own link id).
+    pub(crate) fn ground_key(&mut self, key: [u8; KEY_LEN], timestamp: u64) {
+        self.ground_signing
+            .set_key(key, timestamp, self.io.now_us, LINK_ID + 1);
+    }
+
     /// The end of the input: the board restarts and must find in its store what was in force.
     pub fn restart_check(mut self) {
-        let Some(store) = self.store.take() else {
+        let Some(store) = self.service.take_store() else {
             return;
         };
         if self.store_failed {
@@ -310,12 +264,12 @@ impl Vehicle {
         assert_eq!(loaded.error, None, "the store fails after a restart");
         assert_eq!(
             &values,
-            self.params.values(),
+            self.service.params().values(),
             "parameters lost in a restart"
         );
         let key = block_on(store.load_signing()).expect("the signing key reads back");
         assert_eq!(
-            key.map(|(k, _)| k),
+            key.map(|(k, _)| k).filter(|k| *k != [0; KEY_LEN]),
             self.stored_key,
             "signing key lost in a restart"
         );
@@ -330,91 +284,78 @@ impl Vehicle {
         );
     }
 
-    fn heartbeat_due(&mut self) {
-        if self.now_us >= self.next_beat_us {
-            let beat = heartbeat(
-                self.mission_state,
-                self.autonomy.mode(),
-                self.armed,
-                self.in_hil,
-            );
-            self.send(&beat);
-            let request = self.timesync.request(ns(self.now_us));
-            self.send(&request);
-            self.next_beat_us = self.now_us + 1_000_000;
+    /// What the vehicle's other tasks do with what the service queued: the control task steps
+    /// on the plant's samples, the job task loads a description, the send task sends the
+    /// replies (noting a store's failure said in them).
+    pub(crate) fn other_tasks(&mut self) {
+        // The control task: a step on each sample the plant sent.
+        while let Some(sample) = self.io.sensors.pop_front() {
+            self.control_step(sample.imu, sample.hil);
         }
-    }
-
-    fn open_params(&mut self, flash: MemFlash) {
-        let mut values = ParamValues::DEFAULT;
-        match open(flash) {
-            Ok(mut store) => {
-                let loaded = block_on(store.load(&mut values));
-                assert_eq!(loaded.refused, 0, "stored values refused at the start");
-                if let Some(e) = loaded.error {
-                    self.report_text(Severity::Error, &format!("params: {e}"));
-                    self.store_failed = true;
+        // The receive task's poll after each read: an upload's timeout, a calibration's
+        // offsets to store.
+        block_on(self.service.poll(&mut self.io));
+        if let Some(received) = self.io.to_load.take() {
+            let running = self.io.mission_state == MissionState::Running;
+            let (report, loaded) =
+                self.loader
+                    .load(&mut self.planner, received, self.io.config, running);
+            if let Some(payload) = loaded {
+                self.io.payload_robots = payload.scenario.robots.count();
+                self.payload = Some(payload);
+            }
+            self.send_report(&report, 0);
+        }
+        if core::mem::take(&mut self.io.reload) {
+            let running = self.io.mission_state == MissionState::Running;
+            if let Some((report, loaded)) =
+                self.loader
+                    .reload(&mut self.planner, self.io.config, running)
+            {
+                if let Some(payload) = loaded {
+                    self.payload = Some(payload);
                 }
-                self.store = Some(store);
+                self.send_report(&report, 0);
             }
-            Err(e) => panic!("the store does not open: {e}"),
         }
-        self.params = ParamService::new(values);
-        self.config = self.params.values().config();
-        self.config_changed = true;
-    }
-
-    fn restore_signing(&mut self) {
-        let Some(store) = &mut self.store else {
-            return;
-        };
-        match block_on(store.load_signing()) {
-            Ok(Some((key, timestamp))) => {
-                self.set_key(key, timestamp);
-                self.stored_key = Some(key);
+        while let Some(reply) = self.io.outbox.pop_front() {
+            if let Outbound::Report(report) = &reply {
+                self.note_store_failures(report);
             }
-            Ok(None) => {}
-            Err(e) => panic!("the stored key does not read: {e}"),
+            self.send_outbound(&reply);
         }
+        while let Some(message) = self.io.bulk.pop_front() {
+            self.send_bulk(&message);
+        }
+        self.send_lists();
     }
 
-    fn restore_payload(&mut self) {
-        let Some(store) = &mut self.store else {
-            return;
-        };
-        let valid = |bytes: &[u8]| decode_and_check(bytes).is_ok();
-        match block_on(store.load_payload(self.ftp.restore_buffer(), valid)) {
-            Ok(Some(len)) => {
-                self.ftp.restored(len);
-                let file = self.ftp.file().to_vec();
-                self.stored_payload = Some(file.clone());
-                self.check_payload(&file, false);
-            }
-            Ok(None) => {}
-            Err(e) => panic!("the stored payload does not read: {e}"),
-        }
+    /// A store's failure, said in a text: a restart may then find older values.
+    fn note_store_failures(&mut self, report: &Report) {
+        let failed = report.texts.iter().any(|t| {
+            t.severity == Severity::Error
+                && (t.text.contains("not stored") || t.text.starts_with("params:"))
+        });
+        self.store_failed |= failed;
     }
+}
 
-    fn set_key(&mut self, key: [u8; KEY_LEN], timestamp: u64) {
-        self.signing.set_key(key, timestamp, self.now_us, LINK_ID);
-        // The ground station takes the key at the same moment (its own link id).
-        self.ground_signing
-            .set_key(key, timestamp, self.now_us, LINK_ID + 1);
-    }
+/// What a frame may change, taken before its handling and checked after.
+struct Checked {
+    inert: bool,
+    untrusted: bool,
+    was_running: bool,
+    values: ParamValues,
+    file: Vec<u8>,
+    commands: Vec<onboard::link_service::PendingCommand>,
+    telemetry: link::telemetry::Schedule,
+    signing: Signing,
+    mission: Vec<link::mission::wire::WireItem>,
+    offered: u32,
+}
 
-    fn faults(&self) -> HardwareFaults {
-        if self.frames < u32::from(self.options.faults_from) {
-            return HardwareFaults::NONE;
-        }
-        HardwareFaults {
-            imu: self.options.imu_fault,
-            stalled_robots: self.options.stalled_robots,
-            rotors_out: 0,
-        }
-    }
-
-    /// `handle` with the invariants of what an ignored or untrusted frame may change.
-    fn handle_checked(&mut self, inbound: Inbound, verdict: Verdict) {
+impl Checked {
+    fn before(v: &Vehicle, inbound: &Inbound, verdict: Verdict, signing: Signing) -> Self {
         let inert = matches!(
             inbound,
             Inbound::Ignored { .. }
@@ -423,760 +364,103 @@ impl Vehicle {
                 | Inbound::Battery { .. }
                 | Inbound::EscStatus(_)
         );
-        let untrusted = !verdict.trusted();
-        let before = (
-            self.params.values().clone(),
-            self.ftp.file().to_vec(),
-            self.commands.clone(),
-            self.telemetry,
-            self.signing,
-        );
-        let was_running = self.mission_state == MissionState::Running;
-        self.handle(inbound, verdict);
-        if inert {
-            let after = (
-                self.params.values().clone(),
-                self.ftp.file().to_vec(),
-                self.commands.clone(),
-                self.telemetry,
-                self.signing,
-            );
-            assert_eq!(before.0, after.0, "an ignored frame changed a parameter");
-            assert_eq!(before.1, after.1, "an ignored frame changed the FTP file");
-            assert_eq!(before.2, after.2, "an ignored frame queued a command");
+        Self {
+            inert,
+            untrusted: !verdict.trusted(),
+            was_running: v.io.mission_state == MissionState::Running,
+            values: v.service.params().values().clone(),
+            file: v.service.payload_file().to_vec(),
+            commands: v.io.commands.iter().copied().collect(),
+            telemetry: v.io.telemetry,
+            signing,
+            mission: v.service.mission().items().to_vec(),
+            offered: v.io.offered,
+        }
+    }
+
+    fn after(self, v: &mut Vehicle, inbound: &Inbound) {
+        let values = v.service.params().values();
+        let commands: Vec<_> = v.io.commands.iter().copied().collect();
+        if self.inert {
+            assert_eq!(&self.values, values, "an ignored frame changed a parameter");
             assert_eq!(
-                before.3, after.3,
+                self.file,
+                v.service.payload_file(),
+                "an ignored frame changed the FTP file"
+            );
+            assert_eq!(self.commands, commands, "an ignored frame queued a command");
+            assert_eq!(
+                self.telemetry, v.io.telemetry,
                 "an ignored frame changed the telemetry rates"
             );
             assert_eq!(
-                before.4, after.4,
+                self.signing, v.io.signing,
                 "an ignored frame changed the signing state"
             );
         }
-        if untrusted || was_running {
+        if self.untrusted || self.was_running {
             assert_eq!(
-                &before.0,
-                self.params.values(),
-                "a parameter changed (untrusted {untrusted}, running {was_running})"
+                &self.values, values,
+                "a parameter changed (untrusted {}, running {})",
+                self.untrusted, self.was_running
             );
+            let set_current = matches!(
+                inbound,
+                Inbound::Mission {
+                    message: MissionMessage::SetCurrent { .. },
+                    ..
+                }
+            );
+            if !set_current {
+                assert_eq!(
+                    self.mission,
+                    v.service.mission().items(),
+                    "a locked mission changed"
+                );
+            }
         }
-        if untrusted {
+        if self.untrusted {
             assert_eq!(
-                before.1,
-                self.ftp.file(),
+                self.file,
+                v.service.payload_file(),
                 "an untrusted upload wrote the file"
             );
             assert!(
-                self.commands.len() <= before.2.len(),
+                commands.len() <= self.commands.len(),
                 "an untrusted command was queued"
             );
         }
         for i in 0..PARAM_COUNT {
-            let v = self
-                .params
-                .values()
-                .get(i)
-                .expect("every index has a value");
-            assert!(check(i, v).is_ok(), "parameter {i} = {v} is out of range");
+            let value = values.get(i).expect("every index has a value");
+            assert!(
+                check(i, value).is_ok(),
+                "parameter {i} = {value} is out of range"
+            );
         }
-    }
-
-    /// comms.rs `handle`.
-    fn handle(&mut self, inbound: Inbound, verdict: Verdict) {
-        match inbound {
-            Inbound::Sensor(imu) => {
-                self.in_hil = true;
-                self.control_step(imu, true);
-            }
-            Inbound::Mocap(mut fix) => {
-                if !self.in_hil {
-                    fix.stamp_us = self
-                        .timesync
-                        .stamp(fix.stamp_us, self.now_us, MAX_FIX_AGE_US);
-                }
-                self.mocap = Some(fix);
-            }
-            Inbound::TimeSync { tc1, ts1 } => {
-                let message = TIMESYNC_DATA { tc1, ts1 };
-                if let SyncReceived::Answer(a) = self.timesync.receive(&message, ns(self.now_us)) {
-                    self.send(&TIMESYNC_DATA {
-                        tc1: a.tc1,
-                        ts1: a.ts1,
-                    });
-                }
-            }
-            Inbound::Command {
-                command, request, ..
-            } => match request {
-                Request::AvailableModes(index) => {
-                    let modes = &link::modes::MODES;
-                    if usize::from(index) > modes.len() {
-                        self.refuse(
-                            command,
-                            MavResult::MAV_RESULT_DENIED,
-                            "no mode of that index",
-                        );
-                    } else {
-                        self.send(&ack(command, MavResult::MAV_RESULT_ACCEPTED));
-                        for (i, mode) in modes.iter().enumerate() {
-                            if index == 0 || usize::from(index) == i + 1 {
-                                self.send(&mode.available());
-                            }
-                        }
-                    }
-                }
-                Request::Message(id) if id == AUTOPILOT_VERSION_DATA::ID => {
-                    self.send(&ack(command, MavResult::MAV_RESULT_ACCEPTED));
-                    self.send_identity();
-                }
-                Request::Message(id)
-                    if id == HOME_POSITION_DATA::ID || id == GPS_GLOBAL_ORIGIN_DATA::ID =>
-                {
-                    let origin = self.params.origin();
-                    if let Err(e) = origin.check() {
-                        self.refuse(command, MavResult::MAV_RESULT_DENIED, e.as_str());
-                    } else {
-                        self.send(&ack(command, MavResult::MAV_RESULT_ACCEPTED));
-                        if id == HOME_POSITION_DATA::ID {
-                            let home = Home::START.home_position(&origin);
-                            self.send(&home.expect("a usable origin places the home"));
-                        } else {
-                            self.send(&gps_global_origin(&origin));
-                        }
-                    }
-                }
-                Request::Message(id) => {
-                    if self.telemetry.request_once(id) {
-                        self.send(&ack(command, MavResult::MAV_RESULT_ACCEPTED));
-                    } else {
-                        let result = MavResult::MAV_RESULT_UNSUPPORTED;
-                        self.refuse(command, result, "that message is not sent on request");
-                    }
-                }
-                _ if !verdict.trusted() => {
-                    self.refuse(command, MavResult::MAV_RESULT_DENIED, verdict.reason());
-                }
-                Request::Operator(operator) => {
-                    if self.commands.len() < COMMANDS_CAPACITY {
-                        self.commands.push_back(PendingCommand {
-                            command: operator,
-                            mav_cmd: command,
-                        });
-                    } else {
-                        self.send(&ack(command, MavResult::MAV_RESULT_TEMPORARILY_REJECTED));
-                    }
-                }
-                Request::SetInterval {
-                    message_id,
-                    interval_us,
-                } => {
-                    let result = self
-                        .telemetry
-                        .set_interval(message_id, interval_us, self.now_us);
-                    match result {
-                        MavResult::MAV_RESULT_ACCEPTED => self.send(&ack(command, result)),
-                        MavResult::MAV_RESULT_UNSUPPORTED => {
-                            self.refuse(command, result, "that message is not streamed");
-                        }
-                        _ => self.refuse(command, result, "the interval is out of range"),
-                    }
-                }
-                Request::Refused(result) => {
-                    self.refuse(command, result, link::command::refusal(command, result));
-                }
-                // comms.rs `reboot`: the host's vehicle does not restart; refused while armed.
-                Request::Reboot => {
-                    let result = if self.armed {
-                        MavResult::MAV_RESULT_DENIED
-                    } else {
-                        MavResult::MAV_RESULT_ACCEPTED
-                    };
-                    self.send(&ack(command, result));
-                }
-                // comms.rs `command_origin`.
-                Request::SetOrigin {
-                    lat_e7,
-                    lon_e7,
-                    alt_mm,
-                } => match self.checked_origin((lat_e7, lon_e7, alt_mm), verdict) {
-                    Ok(origin) => {
-                        self.send(&ack(command, MavResult::MAV_RESULT_ACCEPTED));
-                        self.store_origin(&origin);
-                    }
-                    Err(why) => self.refuse(command, MavResult::MAV_RESULT_DENIED, why),
-                },
-            },
-            Inbound::Param { request, from } => {
-                let running = self.mission_state == MissionState::Running;
-                let refuse_changes = if !verdict.trusted() {
-                    Some(verdict.reason())
-                } else if running {
-                    Some("the mission is running")
-                } else {
-                    None
-                };
-                let before = self.params.values().clone();
-                let answer = self.params.handle(&request, refuse_changes);
-                match answer.changed {
-                    Some((index, value)) => {
-                        assert!(refuse_changes.is_none(), "a refused write changed {index}");
-                        assert_eq!(self.params.values().get(index), Some(value));
-                        if let Some(store) = &mut self.store
-                            && let Err(e) = block_on(store.save(index, value))
-                        {
-                            self.store_failed = true;
-                            self.report_text(Severity::Error, &format!("param: {e}"));
-                        }
-                        if is_origin(index) {
-                            self.send(&gps_global_origin(&self.params.origin()));
-                        } else {
-                            self.config = self.params.values().config();
-                            self.config_changed = true;
-                            self.reload();
-                        }
-                    }
-                    None => assert_eq!(
-                        &before,
-                        self.params.values(),
-                        "a parameter changed without being reported"
-                    ),
-                }
-                // The send task's order: one value at once, a list as the sender's list in
-                // flight (sent whole here, the link always having room).
-                match answer.values {
-                    Values::None => {}
-                    Values::One(i) => {
-                        let m = value_message(self.params.values(), i).expect("an index in range");
-                        self.send(&m);
-                    }
-                    Values::All => self.lists.request(from),
-                }
-                while let Some(i) = self.lists.next(PARAM_COUNT) {
-                    let m = value_message(self.params.values(), i).expect("an index in range");
-                    self.send(&m);
-                }
-                if let Some(text) = &answer.text {
-                    self.report_text(Severity::Warning, text);
-                }
-            }
-            Inbound::SetupSigning { key, timestamp, .. } => {
-                if !self.options.key_setup_allowed {
-                    self.report_text(Severity::Warning, "signing: key refused");
-                    return;
-                }
-                let stored = match &mut self.store {
-                    Some(store) => block_on(store.save_signing(&key, timestamp)),
-                    None => Err(link::store::StoreError::Other),
-                };
-                match stored {
-                    Ok(()) => self.stored_key = (key != [0; KEY_LEN]).then_some(key),
-                    Err(_) => self.store_failed = true,
-                }
-                self.set_key(key, timestamp);
-                let on = self.signing.enabled();
-                assert_eq!(on, key != [0; KEY_LEN], "signing on with an all-zero key");
-            }
-            // As comms.rs's `handle_log` when no logger task runs (the fuzzed vehicle keeps
-            // no logs): a list of none, the rest refused with a text.
-            Inbound::Log { request, .. } => match request {
-                LogRequest::Erase if !verdict.trusted() => {
-                    self.report_text(Severity::Warning, "log erase refused");
-                }
-                LogRequest::List { .. } => self.send(&link::log_transfer::no_logs_entry()),
-                LogRequest::End => {}
-                LogRequest::Data { .. } | LogRequest::Erase => {
-                    self.report_text(Severity::Warning, "flight logs: this board keeps none");
-                }
-            },
-            Inbound::SetOrigin {
-                lat_e7,
-                lon_e7,
-                alt_mm,
-                ..
-            } => {
-                // comms.rs `set_origin`.
-                match self.checked_origin((lat_e7, lon_e7, alt_mm), verdict) {
-                    Ok(origin) => self.store_origin(&origin),
-                    Err(why) => self.report_text(Severity::Warning, why),
-                }
-            }
-            Inbound::Mission { message, from } => {
-                // comms.rs `handle_mission`.
-                let running = self.mission_state == MissionState::Running;
-                let locked = if !verdict.trusted() {
-                    Some(verdict.reason())
-                } else if running {
-                    Some(link::mission::RUNNING)
-                } else {
-                    None
-                };
-                let origin = self.params.origin();
-                let context = MissionContext {
-                    origin: &origin,
-                    locked,
-                };
-                let before = self.mission.items().to_vec();
-                let outcome = self.mission.handle(
-                    &message,
-                    (from.system, from.component),
-                    self.now_us,
-                    &context,
-                );
-                if locked.is_some() && !matches!(outcome.event, Some(MissionEvent::SetCurrent(_))) {
-                    assert_eq!(
-                        before,
-                        self.mission.items(),
-                        "a locked mission changed ({locked:?})"
-                    );
-                }
-                self.deliver_mission(outcome);
-            }
-            Inbound::Ftp { message, from } if !verdict.trusted() => {
-                self.send_ftp(&link::ftp::refusal(&message), from);
-                // Said once per sender in a row (comms.rs `FTP_REFUSED`).
-                let sender = 1 + (u32::from(from.system) << 8 | u32::from(from.component));
-                if core::mem::replace(&mut self.ftp_refused, sender) != sender {
-                    self.report_text(Severity::Warning, "payload upload refused");
-                }
-            }
-            Inbound::Ftp { message, from } => {
-                self.ftp_refused = 0;
-                let (answer, event) = self.ftp.handle(&message);
-                assert_eq!(
-                    answer.seq,
-                    message.seq.wrapping_add(1),
-                    "FTP answer numbered"
-                );
-                self.send_ftp(&answer, from);
-                if let FileEvent::Written { len } = event {
-                    assert_eq!(len, self.ftp.file().len());
-                    if self.options.fix_payload_checksum && len >= 4 {
-                        let crc = CRC32.checksum(&self.ftp.file()[..len - 4]);
-                        self.ftp.restore_buffer()[len - 4..len].copy_from_slice(&crc.to_le_bytes());
-                    }
-                    let file = self.ftp.file().to_vec();
-                    self.check_payload(&file, true);
-                }
-            }
-            Inbound::Invalid(e) => self.report_text(Severity::Warning, &format!("HIL: {e}")),
-            Inbound::GcsHeartbeat(_) => self.gcs_heartbeat = true,
-            Inbound::Battery { volts, .. } => self.link_battery_mv = (volts * 1000.0) as u32,
-            Inbound::EscStatus(rpm) if self.in_hil => {
-                if let Err(e) = self.link_esc_rpm.receive(&rpm) {
-                    self.report_text(Severity::Warning, &format!("{e}"));
-                }
-            }
-            Inbound::EscStatus(_) => {}
-            Inbound::Heartbeat(_) | Inbound::Ignored { .. } => {}
-        }
-    }
-
-    /// comms.rs `checked_origin`.
-    fn checked_origin(
-        &self,
-        (lat_e7, lon_e7, alt_mm): (i32, i32, i32),
-        verdict: Verdict,
-    ) -> Result<GeoOrigin, &'static str> {
-        if !verdict.trusted() {
-            Err(verdict.reason())
-        } else if self.mission_state == MissionState::Running {
-            Err("the mission is running")
-        } else {
-            GeoOrigin::from_message(lat_e7, lon_e7, alt_mm).map_err(OriginError::as_str)
-        }
-    }
-
-    /// comms.rs `store_origin`.
-    fn store_origin(&mut self, origin: &GeoOrigin) {
-        let changed = self
-            .params
-            .set_origin(origin)
-            .expect("a checked origin fits its parameters");
-        assert_eq!(self.params.origin(), *origin);
-        for &(index, value) in &changed {
-            if let Some(store) = &mut self.store
-                && block_on(store.save(index, value)).is_err()
-            {
-                self.store_failed = true;
-            }
-            let m = value_message(self.params.values(), index).expect("an index in range");
-            self.send(&m);
-        }
-        self.send(&gps_global_origin(origin));
-    }
-
-    fn refuse(&mut self, command: CommandId, result: MavResult, why: &str) {
-        self.send(&ack(command, result));
-        self.report_text(
-            Severity::Warning,
-            &format!("command {} refused: {why}", command.0),
-        );
-    }
-
-    /// comms.rs `check_payload` and the job task's turn with it (jobs.rs).
-    fn check_payload(&mut self, file: &[u8], store: bool) {
-        match decode_and_check(file) {
-            Ok((wire, scenario)) => {
-                // The job task: the planner first, then the control task.
-                match self.planner.load(&scenario, self.config) {
-                    Ok(()) => {
-                        self.report_text(
-                            Severity::Info,
-                            &format!("payload {} accepted", wire.name),
-                        );
-                        self.payload = Some((scenario.clone(), self.config));
-                        self.last = Some(scenario);
-                    }
-                    Err(why) => {
-                        self.report_text(Severity::Error, &format!("payload refused: {why}"))
-                    }
-                }
-                if store && let Some(s) = &mut self.store {
-                    match block_on(s.save_payload(file)) {
-                        Ok(()) => self.stored_payload = Some(file.to_vec()),
-                        Err(_) => self.store_failed = true,
-                    }
-                }
-            }
-            Err(e) => self.report_text(Severity::Error, &format!("payload refused: {e}")),
-        }
-    }
-
-    /// The job task on `RELOAD`.
-    fn reload(&mut self) {
-        let running = self.mission_state == MissionState::Running;
-        if let (Some(scenario), false) = (&self.last, running) {
-            match self.planner.load(scenario, self.config) {
-                Ok(()) => self.payload = Some((scenario.clone(), self.config)),
-                Err(why) => {
-                    let text = format!("params not applied: {why}");
-                    self.report_text(Severity::Error, &text);
-                }
-            }
-        }
-    }
-
-    /// A step of the board's IMU driver: a sample at rest on the board's clock.
-    fn driver_step(&mut self) {
-        self.driver_steps += 1;
-        self.now_us += TICK_US;
-        if self.options.mocap {
-            self.mocap = Some(MocapFix {
-                stamp_us: self.now_us,
-                position: [0.0; 3],
-                attitude: [1.0, 0.0, 0.0, 0.0],
-            });
-        }
-        let imu = ImuSample {
-            time_us: self.now_us,
-            // A real sensor never repeats itself: the mission's IMU monitor stops on one that
-            // does (shared::control::imu_monitor), so the driver's rest has a little noise.
-            gyro: [0.0, 0.0, crate::rest_noise(self.driver_steps)],
-            accel: [0.0, 0.0, -shared::scenario::GRAVITY],
-        };
-        self.control_step(imu, false);
-        self.heartbeat_due();
-    }
-
-    /// control.rs: one step of the autonomy on an IMU sample.
-    fn control_step(&mut self, imu: ImuSample, hil: bool) {
-        let Ok(step) = self.clock.on_sensor(imu.time_us) else {
-            self.report_text(Severity::Error, "sensor refused");
-            return;
-        };
-        self.steps += 1;
-        self.in_hil = hil;
-        let job = if self.deadline.is_due(step.index) {
-            self.deadline.taken();
-            // The job ran at once: in lockstep the step would wait for it, off HIL it is in.
-            match self.job_result.take() {
-                Some((id, result)) if id == self.job_id => Some(result),
-                _ => None,
-            }
-        } else {
-            None
-        };
-        // The payload goes to the autonomy before the step, as the firmware's control task
-        // hands it over.
-        let payload = self.payload.take();
-        let loaded_config = payload.as_ref().map(|(_, config)| *config);
-        let loads_payload = payload.is_some();
-        if let Some((scenario, config)) = payload {
-            self.autonomy.take_payload(scenario, config);
-        }
-        if let Some(result) = job {
-            self.autonomy.deliver_job(result);
-        }
-        let pending = self.commands.pop_front();
-        let route = self.routes.pop_front();
-        let input = TickInput {
-            time_us: step.time_us,
-            step: step.index,
-            imu: ImuReading {
-                gyro: imu.gyro,
-                accel: imu.accel,
-            },
-            mocap: self.mocap.take(),
-            command: pending.map(|p| p.command),
-            faults: if hil {
-                HardwareFaults::NONE
-            } else {
-                self.faults()
-            },
-            // The job task runs each load to the end before the next frame here.
-            loading: false,
-            route: route.as_ref(),
-            // The plant's RPM in HIL; no ESC telemetry off HIL (no board here).
-            esc_rpm: if hil {
-                self.link_esc_rpm.rpm_at(step.time_us)
-            } else {
-                None
-            },
-            // The parameters' IMU offsets and hardware settings, as the firmware's control
-            // task hands them over after a change.
-            // (Not in a step that loads a payload: the settings go in the next.)
-            bench: if loads_payload {
-                None
-            } else {
-                core::mem::take(&mut self.config_changed).then(|| (&self.config).into())
-            },
-            supervision: Supervision {
-                gcs_heartbeat: core::mem::take(&mut self.gcs_heartbeat),
-                // The plant's pack in HIL; off HIL the board's ADC (none on the host).
-                battery_volts: match self.link_battery_mv {
-                    u32::MAX => None,
-                    mv if hil => Some(mv as f32 * 1e-3),
-                    _ => None,
-                },
-            },
-        };
-        let mut out = self.autonomy.tick(&input);
-        if let Some(config) = loaded_config
-            && !out.report.texts.iter().any(|t| t.text.contains("ignored"))
+        // What a restart must find: the key set, the description accepted from an upload.
+        if let Inbound::SetupSigning { key, timestamp, .. } = inbound
+            && v.options.key_setup_allowed
+            && !self.untrusted
         {
-            // Loaded: the mission is idle again, without a transition.
             assert_eq!(
-                config, self.config,
-                "the payload came with stale parameters"
+                v.io.signing.enabled(),
+                *key != [0; KEY_LEN],
+                "signing on with an all-zero key"
             );
-            self.phase = "idle".into();
+            v.stored_key = (*key != [0; KEY_LEN]).then_some(*key);
+            v.ground_key(*key, *timestamp);
         }
-        for line in &out.report.texts {
-            if let Some(rest) = line.text.strip_prefix(PHASE_PREFIX) {
-                let name = rest.split(':').next().unwrap_or_default();
-                self.phase = name.to_string();
-                self.phases.push(rest.to_string());
-            }
-        }
-        self.check_output(&out);
-        if let Some(request) = out.job.take() {
-            let next_id = self.job_id.wrapping_add(1);
-            match self.deadline.request(step.index, request.deadline_steps) {
-                Ok(_) => {
-                    self.job_id = next_id;
-                    let result = crate::autonomy::run_job(&mut self.planner, &request.work);
-                    self.job_result = Some((next_id, result));
-                }
-                Err(_) => {
-                    self.deadline.taken();
-                    out.report
-                        .text(Severity::Error, format_args!("job refused: busy"));
-                }
-            }
-        }
-        self.mission_state = out.state;
-        self.armed = out.armed;
-        // Every command is acknowledged.
-        if let Some(p) = pending {
-            let result = out.ack.map_or(CommandResult::Accepted, |(given, result)| {
-                assert_eq!(given, p.command, "the ack is for another command");
-                result
-            });
-            let result = match result {
-                CommandResult::Accepted => MavResult::MAV_RESULT_ACCEPTED,
-                CommandResult::InProgress => MavResult::MAV_RESULT_IN_PROGRESS,
-                CommandResult::Failed => MavResult::MAV_RESULT_FAILED,
-                CommandResult::TemporarilyRejected => MavResult::MAV_RESULT_TEMPORARILY_REJECTED,
-                CommandResult::Denied => MavResult::MAV_RESULT_DENIED,
-            };
-            self.send(&ack(p.mav_cmd, result));
-        }
-        let time_ms = (step.time_us / 1000) as u32;
-        self.send_report(&out.report, time_ms);
-        if hil {
-            let actuators = link::hil::Actuators {
-                time_us: step.time_us,
-                robots: out.robots,
-                thrust: out.thrust,
-                rail: out.rail,
-                armed: out.armed,
-            };
-            let messages = actuators.to_messages();
-            if let Some(status) = &messages.status {
-                self.send(status);
-            }
-            self.send(&messages.controls);
-        }
-    }
-
-    fn check_output(&self, out: &crate::autonomy::TickOutput) {
-        assert!(out.robots <= MAX_ROBOTS);
-        for j in 0..MAX_ROBOTS {
-            let (t, r) = (out.thrust[j], out.rail[j]);
-            assert!((0.0..=1.0).contains(&t), "thrust {j} is {t}");
-            assert!(r.is_finite(), "rail setpoint {j} is {r}");
-            if j >= out.robots {
-                assert_eq!((t, r), (0.0, 0.0), "an output past the robots in use");
-            }
-        }
-        let pushing = out.thrust.iter().any(|&t| t > 0.0);
-        let phase = self.phase.as_str();
-        if out.motor_test {
-            assert!(out.armed, "a motor test disarmed");
-            assert_ne!(
-                out.state,
-                MissionState::Running,
-                "a motor test in the mission"
-            );
-            return;
-        }
-        assert_eq!(
-            out.armed,
-            ARMED_PHASES.contains(&phase),
-            "armed {} in phase {phase}",
-            out.armed
-        );
-        assert!(
-            !pushing || THRUST_PHASES.contains(&phase),
-            "thrust in phase {phase}"
-        );
-        assert!(out.armed || !pushing, "thrust while disarmed");
-        let stopped = out.state != MissionState::Running;
-        assert_eq!(
-            stopped,
-            STOPPED_PHASES.contains(&phase),
-            "state {:?} in phase {phase}",
-            out.state
-        );
-        assert!(!(stopped && out.armed), "armed while {:?}", out.state);
-    }
-
-    fn send_report(&mut self, report: &Report, time_ms: u32) {
-        for line in &report.texts {
-            let text = line.text.clone();
-            self.report_text(line.severity, &text);
-        }
-        for v in &report.values {
-            match v.value {
-                Value::Float(x) => self.send(&named_float(v.name, x, time_ms)),
-                Value::Int(x) => self.send(&named_int(v.name, x, time_ms)),
-            }
-        }
-    }
-
-    fn report_text(&mut self, severity: Severity, text: &str) {
-        let severity = match severity {
-            Severity::Info => MavSeverity::MAV_SEVERITY_INFO,
-            Severity::Notice => MavSeverity::MAV_SEVERITY_NOTICE,
-            Severity::Warning => MavSeverity::MAV_SEVERITY_WARNING,
-            Severity::Error => MavSeverity::MAV_SEVERITY_ERROR,
-            Severity::Critical => MavSeverity::MAV_SEVERITY_CRITICAL,
-        };
-        self.text_id = self.text_id.wrapping_add(1).max(1);
-        for chunk in chunks(text, severity, self.text_id) {
-            chunk.encode(&mut self.encoder, &mut self.frame);
-            self.flush();
-        }
-    }
-
-    fn send_identity(&mut self) {
-        self.send(&AUTOPILOT_VERSION_DATA {
-            capabilities: link::status::capabilities(),
-            ..Default::default()
-        });
-        self.report_text(Severity::Info, "board: fuzz (firmware 0.1.0)");
-    }
-
-    /// comms.rs `deliver_mission`: the reply, the refusal, a route change for the autonomy.
-    fn deliver_mission(&mut self, outcome: Outcome) {
-        if let Some((reply, to)) = outcome.reply {
-            reply.encode(to, &mut self.encoder, &mut self.frame);
-            self.flush();
-        }
-        if let Some(text) = &outcome.refusal {
-            self.report_text(Severity::Warning, text);
-        }
-        let change = match outcome.event {
-            Some(MissionEvent::Replaced | MissionEvent::Cleared) => {
-                let route = self
-                    .mission
-                    .route(&self.params.origin())
-                    .unwrap_or_default();
-                Some(RouteChange::Set(route))
-            }
-            Some(MissionEvent::SetCurrent(seq)) => Some(RouteChange::Current(seq)),
-            None => None,
-        };
-        if let Some(change) = change {
-            // The firmware's link task waits for room (the control task takes one a step);
-            // with no step to wait for here, the oldest is dropped: the newest is in force
-            // either way.
-            if self.routes.len() == 2 {
-                self.routes.pop_front();
-            }
-            self.routes.push_back(change);
-        }
-    }
-
-    fn send_ftp(&mut self, message: &FtpMessage, to: Sender) {
-        self.send(&message.to_message(to.system, to.component));
-    }
-
-    fn send<M: MessageData>(&mut self, message: &M) {
-        self.encoder.encode(message, &mut self.frame);
-        self.flush();
-    }
-
-    /// Signs the frame when signing is on, and checks that the ground reads it back.
-    fn flush(&mut self) {
-        if let Some(extra) = crc_extra(self.frame.message_id()) {
-            self.signing.sign(&mut self.frame, extra, self.now_us);
-        }
-        self.sent += 1;
-        let bytes = self.frame.bytes().to_vec();
-        let mut got = None;
-        for (i, &b) in bytes.iter().enumerate() {
-            if let Some((frame, integrity)) = self.ground.push(b) {
-                assert_eq!(i + 1, bytes.len(), "a sent frame parsed short");
-                assert_eq!(
-                    integrity,
-                    Integrity::Verified,
-                    "a sent frame does not verify"
-                );
-                got = Some(frame.clone());
-            }
-        }
-        let frame = got.expect("a sent frame does not parse");
-        assert_eq!(frame.bytes(), &bytes[..]);
-        if self.signing.enabled() {
-            let verdict = self.ground_signing.check(&frame, self.now_us);
-            // At the end of its 48 bits the timestamp stays there: then equal timestamps are
-            // replays, as they must be (a key set that close to the end leaves no room).
-            let ended = self.signing.timestamp(self.now_us) == (1 << 48) - 1;
-            if !(ended && verdict == Verdict::Replayed) {
-                assert_eq!(verdict, Verdict::Valid, "a signed frame does not check");
-            }
+        if v.io.offered > self.offered {
+            v.stored_payload = Some(v.service.payload_file().to_vec());
         }
     }
 }
 
-fn ns(us: u64) -> i64 {
-    us.saturating_mul(1000) as i64
-}
-
-/// The store over `flash` with the Pixhawk 6C's ranges (comms.rs `open_params`).
-fn open(flash: MemFlash) -> Result<ParamStore<MemFlash>, link::store::StoreError> {
-    ParamStore::new(flash, PARAM_RANGE).and_then(|s| s.with_payload(PAYLOAD_RANGE))
+/// The store over `flash` with the Pixhawk 6C's ranges (the firmware's receive task).
+fn open(flash: MemFlash) -> Result<ParamStore<MemFlash>, StoreError> {
+    ParamStore::new(flash, PARAM_RANGE)
+        .and_then(|s| s.with_payload(PAYLOAD_RANGE))
+        .and_then(|s| s.with_mission(MISSION_RANGE))
 }
 
 /// Runs one `link_input` fuzz input: the header's options, then the byte stream.
