@@ -13,6 +13,7 @@ mod params;
 mod payload;
 pub mod ports;
 pub mod queue_ports;
+pub mod send_order;
 mod signing_key;
 mod stored_mission;
 

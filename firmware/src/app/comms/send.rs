@@ -23,6 +23,7 @@ use link::param::value_message;
 use link::status::{MissionState, Text, chunks, heartbeat, named_float, named_int};
 use link::telemetry::{Home, RouteStatus, Stream, VehicleSnapshot, gps_global_origin};
 use link::vehicle::crc_extra;
+use onboard::link_service::send_order::{Source, Waiting, next_source, wake_at};
 use onboard::link_service::{Bulk, Outbound, StepMessages, mav_result, mav_severity};
 use shared::control::thrust_map::ThrustMap;
 use shared::mission::params::COUNT as PARAM_COUNT;
@@ -419,7 +420,7 @@ fn origin() -> GeoOrigin {
     LINK.lock(|l| GeoOrigin::from_params(&l.borrow().values))
 }
 
-/// What the send task does next (docs/ground-link.md#under-a-flood).
+/// What the send task does next, taken from the source [`next_source`] chose.
 enum Next {
     /// A control step's messages: at once.
     Step(StepMessages),
@@ -471,22 +472,26 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
         let now = Instant::now();
         let telemetry_due = telemetry(|t| t.next_due());
         let may_wait_goes = out.budget.allows(now.as_micros());
-        let next = if let Ok(step) = STEP_OUT.try_receive() {
-            Next::Step(step)
-        } else if now >= next_beat {
-            Next::Heartbeat
-        } else if !may_wait_goes {
-            Next::Wait
-        } else if let Ok(message) = OUTBOX.try_receive() {
-            Next::Reply(message)
-        } else if telemetry_due.is_some_and(|due| due <= now.as_micros()) {
-            Next::Telemetry
-        } else if let Ok(message) = BULK.try_receive() {
-            Next::Bulk(message)
-        } else if let Some(index) = LINK.lock(|l| l.borrow_mut().lists.next(PARAM_COUNT)) {
-            Next::ListValue(index)
-        } else {
-            Next::Wait
+        let waiting = Waiting {
+            step: !STEP_OUT.is_empty(),
+            heartbeat_due: now >= next_beat,
+            budget_allows: may_wait_goes,
+            reply: !OUTBOX.is_empty(),
+            telemetry_due: telemetry_due.is_some_and(|due| due <= now.as_micros()),
+            bulk: !BULK.is_empty(),
+            list: LINK.lock(|l| l.borrow().lists.busy()),
+        };
+        // This task is each queue's only receiver: what it found waiting is there to take.
+        let next = match next_source(&waiting) {
+            Source::Step => STEP_OUT.try_receive().map_or(Next::Wait, Next::Step),
+            Source::Heartbeat => Next::Heartbeat,
+            Source::Reply => OUTBOX.try_receive().map_or(Next::Wait, Next::Reply),
+            Source::Telemetry => Next::Telemetry,
+            Source::Bulk => BULK.try_receive().map_or(Next::Wait, Next::Bulk),
+            Source::ListValue => LINK
+                .lock(|l| l.borrow_mut().lists.next(PARAM_COUNT))
+                .map_or(Next::Wait, Next::ListValue),
+            Source::Wait => Next::Wait,
         };
         match &next {
             // Before the step's messages: the lockstep reply goes last, and after the last
@@ -515,12 +520,12 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
             Next::Bulk(message) => out.bulk(message).await,
             Next::ListValue(index) => out.param_value(*index).await,
             Next::Wait => {
-                let mut wake = next_beat;
-                if !may_wait_goes {
-                    wake = wake.min(Instant::from_micros(out.budget.ready_at()));
-                } else if let Some(due) = telemetry_due {
-                    wake = wake.min(Instant::from_micros(due));
-                }
+                let wake = Instant::from_micros(wake_at(
+                    next_beat.as_micros(),
+                    may_wait_goes,
+                    out.budget.ready_at(),
+                    telemetry_due,
+                ));
                 let more = async {
                     if may_wait_goes {
                         select4(
