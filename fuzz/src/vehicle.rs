@@ -34,7 +34,7 @@ use link::hil::{JobDeadline, VehicleClock};
 use link::mission::wire::MissionMessage;
 use link::signing::{KEY_LEN, Signing, Verdict};
 use link::status::MissionState;
-use link::store::{ParamStore, StoreError};
+use onboard::store::{ParamStore, StoreError};
 use link::vehicle::{Inbound, crc_extra, dispatch};
 use onboard::autonomy::{Autonomy, JobResult, Report, Severity};
 use onboard::link_service::{LINK_ID, LinkService, Outbound, QueuePorts};

@@ -22,8 +22,6 @@
 //! - [`modes`]: the flight modes, in PX4's numbers and the standard modes protocol.
 //! - [`param`]: MAVLink's parameter protocol over the mission's parameter table.
 //! - [`param_lists`]: the parameter lists in flight, one per requester, sent as room allows.
-//! - [`slots`]: the payload description's two power-cut-safe slots.
-//! - [`store`]: the parameters' storage (`sequential-storage` on NOR flash), power-cut safe.
 //! - [`signing`]: MAVLink 2 message signing (SHA-256), both ways.
 //! - [`status`]: `STATUSTEXT` (long texts in chunks, and their reassembly) and named values.
 //! - [`telemetry`]: `SYS_STATUS`, `ATTITUDE_QUATERNION`, `LOCAL_POSITION_NED`,
@@ -62,9 +60,7 @@ pub mod odometry;
 pub mod param;
 pub mod param_lists;
 pub mod signing;
-pub mod slots;
 pub mod status;
-pub mod store;
 pub mod telemetry;
 pub mod timesync;
 pub mod vehicle;

@@ -9,7 +9,7 @@
 //! | `PARAM_SET` | always a `PARAM_VALUE` with the value now in force: the new one, or the old one kept when the new one is refused (not finite, out of range, not whole, or the mission is running) with a `STATUSTEXT` giving the reason |
 //!
 //! The service does no I/O: it says what to send and which value changed; the firmware sends
-//! and stores it ([`crate::store`]).
+//! and stores it (`onboard::store`).
 
 use core::fmt::Write as _;
 

@@ -4,7 +4,7 @@
 //! MISO PC2, MOSI PC3) as the NOR flash the parameters' store expects.
 //!
 //! FRAM writes in place without erase or wait, and survives power loss at any byte; the store
-//! (`link::store`, on `sequential-storage`) is written for NOR flash, so this presents the
+//! (`onboard::store`, on `sequential-storage`) is written for NOR flash, so this presents the
 //! FRAM as NOR: an erase writes 0xFF over whole pages, a write stores bytes as given. The
 //! command set (FM25V02A datasheet, "Command structure"): WREN 0x06 before every write, WRITE
 //! 0x02 and READ 0x03, each followed by a two-byte address.

@@ -1,5 +1,5 @@
 //! The mission's items as stored beside the payload description (two power-cut-safe slots,
-//! [`crate::slots`]; docs/ground-link.md#missions): a magic word, the count, the items
+//! `onboard::slots`; docs/ground-link.md#missions): a magic word, the count, the items
 //! ([`WireItem::to_bytes`]) and a CRC-32 of all before it, so a torn or foreign slot is never
 //! read as a mission.
 

@@ -17,6 +17,7 @@ pub mod send_order;
 mod signing_key;
 mod stored_mission;
 
+use crate::store::{ParamStore, StoreError};
 use embedded_storage_async::nor_flash::NorFlash;
 use link::frame::Parser;
 use link::ftp::{ReadOnlyFile, Server};
@@ -24,7 +25,6 @@ use link::mission::MissionService;
 use link::param::ParamService;
 use link::signing::Verdict;
 use link::status::MissionState;
-use link::store::{ParamStore, StoreError};
 use link::timesync::Received as SyncReceived;
 use link::vehicle::{Inbound, crc_extra, dispatch};
 use shared::mission::params::ParamValues;

@@ -3,11 +3,11 @@
 //! ground station that saw the answer may cut the power), a calibration's offsets set as
 //! their parameters.
 
+use crate::store::{ParamStore, StoreError};
 use embedded_storage_async::nor_flash::NorFlash;
 use link::geo::GeoOrigin;
 use link::param::{ParamRequest, ParamService, Values};
 use link::signing::Verdict;
-use link::store::{ParamStore, StoreError};
 use link::vehicle::Sender;
 use shared::mission::bringup::CalibrationKind;
 use shared::mission::params::{COUNT as PARAM_COUNT, NAME_LEN, ParamValues, TABLE, is_origin};

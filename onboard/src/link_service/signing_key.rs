@@ -2,9 +2,9 @@
 //! start, set or cleared by `SETUP_SIGNING` on a link that may set it, stored before it is
 //! said to be in force.
 
+use crate::store::StoreError;
 use embedded_storage_async::nor_flash::NorFlash;
 use link::signing::KEY_LEN;
-use link::store::StoreError;
 
 use super::{LINK_ID, LinkService, Outbound, VehiclePorts, report};
 use crate::autonomy::{Report, Severity};

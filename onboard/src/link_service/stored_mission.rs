@@ -3,13 +3,13 @@
 //! autonomy as a route and stored, and the stored one is put in force at the start. Downloads
 //! need no signature; changes do, and none while the mission runs but a set-current.
 
+use crate::store::StoreError;
 use embedded_storage_async::nor_flash::NorFlash;
 use link::mission::stored::{self, MAX_STORED_LEN};
 use link::mission::wire::MissionMessage;
 use link::mission::{Context as MissionContext, MissionEvent, Outcome};
 use link::signing::Verdict;
 use link::status::MissionState;
-use link::store::StoreError;
 use link::vehicle::Sender;
 
 use super::{Bulk, LinkService, Outbound, VehiclePorts, report};

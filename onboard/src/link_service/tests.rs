@@ -10,6 +10,7 @@ extern crate std;
 
 use std::vec::Vec;
 
+use crate::store::ParamStore;
 use embassy_futures::block_on;
 use link::MessageData;
 use link::command::CommandWire;
@@ -21,7 +22,6 @@ use link::msg::{
     MavParamType, MavResult, PARAM_SET_DATA, SET_GPS_GLOBAL_ORIGIN_DATA, SETUP_SIGNING_DATA,
 };
 use link::status::MissionState;
-use link::store::ParamStore;
 use shared::mission::params::{ParamValues, TABLE};
 use test_support::flash::{CutFlash, PAGE};
 

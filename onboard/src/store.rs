@@ -15,9 +15,9 @@
 
 use core::ops::Range;
 
-use crate::signing::KEY_LEN;
 use crate::slots::Slots;
 use embedded_storage_async::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
+use link::signing::KEY_LEN;
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
 use shared::mission::params::{NAME_LEN, ParamValues, TABLE};

@@ -2,7 +2,7 @@
 //! store keeps the old or the new value after a power cut at any write step, over thousands
 //! of random cuts").
 //!
-//! `link::store`'s own tests cut the power once in a fresh flash (at each step of a run, and
+//! `onboard::store`'s own tests cut the power once in a fresh flash (at each step of a run, and
 //! at 2,000 random steps). Here the same flash lives on through thousands of cuts: writes of
 //! any parameter and of the signing key, a cut at a random byte of any write or erase, a
 //! restart whose load may itself be cut (a glitch while the store repairs what the last cut
@@ -16,7 +16,7 @@
 //! (the SPI FRAM on which the board emulates a NOR flash), here cut at a chosen byte.
 
 use link::signing::KEY_LEN;
-use link::store::ParamStore;
+use onboard::store::ParamStore;
 use shared::mission::params::{COUNT, ParamValues, TABLE};
 use test_support::flash::{Cut, CutFlash, PAGE, block_on};
 use test_support::rng::Rng;
