@@ -22,6 +22,7 @@ pub mod formation;
 pub mod geometry;
 pub mod liftoff_detector;
 pub mod liftoff_thrust;
+pub mod manual;
 pub mod math;
 pub mod mission;
 pub mod numbers;
