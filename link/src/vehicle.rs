@@ -19,9 +19,9 @@ use crate::mission::wire::MissionMessage;
 use crate::msg::{
     ATT_POS_MOCAP_DATA, BATTERY_STATUS_DATA, COMMAND_INT_DATA, COMMAND_LONG_DATA,
     FILE_TRANSFER_PROTOCOL_DATA, HEARTBEAT_DATA, HIL_SENSOR_DATA, LOG_ERASE_DATA,
-    LOG_REQUEST_DATA_DATA, LOG_REQUEST_END_DATA, LOG_REQUEST_LIST_DATA, MavAutopilot, MavType,
-    ODOMETRY_DATA, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA,
-    SETUP_SIGNING_DATA, TIMESYNC_DATA,
+    LOG_REQUEST_DATA_DATA, LOG_REQUEST_END_DATA, LOG_REQUEST_LIST_DATA, MANUAL_CONTROL_DATA,
+    MavAutopilot, MavType, ODOMETRY_DATA, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA,
+    PARAM_SET_DATA, SETUP_SIGNING_DATA, TIMESYNC_DATA,
 };
 use crate::param::ParamRequest;
 
@@ -124,6 +124,23 @@ pub enum Inbound {
     GcsHeartbeat(Sender),
     /// Any other `HEARTBEAT` (a companion computer, another vehicle, an echo).
     Heartbeat(Sender),
+    /// `MANUAL_CONTROL` addressed to the vehicle: a ground station's joystick, its axes as
+    /// sent (x forward, y right, z thrust, r yaw; `shared::manual::from_manual_control` reads
+    /// them).
+    ManualControl {
+        /// Forward, -1000..1000.
+        x: i16,
+        /// Right, -1000..1000.
+        y: i16,
+        /// Thrust, 0..1000 (500 centred).
+        z: i16,
+        /// Yaw, -1000..1000.
+        r: i16,
+        /// The joystick's buttons, a bit each.
+        buttons: u16,
+        /// Its sender.
+        from: Sender,
+    },
     /// `BATTERY_STATUS`: a pack's voltage. The vehicle takes it only in hardware-in-the-loop,
     /// from the plant (on a board its own ADC measures the pack).
     Battery {
@@ -342,6 +359,17 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
                 Inbound::Heartbeat(from)
             }
         }
+        MANUAL_CONTROL_DATA::ID => match frame.decode::<MANUAL_CONTROL_DATA>() {
+            Some(m) if m.target == crate::VEHICLE_SYSTEM_ID => Inbound::ManualControl {
+                x: m.x,
+                y: m.y,
+                z: m.z,
+                r: m.r,
+                buttons: m.buttons,
+                from,
+            },
+            _ => ignored,
+        },
         BATTERY_STATUS_DATA::ID => {
             battery_volts(frame.payload()).map_or(ignored, |volts| Inbound::Battery { volts, from })
         }

@@ -183,6 +183,10 @@ impl VehiclePorts for Ports {
         GCS_HEARTBEAT.store(true, Ordering::Relaxed);
     }
 
+    fn manual_control(&mut self, input: shared::manual::ManualInput) {
+        super::MANUAL.signal(input);
+    }
+
     fn battery_mv(&mut self, millivolts: u32) {
         LINK_BATTERY_MV.store(millivolts, Ordering::Relaxed);
     }

@@ -197,6 +197,9 @@ pub static IN_HIL: AtomicBool = AtomicBool::new(false);
 
 /// A ground station's heartbeat arrived since the control task last looked (it takes it).
 pub static GCS_HEARTBEAT: AtomicBool = AtomicBool::new(false);
+/// The newest joystick input (`MANUAL_CONTROL`), checked by the link's service, for the
+/// control task (docs/hardware.md#rc-receivers: the mission does not fly it yet).
+pub static MANUAL: Signal<Cs, shared::manual::ManualInput> = Signal::new();
 /// The pack voltage the HIL plant last sent (`BATTERY_STATUS`), mV; `u32::MAX`: none yet.
 /// Taken only in HIL: on a board the pack is measured by its own ADC.
 pub static LINK_BATTERY_MV: AtomicU32 = AtomicU32::new(u32::MAX);

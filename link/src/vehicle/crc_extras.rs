@@ -89,4 +89,5 @@ crc_extras!(
     GPS_GLOBAL_ORIGIN_DATA,
     SET_GPS_GLOBAL_ORIGIN_DATA,
     crate::msg::COMPONENT_METADATA_DATA,
+    crate::msg::MANUAL_CONTROL_DATA,
 );

@@ -520,3 +520,34 @@ fn commands_for_other_vehicles_and_bad_sensor_data_are_not_acted_on() {
         .find_map(|&b| p.push(b).map(|(fr, i)| dispatch(fr, i)));
     assert_eq!(got, Some(Inbound::Invalid(HilError::OtherSensor { id: 1 })));
 }
+
+#[test]
+fn a_joystick_reaches_the_vehicle_and_another_vehicles_does_not() {
+    let to_us = crate::msg::MANUAL_CONTROL_DATA {
+        target: crate::VEHICLE_SYSTEM_ID,
+        x: 250,
+        y: -1000,
+        z: 500,
+        r: 7,
+        buttons: 0b101,
+    };
+    match through_the_wire(&to_us) {
+        Inbound::ManualControl {
+            x,
+            y,
+            z,
+            r,
+            buttons,
+            ..
+        } => assert_eq!((x, y, z, r, buttons), (250, -1000, 500, 7, 0b101)),
+        other => panic!("not taken as manual control: {other:?}"),
+    }
+    let elsewhere = crate::msg::MANUAL_CONTROL_DATA {
+        target: crate::VEHICLE_SYSTEM_ID.wrapping_add(1),
+        ..to_us
+    };
+    assert!(matches!(
+        through_the_wire(&elsewhere),
+        Inbound::Ignored { .. }
+    ));
+}

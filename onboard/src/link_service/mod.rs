@@ -208,6 +208,15 @@ impl<F: NorFlash> LinkService<F> {
                 }
             }
             Inbound::EscStatus(_) => {}
+            // A joystick: taken signed once signing is on, as a command; an axis out of its
+            // range is no input.
+            Inbound::ManualControl { x, y, z, r, .. } => {
+                if verdict.trusted()
+                    && let Some(input) = shared::manual::from_manual_control(x, y, z, r)
+                {
+                    io.manual_control(input);
+                }
+            }
             Inbound::Heartbeat(_) | Inbound::Ignored { .. } => {}
         }
     }

@@ -15,6 +15,7 @@ use link::status::MissionState;
 use link::telemetry::Schedule;
 use link::timesync::TimeSync;
 use link::vehicle::Sender;
+use shared::manual::ManualInput;
 use shared::mission::MissionConfig;
 use shared::mission::bringup::CalibrationKind;
 use shared::mission::drives::BoardDrives;
@@ -80,6 +81,8 @@ pub trait VehiclePorts {
     fn command(&mut self, pending: PendingCommand) -> bool;
     /// A ground station's heartbeat came.
     fn gcs_heartbeat(&mut self);
+    /// A ground station's joystick (`MANUAL_CONTROL`), checked, for the control task.
+    fn manual_control(&mut self, input: ManualInput);
     /// The HIL plant's battery voltage, mV.
     fn battery_mv(&mut self, millivolts: u32);
     /// The HIL plant's rotor speeds.

@@ -14,6 +14,7 @@ use link::status::MissionState;
 use link::telemetry::Schedule;
 use link::timesync::TimeSync;
 use link::vehicle::Sender;
+use shared::manual::ManualInput;
 use shared::mission::MissionConfig;
 use shared::mission::bringup::CalibrationKind;
 use shared::mission::drives::{BoardDrives, PIXHAWK_6C};
@@ -84,6 +85,8 @@ pub struct QueuePorts {
     pub commands: Deque<PendingCommand, COMMANDS_CAPACITY>,
     /// A ground station's heartbeat came since the harness last cleared this.
     pub gcs_heartbeat: bool,
+    /// The newest joystick input not yet taken.
+    pub manual: Option<ManualInput>,
     /// The HIL plant's battery, mV (`u32::MAX`: none heard).
     pub battery_mv: u32,
     /// The HIL plant's rotor speeds.
@@ -136,6 +139,7 @@ impl QueuePorts {
             mocap: None,
             commands: Deque::new(),
             gcs_heartbeat: false,
+            manual: None,
             battery_mv: u32::MAX,
             esc_rpm: EscRpmInbox::new(),
             config: MissionConfig::DEFAULT,
@@ -255,6 +259,10 @@ impl VehiclePorts for QueuePorts {
 
     fn gcs_heartbeat(&mut self) {
         self.gcs_heartbeat = true;
+    }
+
+    fn manual_control(&mut self, input: ManualInput) {
+        self.manual = Some(input);
     }
 
     fn battery_mv(&mut self, millivolts: u32) {

@@ -399,3 +399,26 @@ fn a_board_without_logs_lists_none() {
         Some(Bulk::Log(link::log_transfer::LogReply::Entry(e))) if e.num_logs == 0
     ));
 }
+
+#[test]
+fn a_joystick_in_range_goes_to_the_control_task_and_one_out_of_range_does_not() {
+    let stick = |z: i16| link::msg::MANUAL_CONTROL_DATA {
+        target: link::VEHICLE_SYSTEM_ID,
+        x: 1000,
+        y: 0,
+        z,
+        r: 0,
+        buttons: 0,
+    };
+    let mut b = Bench::new();
+    b.send(&stick(-5));
+    assert_eq!(b.io.manual, None, "a thrust below 0 is no input");
+    b.send(&stick(500));
+    let input = b.io.manual.expect("taken");
+    assert_eq!((input.sticks.pitch, input.sticks.throttle), (1.0, 0.5));
+    // Once signing is on, an unsigned joystick is not taken.
+    b.io.manual = None;
+    b.io.signing.set_key([3; 32], 1, 0, LINK_ID);
+    b.send(&stick(500));
+    assert_eq!(b.io.manual, None);
+}
