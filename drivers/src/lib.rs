@@ -16,6 +16,8 @@
 //! | [`stepper`] | a robot's rail axis on a TMC2209: velocity commands, arc length, stalls |
 //! | [`reset`] | why the STM32H7 last reset (RCC_RSR), for the start-up report |
 //! | [`battery`] | the power module's pack voltage from ADC counts (divider, reference) |
+//! | [`rc`] | the safety pilot's RC channels in microseconds, whichever receiver carries them |
+//! | [`crsf`] | CRSF (ExpressLRS, TBS Crossfire) receivers: frames, CRC, channels, link statistics |
 //! | [`sd_logs`] | the flight logs as numbered files on the microSD card's FAT volume |
 #![no_std]
 #![forbid(unsafe_code)]
@@ -25,12 +27,14 @@
 extern crate std;
 
 pub mod battery;
+pub mod crsf;
 pub mod dshot;
 pub mod dshot_telemetry;
 pub mod esc_gate;
 pub mod icm42688;
 pub mod imu;
 pub mod pulse;
+pub mod rc;
 pub mod reset;
 pub mod sd_logs;
 pub mod stepper;
