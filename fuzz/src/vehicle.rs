@@ -34,11 +34,11 @@ use link::hil::{JobDeadline, VehicleClock};
 use link::mission::wire::MissionMessage;
 use link::signing::{KEY_LEN, Signing, Verdict};
 use link::status::MissionState;
-use onboard::store::{ParamStore, StoreError};
 use link::vehicle::{Inbound, crc_extra, dispatch};
 use onboard::autonomy::{Autonomy, JobResult, Report, Severity};
 use onboard::link_service::{LINK_ID, LinkService, Outbound, QueuePorts};
 use onboard::payload_loading::{LoadedPayload, PayloadLoader};
+use onboard::store::{ParamStore, StoreError};
 use shared::mission::MissionPlanner;
 use shared::mission::params::{COUNT as PARAM_COUNT, ParamValues, check};
 use shared::scenario_wire::{MAX_ENCODED_LEN, decode_and_check};
@@ -440,7 +440,6 @@ impl Checked {
         // What a restart must find: the key set, the description accepted from an upload.
         if let Inbound::SetupSigning { key, timestamp, .. } = inbound
             && v.options.key_setup_allowed
-            && !self.untrusted
         {
             assert_eq!(
                 v.io.signing.enabled(),
