@@ -18,6 +18,7 @@
 //! | [`battery`] | the power module's pack voltage from ADC counts (divider, reference) |
 //! | [`rc`] | the safety pilot's RC channels in microseconds, whichever receiver carries them |
 //! | [`crsf`] | CRSF (ExpressLRS, TBS Crossfire) receivers: frames, CRC, channels, link statistics |
+//! | [`sbus`] | SBUS receivers: 25-byte frames, idle-line framing, failsafe and frame-lost flags |
 //! | [`sd_logs`] | the flight logs as numbered files on the microSD card's FAT volume |
 #![no_std]
 #![forbid(unsafe_code)]
@@ -36,6 +37,7 @@ pub mod imu;
 pub mod pulse;
 pub mod rc;
 pub mod reset;
+pub mod sbus;
 pub mod sd_logs;
 pub mod stepper;
 /// The thrust map lives with the mission (its motor test spins a rotor at an ESC command).

@@ -162,6 +162,8 @@ pub(crate) mod testing {
         Flip { at: usize, bit: u8 },
         /// `n` tokens lost (bytes and idles alike).
         Cut { at: usize, n: usize },
+        /// Up to `n` bytes lost from `at` on (a UART overrun), the idle lines among them kept.
+        LoseBytes { at: usize, n: usize },
         /// Noise bytes inserted.
         Insert { at: usize, noise: Vec<u8> },
         /// An idle line inserted (a pause inside a frame).
@@ -173,6 +175,18 @@ pub(crate) mod testing {
         prop_oneof![
             3 => (any::<usize>(), 0u8..8).prop_map(|(at, bit)| Corruption::Flip { at, bit }),
             2 => (any::<usize>(), 1usize..30).prop_map(|(at, n)| Corruption::Cut { at, n }),
+            2 => (any::<usize>(), vec(any::<u8>(), 1..12))
+                .prop_map(|(at, noise)| Corruption::Insert { at, noise }),
+            1 => any::<usize>().prop_map(|at| Corruption::InsertIdle { at }),
+        ]
+    }
+
+    /// One [`Corruption`] of a UART's kind: a flipped bit, bytes lost to an overrun (the idle
+    /// lines still seen), noise bytes, a pause.
+    pub fn uart_corruption() -> impl Strategy<Value = Corruption> {
+        prop_oneof![
+            3 => (any::<usize>(), 0u8..8).prop_map(|(at, bit)| Corruption::Flip { at, bit }),
+            2 => (any::<usize>(), 1usize..30).prop_map(|(at, n)| Corruption::LoseBytes { at, n }),
             2 => (any::<usize>(), vec(any::<u8>(), 1..12))
                 .prop_map(|(at, noise)| Corruption::Insert { at, noise }),
             1 => any::<usize>().prop_map(|at| Corruption::InsertIdle { at }),
@@ -201,6 +215,18 @@ pub(crate) mod testing {
                 let end = (at + n).min(tokens.len());
                 if at < end {
                     tokens.drain(at..end);
+                }
+            }
+            Corruption::LoseBytes { at, n } => {
+                let mut at = at % len;
+                let mut lost = 0;
+                while lost < n && at < tokens.len() {
+                    if let Tok::Byte(_) = tokens[at] {
+                        tokens.remove(at);
+                        lost += 1;
+                    } else {
+                        at += 1;
+                    }
                 }
             }
             Corruption::Insert { at, ref noise } => {
