@@ -26,20 +26,25 @@
 //!   partial frame there: no frame spans a gap, so a truncated frame cannot borrow the next
 //!   frame's bytes and pass its CRC by chance (1 in 256) without one.
 //! - CRSF channel frames carry no failsafe flag: an ExpressLRS receiver stops sending them when
-//!   the link is lost, and the consumer times them out. Channel frames after link statistics
-//!   that say the uplink's link quality is 0 (as a TBS receiver holding failsafe positions
-//!   sends) are reported as failsafe until link statistics say it is back.
-//! - What an 8-bit CRC cannot do: a corrupted frame whose CRC checks by chance (about 1 in 256
-//!   of the corrupted frames that still start with a sync byte and a plausible length) is
-//!   indistinguishable from a real one, here as in every CRSF receiver. The property tests
-//!   measure how often that happens on corrupted streams.
+//!   the link is lost, and the consumer times them out. A receiver that kept sending channels
+//!   (failsafe positions) would say the link is down in its link statistics (the wiki: an
+//!   uplink link quality of 0 may mark a disconnected link), so channel frames after link
+//!   statistics with a link quality of 0 are reported as failsafe until link statistics say
+//!   it is back.
+//! - What an 8-bit CRC cannot do: a corrupted frame whose CRC checks by chance (1 in 256 of the
+//!   corrupted frames that still start with a sync byte and a plausible length) is
+//!   indistinguishable from a real one, here as in every CRSF receiver. The property test
+//!   measured 14 to 28 such frames in 10,000 corrupted streams of up to seven frames and up
+//!   to four faults each (bytes inserted or lost inside a frame, several flipped bits).
 //!
-//! Written by hand rather than with a crate: `crsf` 2.0.1 (the crates.io release) pulls
-//! `bitfield` and `snafu` for a parser that, after a bad CRC, restarts behind the rejected
-//! frame (so a false start swallows the frame after it) and drops bad lengths without saying
-//! so; `uf-crsf` 0.7 resynchronises well but is a 0.x crate whose parser API was rewritten
-//! across its recent releases, pulls `num_enum`'s proc macro and decodes some forty frame types
-//! for the two needed here; neither counts what it drops. The parser is 150 lines.
+//! Written by hand rather than with a crate: `crsf` 2.0.1, its crates.io release, takes 64
+//! bytes off its buffer for every frame whatever the frame's length, so of three frames pushed
+//! back to back it returns one (tried), and it pulls `bitfield` and `snafu`. `uf-crsf` 0.7
+//! resynchronises well (it drops only a rejected start byte, as this parser does), but it is a
+//! 0.x crate whose parser API changed with its recent releases (a byte state machine in 0.2, a
+//! slice cursor in 0.7), brings `num_enum`'s proc macro and some forty frame decoders for the
+//! two needed here, and knows no idle line; the wrapper it would need (idle lines, counts,
+//! failsafe, microseconds) is most of this module.
 
 use crate::rc::{self, PACKED_LEN, RcFrame};
 

@@ -530,6 +530,9 @@ fn corrupted_streams_never_move_a_stick() {
         sent_frames_emitted: usize,
         /// Events that are corrupted frames whose CRC checked by chance.
         collisions: usize,
+        /// Corrupted frames whose CRC checked by chance but which gave no event (another
+        /// type, or a payload of the wrong size).
+        silent_collisions: usize,
     }
     let seen = RefCell::new(Seen::default());
     let case = (stream(), vec(corruption(), 1..5));
@@ -565,10 +568,13 @@ fn corrupted_streams_never_move_a_stick() {
             }
             s.sent_frames_emitted += out;
             s.collisions += collided;
+            // Only channels and statistics were sent: any other frame that checked is chance.
+            let silent = (parser.stats().other_frames + parser.stats().bad_payload) as usize;
+            s.silent_collisions += silent;
             // And every frame that came through the corruption whole comes out, unless a
             // frame that checked by chance took some of its bytes.
             prop_assert!(
-                out + collided >= intact,
+                out + collided + silent >= intact,
                 "{} of {} intact frames",
                 out,
                 intact
@@ -580,7 +586,7 @@ fn corrupted_streams_never_move_a_stick() {
     let s = seen.into_inner();
     println!("CRSF, {CASES} corrupted streams: {s:?}");
     // An 8-bit CRC passes 1 in 256 of the corrupted frames that reach it with a plausible
-    // start and length: measured 15 to 19 events in 10,000 cases of about 2.5 corruptions
+    // start and length: measured 14 to 28 events in 10,000 cases of about 2.5 corruptions
     // each (inserted or lost bytes inside a frame, two or more flipped bits). Bounded well
     // above that, so the test does not flake; no event is ever a frame whose CRC failed.
     assert!(s.collisions * 200 < CASES as usize, "{s:?}");
