@@ -232,8 +232,14 @@ impl Vehicle {
         assert_eq!(
             out.armed,
             ARMED_PHASES.contains(&phase),
-            "armed {} in phase {phase}",
-            out.armed
+            "armed {} in phase {phase} (phases so far {:?}, this step's texts {:?})",
+            out.armed,
+            self.phases,
+            out.report
+                .texts
+                .iter()
+                .map(|t| t.text.as_str())
+                .collect::<Vec<_>>()
         );
         assert!(
             !pushing || THRUST_PHASES.contains(&phase),

@@ -592,7 +592,7 @@ impl Autonomy {
             thrust,
             rail,
             armed: out.armed,
-            motor_test: self.mission.motor_testing(),
+            motor_test: out.motor_test,
             telemetry,
             status_changed,
             calibrated,

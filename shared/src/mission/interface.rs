@@ -247,6 +247,9 @@ pub struct TickOutput {
     pub robots: Positions,
     /// Whether the rotors may spin.
     pub armed: bool,
+    /// A motor test spun the rotors this tick (armed on the ground, the mission not
+    /// running; the tick that ends the test included).
+    pub motor_test: bool,
     /// The phase after this tick.
     pub phase: Phase,
     /// The transition this tick made, if any.

@@ -188,10 +188,13 @@ fn a_motor_test_spins_the_rotors_asked_for_until_its_time_or_another_command() {
             .enumerate()
             .all(|(j, &t)| j == 1 || t == 0.0)
     );
-    // Stopped at 0.5 s.
+    assert!(out.motor_test);
+    // Stopped at 0.5 s; every tick that spins them says it is the motor test's, the last too.
     let mut spinning = 1;
     for tick in 2..400 {
-        if mission.step(&world.input(tick, None)).armed {
+        let out = mission.step(&world.input(tick, None));
+        assert_eq!(out.armed, out.motor_test, "tick {tick}");
+        if out.armed {
             spinning += 1;
         }
     }

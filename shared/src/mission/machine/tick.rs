@@ -131,11 +131,11 @@ impl Mission {
         }
         let stalled = input.faults.stalled_robots != 0;
         let mut calibrated = None;
+        let mut motor_test = false;
         // Nothing on the bench in flight: one look.
         if stalled || self.bench_busy() {
-            let spinning;
-            (spinning, calibrated) = self.bench_step(&input.imu, dt, stalled, &mut thrusts);
-            armed |= spinning;
+            (motor_test, calibrated) = self.bench_step(&input.imu, dt, stalled, &mut thrusts);
+            armed |= motor_test;
         }
         if !matches!(self.phase, Phase::Flying(_)) {
             cascade = None;
@@ -144,6 +144,7 @@ impl Mission {
             thrusts,
             robots: self.robots.clone(),
             armed,
+            motor_test,
             phase: self.phase,
             transition,
             adaptation: self.adaptation.take(),
