@@ -227,6 +227,7 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
         confirm_rails: !args.unconfirmed_rails,
         gyro_bias,
         esc_telemetry: args.esc_telemetry,
+        keeps_logs: args.qemu.is_some() && args.storage.is_some(),
     };
     let json = args.json;
     let on_text: Box<dyn FnMut(&LoggedText) + Send> = Box::new(move |t: &LoggedText| {

@@ -50,6 +50,11 @@ const BATTERY_EVERY: u64 = 40;
 /// How long the firmware may take to say whether it takes a payload description.
 const PAYLOAD_TIMEOUT: Duration = Duration::from_secs(20);
 
+/// Longest the plant waits after the mission for the firmware to say its flight log is
+/// written (wall time): the logger runs below the control step and may still be draining its
+/// ring into the file (seconds under a loaded host).
+const FLIGHT_LOG_WAIT: Duration = Duration::from_secs(120);
+
 /// One run's set-up.
 #[derive(Clone, Debug)]
 pub struct HilSetup {
@@ -81,6 +86,10 @@ pub struct HilSetup {
     /// The gyro's constant bias, rad/s per body axis, in place of the one drawn from the seed
     /// (`--gyro-bias`).
     pub gyro_bias: Option<[f32; 3]>,
+    /// The firmware keeps flight logs (`--storage`): after the mission the plant waits until
+    /// it says the log it started is written, so that stopping it loses none of the log's
+    /// tail.
+    pub keeps_logs: bool,
     /// The plant sends each rotor's RPM (`ESC_STATUS`) with every step, as ESCs with
     /// bidirectional DShot would report it (`--esc-telemetry`).
     pub esc_telemetry: bool,
@@ -104,6 +113,7 @@ impl Default for HilSetup {
             linger: None,
             confirm_rails: true,
             gyro_bias: None,
+            keeps_logs: false,
             esc_telemetry: false,
             mocap_lost_after_takeoff: None,
             injections: Vec::new(),
@@ -449,6 +459,9 @@ pub fn run(
     let record = mission_run::fly(s, &plant_setup, &mut autopilot, &mut |_, _, _| {})?;
     let wall_s = wall.elapsed().as_secs_f64();
     let bytes_after = autopilot.session.byte_counts();
+    if setup.keeps_logs {
+        autopilot.session.wait_for_logs_closed(FLIGHT_LOG_WAIT)?;
+    }
     if let Some(linger) = setup.linger {
         autopilot.session.linger(linger)?;
     }

@@ -201,6 +201,44 @@ impl Session {
         Ok(())
     }
 
+    /// Reads the firmware's frames until every flight log it said it started (`flight log N
+    /// started`) it has also said it ended (`flight log N written: ...`, or why it stopped or
+    /// is incomplete), at most `most` (wall time); an error naming its last texts when it does
+    /// not. A firmware that started no log is not waited for.
+    pub fn wait_for_logs_closed(&mut self, most: Duration) -> Result<()> {
+        let open = |log: &FirmwareLog| {
+            let said = |what: fn(&str) -> bool| log.texts.iter().filter(|t| what(&t.text)).count();
+            let started = said(|t| t.starts_with("flight log ") && t.ends_with(" started"));
+            let ended = said(|t| {
+                (t.starts_with("flight log ") && t.contains(" written: "))
+                    || t.starts_with("flight log incomplete")
+                    || t.starts_with("flight log stopped")
+            });
+            started > ended
+        };
+        let end = Instant::now() + most;
+        while open(&self.log) {
+            let now = Instant::now();
+            if now >= end {
+                let last: Vec<&str> = self
+                    .log
+                    .texts
+                    .iter()
+                    .rev()
+                    .take(5)
+                    .map(|t| t.text.as_str())
+                    .collect();
+                bail!(
+                    "the firmware did not say its flight log was written within {} s of the \
+                     mission's end (its last texts, newest first: {last:?})",
+                    most.as_secs()
+                );
+            }
+            self.next((now + Duration::from_millis(100)).min(end))?;
+        }
+        Ok(())
+    }
+
     /// A bridged ground station's frames forwarded and dropped (`None` without one).
     pub fn gcs_counts(&self) -> Option<super::gcs::GcsCounts> {
         self.gcs.as_ref().map(GcsBridge::counts)
