@@ -47,6 +47,9 @@ mavlink = gs.mavlink
 Failure = gs.Failure
 # Bytes a LOG_REQUEST_DATA asks for at a time (QGroundControl asks 90 * 1024).
 BLOCK = 90 * 512
+# Wall seconds a block may take at most: a backstop only (a block fails after ten requests on
+# the vehicle's clock, above), for a vehicle whose clock stopped.
+BLOCK_BACKSTOP_S = 120
 # Longest the vehicle's heartbeats may be apart during a download, s of the vehicle's clock
 # (it sends one a second, with a TIMESYNC request stamped with its clock).
 MAX_BEAT_GAP_S = 1.5
@@ -112,6 +115,11 @@ def list_logs(v, watch):
     return count, entries
 
 
+def vehicle_clock(watch):
+    """The vehicle's clock, s, as its last heartbeat's TIMESYNC said; None before one came."""
+    return watch.beats[-1][1] if watch.beats else None
+
+
 def download(v, watch, log_id, size):
     """Log `log_id` block by block, as QGroundControl does: its bytes."""
     data = bytearray(size)
@@ -119,8 +127,9 @@ def download(v, watch, log_id, size):
         block_end = min(size, block_start + BLOCK)
         missing = set(range(block_start, block_end, 90))
         v.conn.mav.log_request_data_send(1, 1, log_id, block_start, block_end - block_start)
-        asked = time.monotonic()
+        asked = block_asked = time.monotonic()
         retries = 0
+        counted_at = vehicle_clock(watch)
         while missing:
             m = receive(v, watch, 0.5)
             if m is not None and m.get_type() == "LOG_DATA" and m.id == log_id:
@@ -130,10 +139,18 @@ def download(v, watch, log_id, size):
                     asked = time.monotonic()
                 continue
             if time.monotonic() - asked > 1.0:
-                retries += 1
-                if retries > 10:
+                # Asked again after a second of the wall's without the rest of the block, and
+                # counted against the ten only once the vehicle's clock has moved on a second
+                # too: on a loaded machine QEMU runs it slower than the wall's, and ten seconds
+                # of the wall's were once too few for it to answer.
+                now = vehicle_clock(watch)
+                if now is None or counted_at is None or now - counted_at >= 1.0:
+                    retries += 1
+                    counted_at = now
+                if retries > 10 or time.monotonic() - block_asked > BLOCK_BACKSTOP_S:
                     raise Failure(f"log {log_id}: the block at {block_start} did not come "
-                                  f"({len(missing)} pieces missing after 10 requests)")
+                                  f"({len(missing)} pieces missing after {retries} requests, "
+                                  f"{time.monotonic() - block_asked:.0f} s)")
                 first, last = min(missing), max(missing)
                 v.conn.mav.log_request_data_send(1, 1, log_id, first, min(block_end, last + 90)
                                                  - first)
@@ -177,6 +194,31 @@ def hostile_requests(v, watch, count, size):
           "the end, far past it and of count 0: one empty LOG_DATA each")
 
 
+# MAVProxy as `mavproxy.py` starts it, its link's socket given the receive buffer this script's
+# own pymavlink asks for (ground_station.RECEIVE_BUFFER; SO_RCVBUFFORCE where allowed, past the
+# system's maximum): with the system's default (208 KB) the log's LOG_DATA, which the vehicle
+# sends at several times real time, overflowed it whenever MAVProxy was descheduled on a busy
+# machine (some 20,000 datagrams dropped in a download), and MAVProxy then spent minutes asking
+# for the gaps.
+MAVPROXY_WITH_BUFFER = """
+import runpy, socket, sys
+from pymavlink import mavutil
+size = int(sys.argv.pop(1))
+opened = mavutil.mavudp.__init__
+def with_buffer(self, *args, **kwargs):
+    opened(self, *args, **kwargs)
+    for option in (getattr(socket, "SO_RCVBUFFORCE", None), socket.SO_RCVBUF):
+        try:
+            self.port.setsockopt(socket.SOL_SOCKET, option, size)
+            break
+        except (OSError, TypeError):
+            pass
+mavutil.mavudp.__init__ = with_buffer
+sys.argv[0] = "mavproxy.py"
+runpy.run_module("MAVProxy.mavproxy", run_name="__main__", alter_sys=True)
+"""
+
+
 def mavproxy_download(args, log_path):
     """MAVProxy's `log list` and `log download 0`, typed in as a person would: the file."""
     mavproxy = shutil.which("mavproxy.py")
@@ -186,14 +228,18 @@ def mavproxy_download(args, log_path):
         print("MAVProxy is not installed (pip install MAVProxy): its check skipped")
         return
     want = open(log_path, "rb").read()
-    # On a busy machine MAVProxy falls behind, drops what it cannot read and asks again (up to
-    # three minutes): the plant is paced to 4 times real time so that its 15 minutes of idle
-    # steps outlast that.
-    plant = gs.start_hil(args, ["--speed", "4"], listen=False)
+    # On a busy machine MAVProxy falls behind, and what overflows its socket it asks for again
+    # after 0.7 s without data (each request replacing the one before, as in PX4): with the
+    # system's default buffer the download took 175 to 270 s on two loaded cores, whatever the
+    # plant's pace (1, 2 or 4 times real time), and once the plant's idle steps ran out first;
+    # with MAVPROXY_WITH_BUFFER's, 58 to 67 s there and a few dozen requests again. The plant
+    # is paced to 2 times real time: its 15 minutes of idle steps are 7.5 of the wall's.
+    plant = gs.start_hil(args, ["--speed", "2"], listen=False)
     with tempfile.TemporaryDirectory(prefix="mavproxy-logs-") as state:
         out_file = os.path.join(state, "log0.ulg")
         proxy = subprocess.Popen(
-            [mavproxy, f"--master=udpin:127.0.0.1:{plant.port}", "--source-system=255",
+            [sys.executable, "-c", MAVPROXY_WITH_BUFFER, str(gs.RECEIVE_BUFFER),
+             f"--master=udpin:127.0.0.1:{plant.port}", "--source-system=255",
              f"--state-basedir={state}"],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
             text=True, bufsize=1, env={**os.environ, "PYTHONUNBUFFERED": "1"})
@@ -350,7 +396,7 @@ def main():
         print(f"log download: FAILED: no log-000.ulg in {args.storage}", file=sys.stderr)
         return 1
     # The plant steps the idle vehicle at up to 15 minutes of its time (two minutes of the
-    # wall's at 8 times real time, four at 4): each part has a plant of its own, on the same
+    # wall's at 8 times real time, 7.5 at 2): each part has a plant of its own, on the same
     # storage.
     try:
         sizes = [os.path.getsize(f) for f in files]
