@@ -2,7 +2,7 @@
 """A flooding ground station against the firmware under QEMU, with pymavlink, through
 `host-sim hil --gcs` (docs/ground-link.md#under-a-flood).
 
-Run by tests/flood.rs (cargo test); by hand:
+Run by tests/hil/ground/flood.rs (cargo test); by hand:
 
     python3 tests/flood.py --host-sim target/debug/host-sim \
         --elf target/thumbv7em-none-eabihf/release/firmware-qemu \

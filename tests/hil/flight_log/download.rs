@@ -10,9 +10,7 @@
 //! firmware's QEMU image itself. Without one of them the test says it was skipped and why,
 //! and passes; with `HIL_REQUIRED=1` (CI, which installs them) it fails instead.
 
-mod common;
-
-use common::{image_or_skip, run_python_check, workspace};
+use crate::common::{image_or_skip, qemu_slot, run_python_check, workspace};
 use std::process::Command;
 
 /// The test's name in what it says when skipped.
@@ -27,6 +25,7 @@ fn a_ground_station_lists_downloads_and_erases_the_firmwares_flight_log() {
     let _ = std::fs::remove_dir_all(&storage);
     std::fs::create_dir_all(&storage).expect("a temporary folder");
     let scenario = workspace().join("tests/scenarios/rect-ex1.toml");
+    let slot = qemu_slot();
     let flight = Command::new(env!("CARGO_BIN_EXE_host-sim"))
         .arg("hil")
         .arg("--scenario")
@@ -37,6 +36,7 @@ fn a_ground_station_lists_downloads_and_erases_the_firmwares_flight_log() {
         .arg(&storage)
         .output()
         .expect("host-sim runs");
+    drop(slot);
     assert!(
         flight.status.success(),
         "the flight: {}",
