@@ -7,8 +7,9 @@
 //! `HIL_REQUIRED=1` (CI) it fails instead.
 //!
 //! The tests run side by side (libtest's threads) and take turns at QEMU: at most `HIL_JOBS`
-//! (default 1) firmware runs at once (`common::qemu_slot`). `cargo test -p host-sim --test
-//! hil`; the Python checks alone: `... --test hil -- ground:: flight_log::download`.
+//! (default 1) firmware runs at once (`common::qemu_slot`). The one flight three tests need is
+//! flown once (`storage_flight`). `cargo test -p host-sim --test hil`; the Python checks
+//! alone: `... --test hil -- ground:: flight_log::download`.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -16,3 +17,4 @@ mod common;
 mod flight_log;
 mod ground;
 mod lockstep;
+mod storage_flight;

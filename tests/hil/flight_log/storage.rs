@@ -1,16 +1,17 @@
 //! The firmware's flight log (docs/formats.md#flight-logs): rect-ex1 flown under QEMU with
-//! `hil --storage` leaves the simulator's log in its storage, message for message (but the pack
+//! `hil --storage` ([`crate::storage_flight`], the flight the log download and the flood's clean
+//! run share) leaves the simulator's log in its storage, message for message (but the pack
 //! voltage, which the plant sends at 10 Hz in millivolts), and pyulog opens it too. The
 //! simulator's own log has its tests in `simulation::flight_log`. Without python3 and pyulog,
 //! or QEMU, the test says it was skipped and why; with `HIL_REQUIRED=1` (CI, which installs
 //! them) it fails instead.
 
 use crate::common;
+use crate::storage_flight;
 
 use ::flight_log::topics::Topic;
 use common::ulog::{fly_logged, messages, pyulog_check};
-use common::{image_or_skip, qemu_slot, skip, workspace};
-use std::process::Command;
+use common::{image_or_skip, skip};
 
 #[test]
 fn the_firmware_in_the_loop_keeps_the_simulators_log_in_its_storage() {
@@ -18,28 +19,11 @@ fn the_firmware_in_the_loop_keeps_the_simulators_log_in_its_storage() {
         return;
     };
     let (_, host_log) = fly_logged("hil", true);
-    let storage = host_log.with_file_name("storage");
-    let _ = std::fs::remove_dir_all(&storage);
-    let slot = qemu_slot();
-    let output = Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .arg("hil")
-        .arg("--scenario")
-        .arg(workspace().join("tests/scenarios/rect-ex1.toml"))
-        .arg("--qemu")
-        .arg(&elf)
-        .arg("--storage")
-        .arg(&storage)
-        .output()
-        .expect("host-sim runs");
-    drop(slot);
-    assert!(
-        output.status.success(),
-        "hil: {}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    let firmware_log = storage.join("log-000.ulg");
+    let flight = storage_flight::flown(&elf);
+    let firmware_bytes = flight
+        .file("log-000.ulg")
+        .expect("the firmware left its log");
     let host_bytes = std::fs::read(&host_log).expect("the host's log");
-    let firmware_bytes = std::fs::read(&firmware_log).expect("the firmware left its log");
     let data = |all: &[u8]| -> Vec<Vec<u8>> {
         messages(all)
             .into_iter()
@@ -47,7 +31,7 @@ fn the_firmware_in_the_loop_keeps_the_simulators_log_in_its_storage() {
             .map(|m| [&[m.kind][..], m.payload].concat())
             .collect()
     };
-    let (host, firmware) = (data(&host_bytes), data(&firmware_bytes));
+    let (host, firmware) = (data(&host_bytes), data(firmware_bytes));
     assert_eq!(host.len(), firmware.len(), "as many messages");
     let battery = Topic::BatteryStatus.msg_id().to_le_bytes();
     for (i, (h, f)) in host.iter().zip(&firmware).enumerate() {
@@ -61,6 +45,9 @@ fn the_firmware_in_the_loop_keeps_the_simulators_log_in_its_storage() {
             assert_eq!(f, h, "message {i} differs");
         }
     }
+    // pyulog reads it from a file of its own.
+    let firmware_log = host_log.with_file_name("firmware-log-000.ulg");
+    std::fs::write(&firmware_log, firmware_bytes).expect("the firmware's log copied");
     match pyulog_check(&firmware_log) {
         Ok(report) => {
             use std::io::Write;
@@ -68,6 +55,6 @@ fn the_firmware_in_the_loop_keeps_the_simulators_log_in_its_storage() {
         }
         Err(why) => skip("flight log in the loop with pyulog", &why),
     }
-    let _ = std::fs::remove_dir_all(&storage);
+    let _ = std::fs::remove_file(&firmware_log);
     let _ = std::fs::remove_file(&host_log);
 }
