@@ -110,9 +110,10 @@ pub fn image_or_skip(test: &str) -> Option<PathBuf> {
 }
 
 /// Firmware-in-the-loop runs at once in a test process when `HIL_JOBS` does not say: each is
-/// a QEMU and its plant in lockstep (and the ground station's script, if any). One at a time,
-/// as when each test file was a binary of its own.
-pub const DEFAULT_HIL_JOBS: usize = 1;
+/// a QEMU and its plant in lockstep (and the ground station's script, if any), which take
+/// turns at the processor and keep about one core busy between them, or less when the run is
+/// paced to a multiple of real time. Two keep a two-core machine busy.
+pub const DEFAULT_HIL_JOBS: usize = 2;
 
 /// A turn at QEMU, held for as long as the guard lives ([`qemu_slot`]).
 pub struct QemuSlot(());

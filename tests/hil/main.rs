@@ -7,7 +7,7 @@
 //! `HIL_REQUIRED=1` (CI) it fails instead.
 //!
 //! The tests run side by side (libtest's threads) and take turns at QEMU: at most `HIL_JOBS`
-//! (default 1) firmware runs at once (`common::qemu_slot`). The one flight three tests need is
+//! (default 2) firmware runs at once (`common::qemu_slot`). The one flight three tests need is
 //! flown once (`storage_flight`). `cargo test -p host-sim --test hil`; the Python checks
 //! alone: `... --test hil -- ground:: flight_log::download`.
 
