@@ -5,7 +5,8 @@
 //! The main test flies rect-ex1 and L-sim1 through the firmware and compares them with the
 //! same missions run in this process (`host-sim mission`, same seed): the firmware runs the
 //! same `shared` code on the Cortex-M7 on the same steps, so the lifts, the estimate, the
-//! formation and the landing must agree to the bit.
+//! formation and the landing must agree to the bit. It prints what `.ci/hil-bench` prints of
+//! each mission (the real-time factor, the link's bytes, the guest's instructions per step).
 
 use crate::common;
 
@@ -76,13 +77,16 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
         let (tick_name, worst) = fw
             .worst_tick()
             .expect("the firmware reports its worst tick");
+        let (_, busy_mean, busy_worst) = fw.busy_per_step().unwrap_or(("", f64::NAN, f64::NAN));
         report(format_args!(
-            "hil {name}: {} ticks, {:.1} s simulated in {:.1} s wall ({:.0} ticks/s, {:.1}x real time); host-only mission {:.1} s wall; worst control tick {worst:.0} ({tick_name}, instructions under -icount)",
+            "hil {name}: {} ticks, {:.1} s simulated in {:.1} s wall ({:.0} ticks/s, {:.1}x real time, beside the other HIL tests); {:.0} bytes to the firmware and {:.0} from it per tick; guest {busy_mean:.0} instructions per step on average ({busy_worst:.0} in the busiest second); host-only mission {:.1} s wall; worst control tick {worst:.0} ({tick_name}, instructions under -icount)",
             fw.ticks,
             fw.simulated_s,
             fw.wall_s,
             fw.ticks as f64 / fw.wall_s,
             fw.real_time_factor(),
+            fw.link_bytes.to_firmware as f64 / fw.ticks as f64,
+            fw.link_bytes.from_firmware as f64 / fw.ticks as f64,
             host_wall
         ));
         assert_eq!(fw.firmware, "qemu-mps2-an500");
