@@ -78,7 +78,7 @@ fn load(planner: &mut MissionPlanner, loader: &mut PayloadLoader) -> Option<Repo
     LOADING.store(true, Ordering::SeqCst);
     // The parameters in force now; the mission gets the same with the description.
     let config = MISSION_CONFIG.lock(|c| c.get());
-    let running = MISSION_STATE.load(Ordering::SeqCst) == MissionState::Running as u8;
+    let running = mission_running();
     let (report, loaded) = loader.load(planner, received, config, running);
     if let Some(payload) = loaded {
         PAYLOAD_ROBOTS.store(payload.scenario.robots.count() as u8, Ordering::Relaxed);
@@ -91,7 +91,7 @@ fn load(planner: &mut MissionPlanner, loader: &mut PayloadLoader) -> Option<Repo
 /// New parameters: the last description loaded again with them ([`PayloadLoader::reload`]).
 fn reload(planner: &mut MissionPlanner, loader: &mut PayloadLoader) -> Option<Report> {
     LOADING.store(true, Ordering::SeqCst);
-    let running = MISSION_STATE.load(Ordering::SeqCst) == MissionState::Running as u8;
+    let running = mission_running();
     let config = MISSION_CONFIG.lock(|c| c.get());
     let answer = loader
         .reload(planner, config, running)
@@ -103,4 +103,9 @@ fn reload(planner: &mut MissionPlanner, loader: &mut PayloadLoader) -> Option<Re
         });
     LOADING.store(false, Ordering::SeqCst);
     answer
+}
+
+/// The mission runs now, as the control task last said.
+fn mission_running() -> bool {
+    MISSION_STATE.load(Ordering::SeqCst) == MissionState::Running as u8
 }
