@@ -2,7 +2,7 @@
 """The bring-up commands against the firmware under QEMU, with pymavlink, through
 `host-sim hil --gcs` (docs/ground-link.md#bring-up-commands).
 
-Run by tests/bringup.rs (cargo test); by hand:
+Run by tests/hil/ground/bringup.rs (cargo test); by hand:
 
     python3 tests/bringup.py --host-sim target/debug/host-sim \
         --elf target/thumbv7em-none-eabihf/release/firmware-qemu \

@@ -2,13 +2,15 @@
 """A flooding ground station against the firmware under QEMU, with pymavlink, through
 `host-sim hil --gcs` (docs/ground-link.md#under-a-flood).
 
-Run by tests/flood.rs (cargo test); by hand:
+Run by tests/hil/ground/flood.rs (cargo test); by hand:
 
     python3 tests/flood.py --host-sim target/debug/host-sim \
         --elf target/thumbv7em-none-eabihf/release/firmware-qemu \
         --scenario tests/scenarios/rect-ex1.toml [--rate 200] [--kinds bytes,mix,param-list]
 
-First the mission flies with no ground station (`hil --json`): the clean run. Then, for each
+First the mission flies with no ground station (`hil --json --storage`, a fresh storage): the
+clean run (`--clean-report FILE`: that run's report, flown already by the caller; the Rust
+test shares the flight with the other tests that need it). Then, for each
 kind of flood, it flies again with this script as its ground station (`--gcs --linger 30`),
 which from the mission's start (the HEARTBEAT says it runs) to the mission's end sends `--rate` messages a second
 (default 200; seconds of the vehicle's clock, read from the time stamps of its telemetry, so
@@ -277,6 +279,9 @@ def main():
     parser.add_argument("--scenario", required=True)
     parser.add_argument("--rate", type=int, default=RATE, help="messages a second")
     parser.add_argument("--kinds", default=",".join(KINDS))
+    parser.add_argument("--clean-report",
+                        help="the clean run's report (`hil --json --storage` of the same "
+                             "mission with a fresh storage), when it was flown already")
     args = parser.parse_args()
     kinds = args.kinds.split(",")
     unknown = [k for k in kinds if k not in KINDS]
@@ -285,12 +290,18 @@ def main():
         return 1
     started = time.monotonic()
     try:
-        with tempfile.TemporaryDirectory(prefix="flood-") as tmp:
-            args.storage = tmp
-            clean = report_of(subprocess.Popen(plant_command(args, []), stdout=subprocess.PIPE,
-                                               stderr=subprocess.PIPE, text=True), "clean run")
-            if not clean.get("delivered"):
-                raise Failure(f"the clean run did not deliver: {clean.get('aborted')}")
+        if args.clean_report:
+            with open(args.clean_report) as f:
+                clean = json.load(f)
+        else:
+            with tempfile.TemporaryDirectory(prefix="flood-") as tmp:
+                args.storage = tmp
+                clean = report_of(subprocess.Popen(plant_command(args, []),
+                                                   stdout=subprocess.PIPE,
+                                                   stderr=subprocess.PIPE, text=True),
+                                  "clean run")
+        if not clean.get("delivered"):
+            raise Failure(f"the clean run did not deliver: {clean.get('aborted')}")
         for kind in kinds:
             with tempfile.TemporaryDirectory(prefix=f"flood-{kind}-") as tmp:
                 args.storage = tmp

@@ -2,7 +2,7 @@
 """A real ground station against the firmware under QEMU: pymavlink, as
 QGroundControl and MAVProxy talk to a vehicle, through `host-sim hil --gcs`.
 
-Run by tests/ground_link.rs (cargo test); by hand:
+Run by tests/hil/ground/ground_station.rs (cargo test); by hand:
 
     python3 tests/ground_station.py --host-sim target/debug/host-sim \
         --elf target/thumbv7em-none-eabihf/release/firmware-qemu \

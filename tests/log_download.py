@@ -3,8 +3,8 @@
 QGroundControl and MAVProxy fetch them (docs/formats.md#downloading-the-logs), through
 `host-sim hil --gcs`.
 
-Run by tests/log_download.rs (cargo test), on a storage directory the firmware has flown a
-mission into; by hand:
+Run by tests/hil/flight_log/download.rs (cargo test), on a storage directory the firmware has
+flown a mission into; by hand:
 
     python3 tests/log_download.py --host-sim target/debug/host-sim \
         --elf target/thumbv7em-none-eabihf/release/firmware-qemu \

@@ -5,7 +5,7 @@ uploads the paper's case with `mission_raw`, starts it, holds it in flight (the 
 stays within 0.1 m) and resumes it, and sees every item reached and the landing; the
 plant's report then says the payload was delivered at the target.
 
-Run by tests/mavsdk_mission.rs (cargo test); by hand:
+Run by tests/hil/ground/mavsdk_mission.rs (cargo test); by hand:
 
     python3 tests/mavsdk_mission.py --host-sim target/debug/host-sim \
         --elf target/thumbv7em-none-eabihf/release/firmware-qemu \

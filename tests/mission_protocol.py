@@ -2,7 +2,7 @@
 """The mission protocol's edge cases against the firmware under QEMU, with pymavlink, through
 `host-sim hil --gcs` (docs/ground-link.md#missions).
 
-Run by tests/mission_protocol.rs (cargo test); by hand:
+Run by tests/hil/ground/mission_protocol.rs (cargo test); by hand:
 
     python3 tests/mission_protocol.py --host-sim target/debug/host-sim \
         --elf target/thumbv7em-none-eabihf/release/firmware-qemu \

@@ -1,7 +1,11 @@
-//! Helpers the scenario tests share: where the scenario files are, loading one, running the
-//! `host-sim` binary, and the firmware-in-the-loop tests' image and skipping (a test that
-//! needs a missing tool says it was skipped and why; with `HIL_REQUIRED=1`, CI, it fails).
-#![allow(dead_code)] // each test crate uses its own subset
+//! Helpers the test binaries (`tests/simulation`, `tests/hil`, `tests/tools`) share: where the
+//! scenario files are, loading one, running the `host-sim` binary, the flight log's helpers
+//! ([`ulog`]), and the firmware-in-the-loop tests' image, their turns at QEMU and skipping (a
+//! test that needs a missing tool says it was skipped and why; with `HIL_REQUIRED=1`, CI, it
+//! fails).
+#![allow(dead_code)] // each test binary uses its own subset
+
+pub mod ulog;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -105,6 +109,47 @@ pub fn image_or_skip(test: &str) -> Option<PathBuf> {
     None
 }
 
+/// Firmware-in-the-loop runs at once in a test process when `HIL_JOBS` does not say: each is
+/// a QEMU and its plant in lockstep (and the ground station's script, if any), which take
+/// turns at the processor and keep about one core busy between them, or less when the run is
+/// paced to a multiple of real time. Two keep a two-core machine busy.
+pub const DEFAULT_HIL_JOBS: usize = 2;
+
+/// A turn at QEMU, held for as long as the guard lives ([`qemu_slot`]).
+pub struct QemuSlot(());
+
+static SLOTS_TAKEN: std::sync::Mutex<usize> = std::sync::Mutex::new(0);
+static SLOT_FREED: std::sync::Condvar = std::sync::Condvar::new();
+
+/// How many firmware-in-the-loop runs may go at once: `HIL_JOBS=N` (at least 1; 1 runs them
+/// one after the other), else [`DEFAULT_HIL_JOBS`].
+pub fn hil_jobs() -> usize {
+    std::env::var("HIL_JOBS")
+        .ok()
+        .and_then(|v| v.trim().parse::<usize>().ok())
+        .map_or(DEFAULT_HIL_JOBS, |n| n.max(1))
+}
+
+/// Waits for a turn at QEMU: every test that starts the firmware holds one while it runs, so
+/// that no more than [`hil_jobs`] run at once (libtest runs a binary's tests side by side).
+pub fn qemu_slot() -> QemuSlot {
+    let limit = hil_jobs();
+    let mut taken = SLOTS_TAKEN.lock().unwrap_or_else(|e| e.into_inner());
+    while *taken >= limit {
+        taken = SLOT_FREED.wait(taken).unwrap_or_else(|e| e.into_inner());
+    }
+    *taken += 1;
+    QemuSlot(())
+}
+
+impl Drop for QemuSlot {
+    fn drop(&mut self) {
+        let mut taken = SLOTS_TAKEN.lock().unwrap_or_else(|e| e.into_inner());
+        *taken -= 1;
+        SLOT_FREED.notify_one();
+    }
+}
+
 /// Exit status of the Python checks when a package they need is missing (the one line on
 /// their stderr says which and how to install it).
 pub const PYTHON_PACKAGE_MISSING: i32 = 2;
@@ -125,10 +170,12 @@ pub fn python_check(test: &str, script: &str) {
 /// CI until its own limit.
 const PYTHON_CHECK_LIMIT_S: u64 = 900;
 
-/// [`python_check`] with the image `elf` already at hand and `extra` arguments for the script.
+/// [`python_check`] with the image `elf` already at hand and `extra` arguments for the script;
+/// waits for a turn at QEMU ([`qemu_slot`]) first.
 pub fn run_python_check(test: &str, script: &str, elf: &Path, extra: &[&std::ffi::OsStr]) {
     use std::os::unix::process::CommandExt;
     use std::process::Stdio;
+    let _slot = qemu_slot();
     let child = Command::new("python3")
         .arg(workspace().join(script))
         .arg("--host-sim")

@@ -3,7 +3,7 @@
 //! on motion capture without dropping the payload and stops its rotors; on the ground the
 //! mission stops with the reason and never arms; no normal mission is ever flagged.
 
-mod common;
+use crate::common;
 use common::{host_sim, load};
 
 use host_sim::mission_run::{

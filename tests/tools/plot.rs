@@ -6,7 +6,7 @@
 //! one line of error and exit code 1; no cut, flipped or random bytes make the reader or the
 //! page panic.
 
-mod common;
+use crate::common;
 use common::{host_sim, scenario_path};
 
 use std::path::{Path, PathBuf};

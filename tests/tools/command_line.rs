@@ -3,7 +3,7 @@
 //! `--output`, an endless or huge file is refused, a closed stdout ends the run quietly, and
 //! the exit code tells how a mission or flight ended.
 
-mod common;
+use crate::common;
 use common::{host_sim, scenario_path};
 
 use std::io::{BufRead, BufReader};

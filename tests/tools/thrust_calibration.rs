@@ -3,7 +3,7 @@
 //! as `param set` lines to paste, and every bench file it cannot use is refused with exit code
 //! 1 and one line naming the file's line (or the missing interval) and what is wrong.
 
-mod common;
+use crate::common;
 use common::{host_sim, scenario_path, workspace};
 
 use std::path::PathBuf;

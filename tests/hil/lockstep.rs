@@ -1,22 +1,18 @@
-//! Hardware in the loop under QEMU: the firmware's ARM image
-//! (`cargo fw-qemu`) on `qemu-system-arm -M mps2-an500`, the plant in lockstep over MAVLink.
-//!
-//! These tests need `qemu-system-arm`; they build the firmware's QEMU image themselves (the
-//! build `cargo fw-qemu` stands for; `FIRMWARE_QEMU_ELF` names another). Without QEMU each
-//! test says it was skipped and why, and passes; with `HIL_REQUIRED=1` (CI) it fails instead.
-//! One QEMU runs at a time.
+//! The firmware driven from this process: the plant in lockstep with the firmware's ARM image
+//! under QEMU over MAVLink (Ethernet, the UART, a pty), through the library's `hil::run` and
+//! `Session`, and the `hil` command's report.
 //!
 //! The main test flies rect-ex1 and L-sim1 through the firmware and compares them with the
 //! same missions run in this process (`host-sim mission`, same seed): the firmware runs the
 //! same `shared` code on the Cortex-M7 on the same steps, so the lifts, the estimate, the
-//! formation and the landing must agree to the bit.
+//! formation and the landing must agree to the bit. It prints what `.ci/hil-bench` prints of
+//! each mission (the real-time factor, the link's bytes, the guest's instructions per step).
 
-mod common;
+use crate::common;
 
-use common::{image_or_skip, workspace};
+use common::{image_or_skip, qemu_slot, workspace};
 use std::net::TcpListener;
 use std::path::Path;
-use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use host_sim::hil::qemu::{Qemu, QemuLink};
@@ -30,9 +26,6 @@ use link::hil::ImuSample;
 use link::msg::{MavCmd, MavResult};
 use link::status::MissionState;
 use shared::scenario_wire::{MAX_ENCODED_LEN, encode};
-
-/// One QEMU at a time: the machines that run this have two cores.
-static ONE_QEMU: Mutex<()> = Mutex::new(());
 
 /// Prints a measurement where it is seen even when the test passes (the harness hides what
 /// `println!` prints then).
@@ -59,7 +52,7 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
     let Some(elf) = image_or_skip("the_qemu_firmware_flies_the_mission_as_the_host_does") else {
         return;
     };
-    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    let _slot = qemu_slot();
     for name in ["rect-ex1", "L-sim1"] {
         let loaded = scenario_file::load(&workspace().join(format!("tests/scenarios/{name}.toml")))
             .expect("scenario");
@@ -84,13 +77,16 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
         let (tick_name, worst) = fw
             .worst_tick()
             .expect("the firmware reports its worst tick");
+        let (_, busy_mean, busy_worst) = fw.busy_per_step().unwrap_or(("", f64::NAN, f64::NAN));
         report(format_args!(
-            "hil {name}: {} ticks, {:.1} s simulated in {:.1} s wall ({:.0} ticks/s, {:.1}x real time); host-only mission {:.1} s wall; worst control tick {worst:.0} ({tick_name}, instructions under -icount)",
+            "hil {name}: {} ticks, {:.1} s simulated in {:.1} s wall ({:.0} ticks/s, {:.1}x real time, beside the other HIL tests); {:.0} bytes to the firmware and {:.0} from it per tick; guest {busy_mean:.0} instructions per step on average ({busy_worst:.0} in the busiest second); host-only mission {:.1} s wall; worst control tick {worst:.0} ({tick_name}, instructions under -icount)",
             fw.ticks,
             fw.simulated_s,
             fw.wall_s,
             fw.ticks as f64 / fw.wall_s,
             fw.real_time_factor(),
+            fw.link_bytes.to_firmware as f64 / fw.ticks as f64,
+            fw.link_bytes.from_firmware as f64 / fw.ticks as f64,
             host_wall
         ));
         assert_eq!(fw.firmware, "qemu-mps2-an500");
@@ -139,7 +135,7 @@ fn a_bad_payload_is_refused_naming_its_key_and_the_start_denied() {
     else {
         return;
     };
-    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    let _slot = qemu_slot();
     let (qemu, mut session) = qemu_session(&elf);
     assert_eq!(
         session.identify(Duration::from_secs(20)).expect("board"),
@@ -194,7 +190,7 @@ fn a_stalled_firmware_is_a_clear_lockstep_error() {
     let Some(elf) = image_or_skip("a_stalled_firmware_is_a_clear_lockstep_error") else {
         return;
     };
-    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    let _slot = qemu_slot();
     let (qemu, mut session) = qemu_session(&elf);
     session.identify(Duration::from_secs(20)).expect("board");
     let mut sample = ImuSample {
@@ -234,7 +230,7 @@ fn the_serial_path_runs_through_a_pty() {
     let Some(elf) = image_or_skip("the_serial_path_runs_through_a_pty") else {
         return;
     };
-    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    let _slot = qemu_slot();
     let (_qemu, pty) = Qemu::launch_pty(&elf).expect("QEMU starts on a pty");
     let link = Link::over_serial(&pty, 921_600).expect("the pty opens as a serial device");
     let setup = HilSetup {
@@ -280,7 +276,7 @@ fn the_uart_and_the_ethernet_link_fly_the_same_steps() {
     let Some(elf) = image_or_skip("the_uart_and_the_ethernet_link_fly_the_same_steps") else {
         return;
     };
-    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    let _slot = qemu_slot();
     // Through the pre-flight checks and into the first lift's move (5 s of checks).
     let setup = HilSetup {
         duration_s: Some(5.5),
@@ -326,7 +322,7 @@ fn a_ground_station_sees_and_commands_the_vehicle_through_the_bridge() {
     else {
         return;
     };
-    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    let _slot = qemu_slot();
     use link::MessageData;
     use link::frame::{Encoder, Frame, Parser};
     use link::msg::{AUTOPILOT_VERSION_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA};
@@ -403,7 +399,7 @@ fn the_firmware_answers_a_stopped_rotor_and_a_low_battery_in_the_loop() {
     else {
         return;
     };
-    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    let _slot = qemu_slot();
     let loaded = rect_ex1();
     let injections: Vec<_> = ["battery:13.8@2", "rotor-out:3@8"]
         .iter()
@@ -479,7 +475,7 @@ fn the_firmware_reads_the_escs_rpm_and_names_two_stopped_rotors_at_once() {
     else {
         return;
     };
-    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    let _slot = qemu_slot();
     let loaded = rect_ex1();
     let injections: Vec<_> = ["rotor-out:1@11", "rotor-out:6@11"]
         .iter()
@@ -551,7 +547,7 @@ fn the_hil_command_prints_the_mission_keys_as_json() {
     let Some(elf) = image_or_skip("the_hil_command_prints_the_mission_keys_as_json") else {
         return;
     };
-    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    let _slot = qemu_slot();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_host-sim"))
         .arg("hil")
         .arg("--scenario")
@@ -614,7 +610,7 @@ fn a_board_that_drives_fewer_robots_refuses_the_payload_and_one_that_drives_them
     ) else {
         return;
     };
-    let _one = ONE_QEMU.lock().unwrap_or_else(|e| e.into_inner());
+    let _slot = qemu_slot();
     // Eight, as a Pixhawk 6C: refused where it arrives, nothing lifted, nothing armed.
     let (code, refused) = rect_12_on_a_board_driving(&elf, 8);
     assert_eq!(code, Some(1), "{refused}");

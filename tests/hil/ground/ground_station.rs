@@ -9,7 +9,7 @@
 //! was skipped and why, and passes; with `HIL_REQUIRED=1` (CI, which installs them) it fails
 //! instead.
 
-mod common;
+use crate::common;
 
 #[test]
 fn a_pymavlink_ground_station_tunes_restarts_and_flies_the_firmware() {

@@ -2,7 +2,7 @@
 //! `mission`): estimation by real lift-off detection, formation decision, rearrangement,
 //! flight, delivery; and the refusals that keep a real vehicle on the ground.
 
-mod common;
+use crate::common;
 use common::{load, scenario_path};
 
 use std::path::Path;

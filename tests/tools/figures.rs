@@ -3,7 +3,7 @@
 //! (not its file name), inside the folder, the PNGs and SVGs well formed; the text output
 //! names the same files. Small trial counts keep them fast.
 
-mod common;
+use crate::common;
 use common::{host_sim, scenario_path};
 
 use std::path::{Path, PathBuf};

@@ -3,7 +3,7 @@
 //! robots move along the rail to the formation about the new COM while the mixer follows
 //! them. Fixed seeds.
 
-mod common;
+use crate::common;
 
 use common::load;
 use host_sim::mission_run::{self, LoadShift, MissionOutcome, MissionSetup};

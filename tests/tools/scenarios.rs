@@ -2,7 +2,7 @@
 //! docs/system.md#paper-cases, in `tests/scenarios/`) load and pass every check. Broken files are in
 //! `tests/broken-scenarios/` with their own test (`broken_scenarios.rs`).
 
-mod common;
+use crate::common;
 use common::{PAPER_CASES, host_sim, scenario_path};
 
 use host_sim::scenario_file;

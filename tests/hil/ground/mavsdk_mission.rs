@@ -8,7 +8,7 @@
 //! firmware's QEMU image itself. Without one of them the test says it was skipped and why,
 //! and passes; with `HIL_REQUIRED=1` (CI, which installs them) it fails instead.
 
-mod common;
+use crate::common;
 
 #[test]
 fn mavsdk_flies_the_papers_case_with_a_hold_on_the_way() {

@@ -13,7 +13,7 @@
 //!
 //! The flags' own checks need neither.
 
-mod common;
+use crate::common;
 
 #[test]
 fn the_bring_up_commands_confirm_jog_calibrate_test_the_motors_and_reboot() {

@@ -3,8 +3,6 @@
 //! optimised formation takes off and tracks the target with small attitude excursions; the
 //! even formation does much worse (the paper saw it fail).
 
-mod common;
-
 use std::path::Path;
 
 use host_sim::harness::{self, FlightOutcome, FlightSetup, FormationChoice};

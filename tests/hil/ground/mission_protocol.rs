@@ -8,7 +8,7 @@
 //! image itself. Without one of them the test says it was skipped and why, and passes; with
 //! `HIL_REQUIRED=1` (CI, which installs them) it fails instead.
 
-mod common;
+use crate::common;
 
 #[test]
 fn the_mission_protocol_holds_its_edge_cases_and_flies_the_uploaded_mission() {

@@ -4,7 +4,7 @@
 //! The paper's 8-rotor payloads, every rotor, fixed seed; two rotors out, apart and at once
 //! (`host_sim::rotor_faults`); a rotor that fades (`rotor-fade`); the ESCs' RPM.
 
-mod common;
+use crate::common;
 
 use common::load;
 use host_sim::mission_run::{self, LoadShift, MissionOutcome, MissionSetup, RotorStop};

@@ -4,7 +4,7 @@
 //! that stops the vehicle where it is until the mission mode is asked for again, and the
 //! landing below the last item.
 
-mod common;
+use crate::common;
 use common::load;
 
 use host_sim::mission_run::{self, MissionSetup};

@@ -3,7 +3,7 @@
 //! noise; the mean and the standard deviation of the error, in resolutions, must stay below 1 on
 //! every axis. Also the `lift` and `estimate` command lines.
 
-mod common;
+use crate::common;
 use common::{host_sim, scenario_path};
 
 use host_sim::monte_carlo::{self, MonteCarloSetup, Summary};

@@ -1,7 +1,7 @@
 //! Formation decision through the command line (docs/formats.md#formation): the JSON keys,
 //! the constraints on every paper case, the comparison with the even formation, and errors.
 
-mod common;
+use crate::common;
 use common::{host_sim, scenario_path};
 
 fn formation_json(name: &str, extra: &[&str]) -> serde_json::Value {

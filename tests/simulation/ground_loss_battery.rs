@@ -3,7 +3,7 @@
 //! drops (`--inject battery:V@T`) in flight on rect-ex1, with each `FS_GCS_ACT`; and on the
 //! ground neither a missing link nor a low pack lets the mission start.
 
-mod common;
+use crate::common;
 use common::load;
 
 use host_sim::mission_run::{self, BatteryDrop, MissionOutcome, MissionSetup, Onset};
