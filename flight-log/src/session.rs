@@ -174,6 +174,7 @@ mod tests {
             faults: HardwareFaults::NONE,
             esc_rpm: None,
             supervision: Supervision::NONE,
+            manual: shared::manual::ManualSamples::NONE,
         }
     }
 

@@ -140,6 +140,11 @@ impl Vehicle {
                     _ => None,
                 },
             },
+            // The joystick's newest `MANUAL_CONTROL`, as the firmware's control task takes it.
+            manual: shared::manual::ManualSamples {
+                rc: None,
+                joystick: self.io.manual.take(),
+            },
         };
         let mut out = self.autonomy.tick(&input);
         if let Some(config) = loaded_config

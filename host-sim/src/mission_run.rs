@@ -14,6 +14,7 @@
 //! `plant_loop` the loop itself ([`fly`]) and what the plant saw ([`PlantRecord`]); in
 //! `in_process` `shared`'s mission as the autopilot ([`InProcess`], [`run`]).
 
+use shared::manual::ManualSamples;
 use anyhow::Result;
 use shared::control::navigator::{ImuSample, MocapFix};
 use shared::flight::AdaptEvent;
@@ -55,6 +56,8 @@ pub struct Sensed {
     pub gcs_lost: bool,
     /// The pack's voltage at its terminals, V.
     pub battery_volts: f32,
+    /// A person's sticks and switches since the last tick (`mission --rc`).
+    pub manual: ManualSamples,
 }
 
 /// Something the autopilot reported this tick.

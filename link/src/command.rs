@@ -7,8 +7,8 @@
 //! |---|---|
 //! | `MAV_CMD_MISSION_START` | [`OperatorCommand::Start`] the mission |
 //! | `MAV_CMD_NAV_LAND` | [`OperatorCommand::LandNow`] |
-//! | `MAV_CMD_DO_SET_MODE` with PX4's AUTO main mode (4) and a sub mode: MISSION (4), LOITER (3), LAND (6) | [`OperatorCommand::Resume`], [`OperatorCommand::Hold`], [`OperatorCommand::LandNow`] ([`crate::modes`]); other modes `DENIED` |
-//! | `MAV_CMD_DO_SET_STANDARD_MODE`: `MISSION`, `LAND` | [`OperatorCommand::Resume`], [`OperatorCommand::LandNow`]; other modes `DENIED` |
+//! | `MAV_CMD_DO_SET_MODE` with PX4's AUTO main mode (4) and a sub mode: MISSION (4), LOITER (3), LAND (6); or POSCTL (3) | [`OperatorCommand::Resume`], [`OperatorCommand::Hold`], [`OperatorCommand::LandNow`], [`OperatorCommand::Position`] ([`crate::modes`]); other modes `DENIED` |
+//! | `MAV_CMD_DO_SET_STANDARD_MODE`: `MISSION`, `LAND`, `POSITION_HOLD` | [`OperatorCommand::Resume`], [`OperatorCommand::LandNow`], [`OperatorCommand::Position`]; other modes `DENIED` |
 //! | `MAV_CMD_DO_PAUSE_CONTINUE`: param1 0, 1 | [`OperatorCommand::Hold`], [`OperatorCommand::Resume`] |
 //! | `MAV_CMD_COMPONENT_ARM_DISARM`, param1 = 0 | [`OperatorCommand::Abort`] (the mission stops in a safe way) |
 //! | the same with param2 = 21196 (forced), or `MAV_CMD_DO_FLIGHTTERMINATION` param1 > 0.5 | [`OperatorCommand::Kill`]: rotors off now |
@@ -143,6 +143,7 @@ impl CommandWire for OperatorCommand {
             Self::LandNow => MavCmd::MAV_CMD_NAV_LAND,
             Self::Kill => MavCmd::MAV_CMD_DO_FLIGHTTERMINATION,
             Self::Hold | Self::Resume => MavCmd::MAV_CMD_DO_PAUSE_CONTINUE,
+            Self::Position => MavCmd::MAV_CMD_DO_SET_MODE,
             Self::Calibrate(_) => MavCmd::MAV_CMD_PREFLIGHT_CALIBRATION,
             Self::MotorTest(_) => MavCmd::MAV_CMD_DO_MOTOR_TEST,
             Self::ConfirmRails => CONFIRM_RAILS,
@@ -158,6 +159,11 @@ impl CommandWire for OperatorCommand {
             Self::Kill => command_long(MavCmd::MAV_CMD_DO_FLIGHTTERMINATION, 1.0, 0.0),
             Self::Hold => command_long(MavCmd::MAV_CMD_DO_PAUSE_CONTINUE, 0.0, 0.0),
             Self::Resume => command_long(MavCmd::MAV_CMD_DO_PAUSE_CONTINUE, 1.0, 0.0),
+            // PX4's custom mode: MAV_MODE_FLAG_CUSTOM_MODE_ENABLED (1), main mode POSCTL (3).
+            Self::Position => COMMAND_LONG_DATA {
+                param3: 0.0,
+                ..command_long(MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 3.0)
+            },
             Self::ConfirmRails => command_long(CONFIRM_RAILS, 1.0, 0.0),
             Self::Jog { robot, micrometres } => {
                 command_long(JOG, f32::from(robot), micrometres as f32 * 1e-6)
@@ -367,6 +373,7 @@ pub fn mode_request(mode: Option<FlightMode>) -> Request {
         Some(FlightMode::Mission) => Request::Operator(OperatorCommand::Resume),
         Some(FlightMode::Hold) => Request::Operator(OperatorCommand::Hold),
         Some(FlightMode::Land) => Request::Operator(OperatorCommand::LandNow),
+        Some(FlightMode::Position) => Request::Operator(OperatorCommand::Position),
         Some(FlightMode::Ready) | None => Request::Refused(MavResult::MAV_RESULT_DENIED),
     }
 }
@@ -399,7 +406,7 @@ pub fn refusal(command: CommandId, result: MavResult) -> &'static str {
         _ if command.is(MavCmd::MAV_CMD_DO_SET_MODE)
             || command.is(MavCmd::MAV_CMD_DO_SET_STANDARD_MODE) =>
         {
-            "the modes are Mission, Hold and Land (PX4's AUTO 4/4, 4/3, 4/6)"
+            "the modes are Mission, Hold, Land and Position (PX4's AUTO 4/4, 4/3, 4/6 and POSCTL 3)"
         }
         _ => "not supported",
     }

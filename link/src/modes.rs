@@ -9,6 +9,7 @@
 //! | Mission | the mission runs: estimation, formation, take-off, the route, its landing | AUTO (4) / MISSION (4) | `MISSION` |
 //! | Hold | in flight, held where it is by the operator (or while the ground link is lost) | AUTO (4) / LOITER (3) | none |
 //! | Land | landing where it is (the operator's, or a failsafe's) | AUTO (4) / LAND (6) | `LAND` |
+//! | Position | in flight, the sticks (RC or joystick) steer the payload (docs/manual-control.md) | POSCTL (3) / 0 | `POSITION_HOLD` |
 //!
 //! The `HEARTBEAT`'s `custom_mode` is PX4's number (main mode in bits 16 to 23, sub mode in
 //! bits 24 to 31) with the [`MissionState`] in its low byte, which PX4's decoders leave
@@ -19,6 +20,8 @@ use crate::status::MissionState;
 
 /// PX4's main mode `AUTO`.
 const PX4_MAIN_AUTO: u32 = 4;
+/// PX4's main mode `POSCTL` (Position).
+const PX4_MAIN_POSCTL: u32 = 3;
 /// PX4's `AUTO` sub modes this vehicle has.
 const PX4_SUB_READY: u32 = 1;
 const PX4_SUB_LOITER: u32 = 3;
@@ -37,14 +40,17 @@ pub enum FlightMode {
     Hold = 2,
     /// Landing where it is.
     Land = 3,
+    /// The sticks steer the payload.
+    Position = 4,
 }
 
 /// Every mode, in `AVAILABLE_MODES`' order (index 1 first).
-pub const MODES: [FlightMode; 4] = [
+pub const MODES: [FlightMode; 5] = [
     FlightMode::Ready,
     FlightMode::Mission,
     FlightMode::Hold,
     FlightMode::Land,
+    FlightMode::Position,
 ];
 
 impl FlightMode {
@@ -55,6 +61,7 @@ impl FlightMode {
             Self::Mission => "Mission",
             Self::Hold => "Hold",
             Self::Land => "Land",
+            Self::Position => "Position",
         }
     }
 
@@ -75,6 +82,7 @@ impl FlightMode {
             Self::Mission => PX4_SUB_MISSION,
             Self::Hold => PX4_SUB_LOITER,
             Self::Land => PX4_SUB_LAND,
+            Self::Position => return PX4_MAIN_POSCTL << 16,
         };
         (PX4_MAIN_AUTO << 16) | (sub << 24)
     }
@@ -82,6 +90,9 @@ impl FlightMode {
     /// The mode a PX4 main and sub mode (`MAV_CMD_DO_SET_MODE`'s parameters 2 and 3) name,
     /// if this vehicle has it.
     pub fn from_px4(main: f32, sub: f32) -> Option<Self> {
+        if main == PX4_MAIN_POSCTL as f32 && sub == 0.0 {
+            return Some(Self::Position);
+        }
         if main != PX4_MAIN_AUTO as f32 {
             return None;
         }
@@ -100,6 +111,7 @@ impl FlightMode {
         match self {
             Self::Mission => MavStandardMode::MAV_STANDARD_MODE_MISSION,
             Self::Land => MavStandardMode::MAV_STANDARD_MODE_LAND,
+            Self::Position => MavStandardMode::MAV_STANDARD_MODE_POSITION_HOLD,
             Self::Ready | Self::Hold => MavStandardMode::MAV_STANDARD_MODE_NON_STANDARD,
         }
     }
@@ -119,7 +131,11 @@ impl FlightMode {
         let mut mode_name = [0u8; 35];
         let name = self.name().as_bytes();
         mode_name[..name.len()].copy_from_slice(name);
-        let mut properties = MavModeProperty::MAV_MODE_PROPERTY_AUTO_MODE;
+        let mut properties = if self == Self::Position {
+            MavModeProperty::empty()
+        } else {
+            MavModeProperty::MAV_MODE_PROPERTY_AUTO_MODE
+        };
         if self == Self::Ready {
             properties |= MavModeProperty::MAV_MODE_PROPERTY_NOT_USER_SELECTABLE;
         }
@@ -165,14 +181,16 @@ mod tests {
         assert_eq!(decode(FlightMode::Hold), (4, 3));
         assert_eq!(decode(FlightMode::Land), (4, 6));
         assert_eq!(decode(FlightMode::Ready), (4, 1));
+        assert_eq!(decode(FlightMode::Position), (3, 0));
         for m in MODES {
             let (main, sub) = decode(m);
             assert_eq!(FlightMode::from_px4(main as f32, sub as f32), Some(m));
             assert_eq!(FlightMode::from_code(m.code()), Some(m));
         }
-        // PX4's position mode (3/0) and return (4/5) are not this vehicle's.
-        assert_eq!(FlightMode::from_px4(3.0, 0.0), None);
+        // PX4's return (4/5), altitude (2/0) and position's orbit (3/1) are not this vehicle's.
         assert_eq!(FlightMode::from_px4(4.0, 5.0), None);
+        assert_eq!(FlightMode::from_px4(2.0, 0.0), None);
+        assert_eq!(FlightMode::from_px4(3.0, 1.0), None);
         assert_eq!(FlightMode::from_px4(f32::NAN, 4.0), None);
     }
 
@@ -196,8 +214,9 @@ mod tests {
     fn standard_modes_map_both_ways_and_list_every_mode_once() {
         assert_eq!(FlightMode::from_standard(6.0), Some(FlightMode::Mission));
         assert_eq!(FlightMode::from_standard(7.0), Some(FlightMode::Land));
+        assert_eq!(FlightMode::from_standard(1.0), Some(FlightMode::Position));
         assert_eq!(FlightMode::from_standard(0.0), None);
-        assert_eq!(FlightMode::from_standard(1.0), None);
+        assert_eq!(FlightMode::from_standard(2.0), None);
         let listed: std::vec::Vec<_> = MODES.iter().map(|m| m.available()).collect();
         for (i, a) in listed.iter().enumerate() {
             assert_eq!(a.mode_index as usize, i + 1);

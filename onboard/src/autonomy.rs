@@ -37,6 +37,7 @@ use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
 use shared::flight::Route;
 use shared::mission::bringup::{BenchConfig, CalibrationFailure, CalibrationKind};
+use shared::manual::ManualSamples;
 use shared::mission::supervision::BatteryLevel;
 use shared::mission::{
     CommandRefusal, EscRpm, HardwareFaults, Mission, MissionConfig, MissionPlanner, Phase, Reason,
@@ -71,6 +72,8 @@ pub struct TickInput<'a> {
     pub faults: HardwareFaults,
     /// A ground station's heartbeat since the last step, and the pack's voltage.
     pub supervision: Supervision,
+    /// The RC receiver's and the joystick's newest samples since the last step.
+    pub manual: ManualSamples,
     /// The job task is loading the planner with a description or new parameters (`LOADING`):
     /// a start now is refused as temporarily rejected (the ground tries again).
     pub loading: bool,
@@ -327,6 +330,7 @@ impl Autonomy {
             Phase::Flying(_) if flight.is_some_and(|f| f.landing_cause().is_some()) => {
                 FlightMode::Land
             }
+            Phase::Flying(_) if self.mission.position_mode() => FlightMode::Position,
             Phase::Flying(_) if flight.is_some_and(|f| f.holding()) => FlightMode::Hold,
             _ => FlightMode::Mission,
         }
@@ -455,6 +459,7 @@ impl Autonomy {
             faults: input.faults,
             esc_rpm: input.esc_rpm,
             supervision: input.supervision,
+            manual: input.manual,
         };
         let out = self.mission.step(&mission_input);
         // Its COMMAND_ACK says TEMPORARILY_REJECTED, and a text says why and what to do.

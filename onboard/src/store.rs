@@ -310,11 +310,7 @@ mod tests {
                 let i = (rng.next_u64() % 6) as usize * 7 % COUNT;
                 let spec = &TABLE[i];
                 let t = (rng.next_u64() % 1000) as f32 / 1000.0;
-                let mut v = spec.min + t * (spec.max - spec.min);
-                if spec.integer {
-                    v = shared::math::floor(v);
-                }
-                (i, v)
+                (i, spec.valid_value(t))
             })
             .collect()
     }

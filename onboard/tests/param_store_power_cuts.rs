@@ -46,11 +46,7 @@ fn random_write(rng: &mut Rng) -> Write {
     };
     let spec = &TABLE[index];
     let t = rng.below(1001) as f32 / 1000.0;
-    let mut v = spec.min + t * (spec.max - spec.min);
-    if spec.integer {
-        v = v.round();
-    }
-    Write::Param(index, v)
+    Write::Param(index, spec.valid_value(t))
 }
 
 /// The signing key and timestamp as stored (none: signing off).

@@ -91,6 +91,20 @@ pub fn clamp(x: f32, lo: f32, hi: f32) -> f32 {
     }
 }
 
+/// `magnitude`'s absolute value with `sign`'s sign.
+#[inline]
+pub fn copysign(magnitude: f32, sign: f32) -> f32 {
+    libm::copysignf(magnitude, sign)
+}
+
+/// An angle brought into `(-pi, pi]`, rad.
+#[inline]
+pub fn wrap_pi(angle: f32) -> f32 {
+    use core::f32::consts::{PI, TAU};
+    let wrapped = angle - TAU * floor((angle + PI) / TAU);
+    if wrapped <= -PI { wrapped + TAU } else { wrapped }
+}
+
 /// Arc sine (radians), argument clamped to `[-1, 1]`.
 #[inline]
 pub fn asin(x: f32) -> f32 {

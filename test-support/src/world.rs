@@ -5,6 +5,7 @@
 //! truth with a little noise), a motion-capture fix every fourth tick, the drivers' faults,
 //! the ground station's heartbeat and the battery, and takes the mission's outputs back.
 
+use shared::manual::ManualSamples;
 use shared::control::navigator::{ImuSample, MocapFix};
 use shared::control::vector::{Quat, Vec3};
 use shared::geometry::Vec2;
@@ -119,6 +120,7 @@ impl World {
                     && tick % self.heartbeat_period.max(1) == heartbeat_phase,
                 battery_volts: self.battery,
             },
+            manual: ManualSamples::NONE,
         }
     }
 

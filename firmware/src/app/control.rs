@@ -14,6 +14,7 @@
 //! Pixhawk), the wait for a job excluded, is tracked; the worst so far goes out once a second
 //! of vehicle time as a `NAMED_VALUE_INT` named by the board (`tick_insn` under QEMU).
 
+use shared::manual::ManualSamples;
 use core::sync::atomic::Ordering;
 
 use link::hil::{Actuators, JobDeadline, VehicleClock};
@@ -160,6 +161,11 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                     } else {
                         <Selected as Board>::battery_volts()
                     },
+                },
+                // A ground station's joystick (`MANUAL_CONTROL`), its newest sample.
+                manual: ManualSamples {
+                    rc: None,
+                    joystick: super::MANUAL.try_take(),
                 },
             };
             // The RPM for the ground station: written only while there is some, and once

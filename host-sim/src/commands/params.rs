@@ -36,6 +36,7 @@ pub fn run(args: &ParamsArgs) -> Result<Outcome> {
                     "max": p.max,
                     "default": p.default_value(),
                     "integer": p.integer,
+                    "choices": p.allowed,
                     "doc": p.doc,
                 })
             })

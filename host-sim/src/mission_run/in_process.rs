@@ -67,6 +67,7 @@ impl Autopilot for InProcess {
                 gcs_heartbeat: sensed.gcs_heartbeat,
                 battery_volts: Some(sensed.battery_volts),
             },
+            manual: sensed.manual,
         };
         let out = self.mission.step(&input);
         // Recorded as the firmware's control step records it: before a job's result is taken.

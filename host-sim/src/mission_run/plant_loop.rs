@@ -2,6 +2,7 @@
 //! the injected failures applied each control tick, the autopilot's commands taken back, and
 //! what the plant saw recorded ([`PlantRecord`]); docs/system.md#pipeline.
 
+use shared::manual::ManualSamples;
 use anyhow::{Result, anyhow};
 use shared::control::navigator::ImuSample;
 use shared::control::vector::Vec3;
@@ -297,6 +298,7 @@ pub fn fly(
             gcs_heartbeat,
             gcs_lost,
             battery_volts,
+            manual: ManualSamples::NONE,
         })?;
         record.ticks += 1;
         record.armed |= out.armed;

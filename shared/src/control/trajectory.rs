@@ -330,6 +330,33 @@ impl FlightPlan {
         let _ = self.segments.push(land);
     }
 
+    /// The plan goes on from `here` (NED, in the air) at segment `index`: that segment becomes a
+    /// move from `here` to its end (a hover's a move to its point, then the hover), the
+    /// segments after it as they were, in place. After Position mode the flight goes on with
+    /// its plan from where the pilot left the vehicle. Nothing changes past the plan's end.
+    pub fn resume_from(&mut self, index: usize, here: Vec3, limits: PlanLimits) {
+        let Some(current) = self.segments.get(index).copied() else {
+            return;
+        };
+        let hover = current.phase == FlightPhase::Hover;
+        let phase = if hover {
+            FlightPhase::Transit
+        } else {
+            current.phase
+        };
+        let back = PlanSegment::moving(phase, here, current.to, &limits, current.yaw)
+            .of_item(usize::from(current.item), current.ends_item && !hover);
+        let mut segments = heapless::Vec::<PlanSegment, MAX_PLAN_SEGMENTS>::new();
+        let _ = segments.push(back);
+        if hover {
+            let _ = segments.push(current);
+        }
+        for s in self.segments.iter().skip(index + 1) {
+            let _ = segments.push(*s);
+        }
+        self.segments = segments;
+    }
+
     /// Segment `index`, in order; `None` past the last.
     pub fn segment(&self, index: usize) -> Option<&PlanSegment> {
         self.segments.get(index)
@@ -519,5 +546,26 @@ mod tests {
             assert!(finite, "at {t}: {sp:?}");
             t += 0.0025;
         }
+    }
+
+    #[test]
+    fn a_plan_resumed_in_the_hover_flies_back_to_its_point_then_hovers_and_lands() {
+        let limits = PlanLimits::DEFAULT;
+        let mut plan = FlightPlan::new(Vec3::ZERO, [2.0, 0.0, 1.0], 0.0, limits);
+        let hover = *plan.segment(2).expect("a hover");
+        let here = Vec3::new(3.0, 1.0, -1.5);
+        plan.resume_from(2, here, limits);
+        let back = plan.segment(0).expect("the move back");
+        assert_eq!((back.phase, back.from, back.to), (FlightPhase::Transit, here, hover.to));
+        assert_eq!(plan.segment(1), Some(&hover));
+        assert_eq!(plan.segment(2).map(|s| s.phase), Some(FlightPhase::Land));
+        assert_eq!(plan.segment(3), None);
+        // In a transit: from here to the transit's end, then the rest.
+        let mut plan = FlightPlan::new(Vec3::ZERO, [2.0, 0.0, 1.0], 0.0, limits);
+        let transit = *plan.segment(1).expect("a transit");
+        plan.resume_from(1, here, limits);
+        let back = plan.segment(0).expect("the move back");
+        assert_eq!((back.phase, back.to), (FlightPhase::Transit, transit.to));
+        assert_eq!(plan.segment(1).map(|s| s.phase), Some(FlightPhase::Hover));
     }
 }

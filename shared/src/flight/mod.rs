@@ -6,6 +6,7 @@
 //!   matrix inverse: built once, off the control tick).
 //! - [`stack`]: the 400 Hz flight: cascade, mixer, plan walked on the vehicle's state,
 //!   take-off check, land detector, failsafes and the operator's land and kill commands.
+//! - [`manual`]: Position mode's setpoint, steered by a person's sticks.
 //! - [`trim`]: the payload's COM and mass from the wrench that holds it in a hover.
 //! - [`adapt`]: the formation re-solved and the robots moved in flight when the load shifts.
 //! - [`route`]: a ground station's mission items in the local frame, checked.
@@ -13,6 +14,7 @@
 //!   and the ESCs' RPM; [`rotor_isolation`]: which one or two rotors a change is.
 
 pub mod adapt;
+pub mod manual;
 pub mod model;
 pub mod rotor_isolation;
 pub mod rotor_monitor;
@@ -21,6 +23,7 @@ pub mod stack;
 pub mod trim;
 
 pub use adapt::{AdaptConfig, AdaptEvent, Adapter};
+pub use manual::{ManualLimits, ManualSetpoint, ManualVelocity};
 pub use model::FlightModel;
 pub use rotor_monitor::{RotorMonitor, RotorMonitorConfig};
 pub use route::{Route, RouteError, RouteItem, RoutePoint, RouteProblem};

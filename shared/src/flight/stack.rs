@@ -38,6 +38,7 @@ use crate::control::trajectory::PlanSegment;
 use crate::control::trajectory::{FlightPhase, FlightPlan, PlanLimits, Setpoint};
 use crate::control::vector::{Quat, Vec3};
 use crate::control::vehicle::VehicleModel;
+use crate::flight::manual::{ManualSetpoint, ManualVelocity};
 use crate::flight::model::FlightModel;
 use crate::flight::rotor_monitor::{MonitorInput, RotorMonitor, RotorMonitorConfig};
 use crate::flight::route::Route;
@@ -257,6 +258,8 @@ pub struct FlightStack {
     rotors_lost: heapless::Vec<RotorOut, MAX_ROTORS_OUT>,
     /// A rotor found stopped whose landing has not begun yet.
     rotor_landing: Option<u8>,
+    /// Position mode: the setpoint the sticks steer and what they ask this tick.
+    manual: Option<(ManualSetpoint, ManualVelocity)>,
 }
 
 impl FlightStack {
@@ -290,6 +293,7 @@ impl FlightStack {
             monitor: RotorMonitor::new(),
             rotors_lost: heapless::Vec::new(),
             rotor_landing: None,
+            manual: None,
         }
     }
 
@@ -425,6 +429,53 @@ impl FlightStack {
         self.hold_here = hold;
     }
 
+    /// Position mode (docs/manual-control.md#position-mode): with `Some`, the sticks' velocity
+    /// steers the setpoint from this tick on (taken over where the setpoint is now), the plan
+    /// stopped where it was; with `None` after it, the plan goes on from where the pilot left
+    /// the vehicle ([`FlightPlan::resume_from`]). Refused (returns false) once stopped, before
+    /// the payload has left the ground, or while landing without position or on a rotor
+    /// that stopped; a landing for any other cause is the pilot's to take over.
+    pub fn steer(&mut self, command: Option<ManualVelocity>, nav: &NavState) -> bool {
+        let Some(command) = command else {
+            if let Some((manual, _)) = self.manual.take() {
+                let here = manual.setpoint().position;
+                let limits = self.config.plan;
+                self.plan.resume_from(self.segment, here, limits);
+                self.segment = 0;
+                self.segment_time = 0.0;
+                self.after_plan = 0.0;
+                self.phase = self.plan.segment(0).map_or(FlightPhase::Done, |s| s.phase);
+            }
+            return true;
+        };
+        let refused = self.stopped.is_some()
+            || !self.land.airborne()
+            || self.failsafe_until.is_some()
+            || matches!(
+                self.landing,
+                Some(LandingCause::PositionLost | LandingCause::RotorOut { .. })
+            )
+            || self.rotor_landing.is_some();
+        if refused {
+            return false;
+        }
+        match self.manual.as_mut() {
+            Some((_, now)) => *now = command,
+            None => {
+                let from = self.setpoint(nav);
+                self.landing = None;
+                self.manual = Some((ManualSetpoint::new(from), command));
+            }
+        }
+        true
+    }
+
+    /// Whether the sticks steer the vehicle (Position mode, not landing for a rotor or without
+    /// position).
+    pub fn steered(&self) -> bool {
+        self.manual.is_some() && self.landing.is_none() && self.stopped.is_none()
+    }
+
     /// Whether the vehicle holds where it is ([`Self::hold_position`], and not landing).
     pub fn holding(&self) -> bool {
         self.hold_here
@@ -513,7 +564,10 @@ impl FlightStack {
             return None;
         }
         self.landing = Some(cause);
-        let yaw = self.plan.settled().yaw;
+        let yaw = match self.manual.take() {
+            Some((manual, _)) => manual.setpoint().yaw,
+            None => self.plan.settled().yaw,
+        };
         let limits = self.config.plan;
         self.plan
             .fill_landing(nav.position.position, self.ground_z, yaw, limits);
@@ -605,8 +659,13 @@ impl FlightStack {
             }
         }
         let position = nav.position;
-        let descending =
-            matches!(self.phase, FlightPhase::Land | FlightPhase::Done) || self.landing.is_some();
+        let steered_down = self
+            .manual
+            .as_ref()
+            .is_some_and(|(_, command)| command.velocity.z > 0.0);
+        let descending = matches!(self.phase, FlightPhase::Land | FlightPhase::Done)
+            || self.landing.is_some()
+            || steered_down;
         let contact = self
             .land
             .update(position.position, position.velocity, descending, dt);
@@ -646,6 +705,10 @@ impl FlightStack {
                     height: self.max_height,
                 });
             }
+        }
+        if let Some((manual, command)) = self.manual.as_mut() {
+            manual.step(command, position.position, self.ground_z, dt);
+            return None;
         }
         self.walk_plan(nav, dt)
     }
@@ -700,6 +763,11 @@ impl FlightStack {
 
     /// What the cascade follows now.
     fn setpoint(&self, nav: &NavState) -> Setpoint {
+        if let Some((manual, _)) = &self.manual
+            && self.failsafe_until.is_none()
+        {
+            return manual.setpoint();
+        }
         let mut planned = match self.plan.segment(self.segment) {
             Some(segment) => segment.sample(self.segment_time),
             None => self.plan.settled(),

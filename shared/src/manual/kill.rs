@@ -31,6 +31,16 @@ impl KillSwitch {
         }
     }
 
+    /// A new disarm delay; the switch's time on kept.
+    pub fn configure(&mut self, disarm_after_us: u64) {
+        self.disarm_after_us = disarm_after_us;
+    }
+
+    /// Whether the switch was on at the last update.
+    pub fn is_on(&self) -> bool {
+        self.on_since.is_some()
+    }
+
     /// The switch's position at `now_us`, and what it asks.
     pub fn update(&mut self, on: bool, now_us: u64) -> KillAction {
         if !on {

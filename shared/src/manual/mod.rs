@@ -3,12 +3,14 @@
 //! (`MANUAL_CONTROL`), as one [`ManualInput`]; which source is in force and when it is lost
 //! ([`source`], PX4's `COM_RC_IN_MODE` and `COM_RC_LOSS_T`); the kill switch's rotors-off then
 //! disarm ([`kill`], PX4's `COM_KILL_DISARM`); the channels' functions ([`rc_map`], PX4's
-//! `RC_MAP_*`).
+//! `RC_MAP_*`); what it may do ([`config`]: the modes, the loss's action).
 //!
 //! Plain state machines, inputs in and decisions out, as the rest of the mission: the
 //! firmware feeds them receiver frames and `MANUAL_CONTROL` messages with the vehicle's time.
 
+pub mod config;
 pub mod kill;
+pub mod pilot;
 pub mod rc_map;
 pub mod source;
 
@@ -56,6 +58,36 @@ pub struct ManualInput {
     /// The flight-mode switch's slot, 0 to 5 (PX4's `COM_FLTMODE1..6`), when a channel is
     /// mapped to it.
     pub mode_slot: Option<u8>,
+}
+
+pub use config::{ManualConfig, ManualLossAction, PilotMode};
+pub use pilot::{Pilot, PilotTick};
+
+/// The manual samples that arrived since the previous control tick, one per source at most
+/// (an RC receiver sends at 50 to 150 Hz, a joystick at 25 Hz: the newest is kept).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ManualSamples {
+    /// From the RC receiver (a valid frame, not in failsafe).
+    pub rc: Option<ManualInput>,
+    /// From a ground station's joystick (`MANUAL_CONTROL`).
+    pub joystick: Option<ManualInput>,
+}
+
+impl ManualSamples {
+    /// None.
+    pub const NONE: Self = Self {
+        rc: None,
+        joystick: None,
+    };
+}
+
+impl ManualInput {
+    /// Centred sticks, no switch.
+    pub const NONE: Self = Self {
+        sticks: Sticks::CENTRED,
+        kill: false,
+        mode_slot: None,
+    };
 }
 
 /// Most a `MANUAL_CONTROL` axis carries (its x, y and r are -1000..1000, z 0..1000).

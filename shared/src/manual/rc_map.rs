@@ -49,6 +49,17 @@ impl RcMap {
         mode_switch: 0,
     };
 
+    /// The sticks on the first four channels in the usual order of CRSF and SBUS radios
+    /// (roll, pitch, throttle, yaw: "AETR"), no switch assigned.
+    pub const AETR: Self = Self {
+        roll: 1,
+        pitch: 2,
+        throttle: 3,
+        yaw: 4,
+        kill_switch: 0,
+        mode_switch: 0,
+    };
+
     /// The manual input `channels` (pulse widths, us) carry; `None` unless every stick is
     /// assigned to a channel the frame has.
     pub fn input(&self, channels: &[u16]) -> Option<ManualInput> {

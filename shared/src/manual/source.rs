@@ -76,6 +76,11 @@ struct Last {
 }
 
 impl Last {
+    const NONE: Self = Self {
+        input: ManualInput::NONE,
+        time_us: None,
+    };
+
     fn fresh(&self, now_us: u64, loss_us: u64) -> bool {
         self.time_us
             .is_some_and(|t| now_us.saturating_sub(t) <= loss_us)
@@ -95,14 +100,33 @@ pub struct ManualSelector {
 
 impl ManualSelector {
     /// A selector for `mode`, a source lost after `loss_us` without a valid sample.
-    pub fn new(mode: InputMode, loss_us: u64) -> Self {
+    pub const fn new(mode: InputMode, loss_us: u64) -> Self {
         Self {
             mode,
             loss_us,
-            rc: Last::default(),
-            mavlink: Last::default(),
+            rc: Last::NONE,
+            mavlink: Last::NONE,
             chosen: None,
         }
+    }
+
+    /// New settings; the samples and the source kept (or dropped, if the mode no longer allows
+    /// it).
+    pub fn configure(&mut self, mode: InputMode, loss_us: u64) {
+        self.mode = mode;
+        self.loss_us = loss_us;
+        if self.chosen.is_some_and(|s| !mode.allows(s)) {
+            self.chosen = None;
+        }
+    }
+
+    /// Whether `source` sent a valid sample within the loss time at `now_us`.
+    pub fn fresh(&self, source: Source, now_us: u64) -> bool {
+        let last = match source {
+            Source::Rc => &self.rc,
+            Source::Mavlink => &self.mavlink,
+        };
+        self.mode.allows(source) && last.fresh(now_us, self.loss_us)
     }
 
     /// A sample from `source` at `now_us`; one whose sticks are out of range counts as none.

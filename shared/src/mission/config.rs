@@ -5,6 +5,7 @@ use crate::control::allocation::MixerKind;
 use crate::estimation::EstimatorOptions;
 use crate::flight::{AdaptConfig, FlightConfig};
 use crate::liftoff_detector::LiftoffConfig;
+use crate::manual::ManualConfig;
 use crate::mission::bringup::SensorOffsets;
 use crate::mission::hardware::HardwareConfig;
 use crate::mission::supervision::SupervisionConfig;
@@ -54,6 +55,8 @@ pub struct MissionConfig {
     pub supervision: SupervisionConfig,
     /// The IMU's calibrated offsets, taken off every sample (docs/ground-link.md#bring-up-commands).
     pub sensors: SensorOffsets,
+    /// Manual control: its sources, the kill switch, the modes, its loss (docs/manual-control.md).
+    pub manual: ManualConfig,
 }
 
 impl MissionConfig {
@@ -74,6 +77,7 @@ impl MissionConfig {
         hardware: HardwareConfig::DEFAULT,
         supervision: SupervisionConfig::DEFAULT,
         sensors: SensorOffsets::ZERO,
+        manual: ManualConfig::DEFAULT,
     };
 }
 

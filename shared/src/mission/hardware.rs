@@ -3,6 +3,7 @@
 //! They are parameters like the mission's tuning ([`super::params`]), so a bench calibration
 //! replaces them without a new image; the mission itself does not use them.
 
+use crate::manual::rc_map::RcMap;
 use crate::rail::stepper::DriveConfig;
 
 /// The hardware settings.
@@ -32,6 +33,13 @@ pub struct HardwareConfig {
     /// The motors' magnet poles: RPM = electrical RPM / (poles / 2) (`MOT_POLE_COUNT`, PX4's
     /// name).
     pub motor_poles: u8,
+    /// The RC receiver's protocol (`RC_INPUT_PROTO`, PX4's numbers): 0 none, 2 SBUS, 6 CRSF.
+    pub rc_protocol: u8,
+    /// The FMU port the RC receiver is wired to (`RC_PORT_CONFIG`, PX4's numbers): 0 none,
+    /// 103 TELEM3, 202 GPS2 (docs/hardware.md#rc-receivers).
+    pub rc_port: u16,
+    /// Which receiver channel carries each stick and switch (`RC_MAP_*`).
+    pub rc_map: RcMap,
 }
 
 impl HardwareConfig {
@@ -47,6 +55,9 @@ impl HardwareConfig {
         motor_test_enabled: true,
         dshot_bidirectional: false,
         motor_poles: 14,
+        rc_protocol: 6,
+        rc_port: 202,
+        rc_map: RcMap::AETR,
     };
 }
 

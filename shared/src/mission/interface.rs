@@ -5,6 +5,7 @@
 use crate::control::imu_monitor::ImuFailure;
 use crate::control::navigator::{ImuSample, MocapFix, NavState};
 use crate::flight::{AdaptEvent, CascadeSetpoints};
+use crate::manual::ManualSamples;
 use crate::mission::bringup::{CalibrationFailure, CalibrationKind, MotorTestRequest};
 use crate::mission::jobs::JobRequest;
 use crate::mission::phases::{AbortReason, Phase, Transition};
@@ -27,6 +28,10 @@ pub enum OperatorCommand {
     Hold,
     /// Mission mode: before the start, start; held in flight, fly on; otherwise nothing to do.
     Resume,
+    /// Position mode (docs/manual-control.md#position-mode): in the air, the sticks steer the
+    /// payload; before the start, the start (with its checks), the sticks taking over after
+    /// the take-off.
+    Position,
     /// The robots stand at the payload description's `initial` positions (placed at their
     /// marks): the rail positions are known from now on (docs/ground-link.md#bring-up-commands).
     ConfirmRails,
@@ -53,6 +58,7 @@ impl OperatorCommand {
             Self::Kill => "kill",
             Self::Hold => "hold",
             Self::Resume => "mission",
+            Self::Position => "position",
             Self::ConfirmRails => "confirm rails",
             Self::Jog { .. } => "jog",
             Self::Calibrate(_) => "calibrate",
@@ -119,6 +125,14 @@ pub enum CommandRefusal {
     MotorTestDisabled,
     /// A calibration, motor test or jog is under way.
     BenchBusy,
+    /// The kill switch is on.
+    KillSwitchOn,
+    /// No valid manual control: `COM_RC_IN_MODE` requires an RC receiver (`rc`), or Position
+    /// mode needs sticks.
+    NoManualControl {
+        /// An RC receiver's frames are what is missing.
+        rc: bool,
+    },
 }
 
 impl core::fmt::Display for CommandRefusal {
@@ -160,6 +174,14 @@ impl core::fmt::Display for CommandRefusal {
             ),
             Self::MotorTestDisabled => write!(f, "motor tests are off (COM_MOT_TEST_EN = 0)"),
             Self::BenchBusy => write!(f, "a calibration, motor test or jog is under way"),
+            Self::KillSwitchOn => write!(f, "the kill switch is on"),
+            Self::NoManualControl { rc: true } => write!(
+                f,
+                "no RC receiver: COM_RC_IN_MODE requires one and no valid frame came in COM_RC_LOSS_T"
+            ),
+            Self::NoManualControl { rc: false } => {
+                write!(f, "no manual control: Position mode needs an RC receiver or a joystick")
+            }
         }
     }
 }
@@ -232,6 +254,8 @@ pub struct TickInput {
     pub esc_rpm: Option<EscRpm>,
     /// The ground station's heartbeat and the battery's voltage.
     pub supervision: Supervision,
+    /// Manual control's samples since the previous tick ([`ManualSamples::NONE`] without).
+    pub manual: ManualSamples,
 }
 
 /// Each rotor's RPM from its ESC's telemetry, robot by robot; NaN for a rotor without a
@@ -270,6 +294,8 @@ pub struct TickOutput {
     /// What the flight's cascade asked of the vehicle this tick: while flying with the rotors
     /// turning, `None` otherwise.
     pub cascade: Option<CascadeSetpoints>,
+    /// The kill switch holds the rotors at zero this tick (the vehicle may still be armed).
+    pub killed: bool,
 }
 
 /// An IMU failure the monitor found and the mission acted on.

@@ -26,6 +26,8 @@
 //! - `flight`: the formation decision, the rearrangement, the flight and its adaptation.
 //! - `supervision`: the ground link's and the battery's failsafes, and the rotors watched
 //!   in flight.
+//! - `manual`: the kill switch, the mode switch, Position mode's steering and manual control
+//!   lost.
 //! - `bench`: the bring-up commands on the ground.
 
 use crate::control::imu_monitor::ImuMonitor;
@@ -34,6 +36,7 @@ use crate::control::trajectory::FlightPhase;
 use crate::estimation::Estimate;
 use crate::flight::{AdaptEvent, Adapter, FlightStack, Route};
 use crate::liftoff_detector::LiftoffDetector;
+use crate::manual::Pilot;
 use crate::mission::config::MissionConfig;
 use crate::mission::jobs::{JobRequest, JobResult, LiftPlan, NO_SCENARIO};
 use crate::mission::phases::{AbortReason, Phase, Reason, Transition};
@@ -46,6 +49,7 @@ mod bench;
 mod commands;
 mod estimation;
 mod flight;
+mod manual;
 mod supervision;
 mod tick;
 
@@ -111,6 +115,12 @@ pub struct Mission {
     flight_built: bool,
     /// The bring-up side: the rails confirmed, a jog, a calibration, a motor test.
     bench: Bench,
+    /// The person at the sticks: the source in force, the kill switch, the mode switch.
+    pilot: Pilot,
+    /// Position mode is asked for: the sticks steer in the air (after the take-off).
+    position: bool,
+    /// Time left of the hold after manual control was lost in Position mode, s.
+    manual_hold: Option<f32>,
 }
 
 impl Mission {
@@ -168,6 +178,9 @@ impl Mission {
             held: false,
             flight_built: false,
             bench: Bench::IDLE,
+            pilot: Pilot::new(&MissionConfig::DEFAULT.manual),
+            position: false,
+            manual_hold: None,
         }
     }
 
@@ -214,6 +227,9 @@ impl Mission {
         self.jump = None;
         self.held = false;
         self.flight_built = false;
+        self.pilot.configure(&self.config.manual);
+        self.position = false;
+        self.manual_hold = None;
     }
 
     /// Whether the flight flies its plan: taking off, moving or hovering, not landing,
@@ -236,7 +252,7 @@ impl Mission {
 
     /// Holds the flight where it is while the operator or a lost ground link asks for it.
     fn apply_hold(&mut self) {
-        let hold = self.held || self.gcs_hold.is_some();
+        let hold = self.held || self.gcs_hold.is_some() || self.manual_hold.is_some();
         if let Some(f) = self.flight.as_mut() {
             f.hold_position(hold);
         }

@@ -145,6 +145,9 @@ pub enum AbortReason {
         /// The robot, counted from 0.
         robot: u8,
     },
+    /// Manual control was lost in Position mode: after the hold, the vehicle lands in place
+    /// (`NAV_RCL_ACT`).
+    ManualLost,
 }
 
 impl core::fmt::Display for AbortReason {
@@ -207,6 +210,10 @@ impl core::fmt::Display for AbortReason {
                 f,
                 "rotor {} stopped in flight: flying on the other rotors and landing where it is",
                 u32::from(robot) + 1
+            ),
+            Self::ManualLost => write!(
+                f,
+                "manual control lost in Position mode (NAV_RCL_ACT): landing where it is"
             ),
         }
     }

@@ -18,6 +18,8 @@
 //! [`Notice`].
 
 use crate::numbers::Fixed;
+use crate::manual::{ManualLossAction, PilotMode};
+use crate::mission::interface::CommandRefusal;
 
 /// What one tick brings for the supervision: whether a ground station's heartbeat arrived
 /// since the previous tick, and the pack voltage if one is measured.
@@ -310,6 +312,39 @@ pub enum Notice {
         /// comes down faster than planned.
         holdable: bool,
     },
+    /// Manual control (RC or joystick) is lost (docs/manual-control.md#manual-control-lost).
+    ManualLost {
+        /// What the vehicle does now.
+        response: ManualLossResponse,
+    },
+    /// Manual control is back.
+    ManualRegained {
+        /// The vehicle was holding for the loss and the sticks steer it again.
+        resumed: bool,
+    },
+    /// The kill switch was switched on (rotors off) or off again.
+    KillSwitch {
+        /// On.
+        on: bool,
+    },
+    /// The mode switch asked for a mode the vehicle refused.
+    SwitchRefused {
+        /// The mode asked for.
+        mode: PilotMode,
+        /// Why not.
+        why: CommandRefusal,
+    },
+}
+
+/// What the vehicle does about lost manual control.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ManualLossResponse {
+    /// Nothing: not flying on the sticks.
+    Nothing,
+    /// The mission goes on (PX4's `COM_RCL_EXCEPT` for missions).
+    MissionGoesOn,
+    /// Position mode: holds for this long, then the action.
+    Hold(f32, ManualLossAction),
 }
 
 /// The robots of `mask` (from 1) as words: "rotor 3", "rotors 1 and 6", "rotors 1, 2 and 6".
@@ -377,6 +412,30 @@ impl core::fmt::Display for Notice {
                 Fixed(hundredths_down(volts), 2),
                 Fixed(threshold, 2)
             ),
+            Self::ManualLost { response } => {
+                write!(f, "manual control lost (no RC or joystick for COM_RC_LOSS_T)")?;
+                match response {
+                    ManualLossResponse::Nothing => Ok(()),
+                    ManualLossResponse::MissionGoesOn => write!(f, "; the mission goes on"),
+                    ManualLossResponse::Hold(t, action) => {
+                        let then = match action {
+                            ManualLossAction::Hold => "holding until it is back",
+                            ManualLossAction::Land => "landing in place",
+                            ManualLossAction::Terminate => "stopping the rotors (NAV_RCL_ACT)",
+                        };
+                        write!(f, "; holding {} s, then {then}", Fixed(t, 0))
+                    }
+                }
+            }
+            Self::ManualRegained { resumed: true } => {
+                write!(f, "manual control regained; the sticks steer again")
+            }
+            Self::ManualRegained { resumed: false } => write!(f, "manual control regained"),
+            Self::KillSwitch { on: true } => write!(f, "kill switch on: rotors off"),
+            Self::KillSwitch { on: false } => write!(f, "kill switch off"),
+            Self::SwitchRefused { mode, why } => {
+                write!(f, "mode switch: {} refused: {why}", mode.name())
+            }
             Self::RotorsOut {
                 newly,
                 earlier,

@@ -7,6 +7,7 @@ use super::Mission;
 use crate::flight::Route;
 use crate::mission::interface::{CommandRefusal, CommandReply, OperatorCommand};
 use crate::mission::phases::{AbortReason, Phase, Reason, Transition};
+use crate::manual::source::{InputMode, Manual, Source};
 use crate::mission::supervision::GcsLossAction;
 
 impl Mission {
@@ -80,11 +81,34 @@ impl Mission {
         &mut self,
         command: OperatorCommand,
     ) -> (Option<CommandReply>, Option<Transition>) {
-        // Mission mode asked for before the start: the start.
+        // Mission mode asked for before the start: the start; Position mode too, the sticks
+        // taking over after the take-off.
+        let asked = command;
         let command = match command {
-            OperatorCommand::Resume if self.phase == Phase::Idle => OperatorCommand::Start,
+            OperatorCommand::Resume | OperatorCommand::Position if self.phase == Phase::Idle => {
+                OperatorCommand::Start
+            }
             other => other,
         };
+        // Another mode than Position in the air: the sticks let go first.
+        if matches!(
+            command,
+            OperatorCommand::Resume
+                | OperatorCommand::Hold
+                | OperatorCommand::LandNow
+                | OperatorCommand::Abort
+                | OperatorCommand::Kill
+        ) && self.position
+            && matches!(self.phase, Phase::Flying(_))
+        {
+            self.position = false;
+            self.manual_hold = None;
+            self.leave_steering();
+            self.apply_hold();
+            if command == OperatorCommand::Resume {
+                return (Some(CommandReply { command, outcome: Ok(()) }), None);
+            }
+        }
         self.stop_motor_test_for(command);
         if command.is_bench() {
             let outcome = self.bench_command(command);
@@ -110,6 +134,18 @@ impl Mission {
             OperatorCommand::Start if self.phase == Phase::Idle && self.bench_busy() => {
                 Err(CommandRefusal::BenchBusy)
             }
+            // The pre-arm checks of manual control: the kill switch off, and an RC receiver
+            // heard when `COM_RC_IN_MODE` takes RC alone.
+            OperatorCommand::Start if self.phase == Phase::Idle && self.pilot.kill_on() => {
+                Err(CommandRefusal::KillSwitchOn)
+            }
+            OperatorCommand::Start
+                if self.phase == Phase::Idle
+                    && self.config.manual.input_mode == InputMode::RcOnly
+                    && !matches!(self.pilot.current(), Manual::Valid(Source::Rc, _)) =>
+            {
+                Err(CommandRefusal::NoManualControl { rc: true })
+            }
             OperatorCommand::Start
                 if self.phase == Phase::Idle
                     && self.config.supervision.gcs_action != GcsLossAction::Off
@@ -134,6 +170,13 @@ impl Mission {
                 // A pack changed since a low reading is graded afresh.
                 self.battery.regrade(&self.config.supervision);
                 transition = Some(self.enter(Phase::PreflightChecks, Reason::Started));
+                self.position = asked == OperatorCommand::Position;
+                Ok(())
+            }
+            OperatorCommand::Position if flying => self.enter_position(),
+            // Before the take-off: the sticks take over after it.
+            OperatorCommand::Position => {
+                self.position = true;
                 Ok(())
             }
             OperatorCommand::Start | OperatorCommand::Resume if flying && self.held => {

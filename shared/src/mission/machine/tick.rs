@@ -7,7 +7,11 @@ use super::Mission;
 use crate::control::navigator::NavState;
 use crate::control::trajectory::FlightPhase;
 use crate::flight::{CascadeSetpoints, FlightCommand};
-use crate::mission::interface::{ImuDetection, OperatorCommand, TickInput, TickOutput};
+use crate::manual::PilotMode;
+use crate::mission::interface::{
+    CommandReply, ImuDetection, OperatorCommand, TickInput, TickOutput,
+};
+use crate::mission::supervision::Notice;
 use crate::mission::phases::{AbortReason, Phase, Reason, Transition};
 use crate::scenario::MAX_ROBOTS;
 
@@ -53,10 +57,33 @@ impl Mission {
             .battery
             .update(input.supervision.battery_volts, dt, &sup);
         let mut notice = self.notices.pop_front();
-        let (reply, mut transition) = match input.command {
-            Some(c) => self.command(c),
-            None => (None, None),
+        let pilot = self.pilot_step(input, dt);
+        let mut transition = pilot.transition;
+        let reply = match input.command {
+            Some(c) => {
+                let (reply, t) = self.command(c);
+                transition = transition.or(t);
+                reply
+            }
+            None => None,
         };
+        if transition.is_none()
+            && input.command.is_none()
+            && let Some(switched) = pilot.command
+        {
+            let (answer, t) = self.command(switched);
+            transition = t;
+            if let Some(CommandReply {
+                outcome: Err(why), ..
+            }) = answer
+                && let Some(mode) = PilotMode::from_command(switched)
+            {
+                self.tell(&mut notice, Notice::SwitchRefused { mode, why });
+            }
+        }
+        if let Some(n) = pilot.notice {
+            self.tell(&mut notice, n);
+        }
         let mut supervision_landing = false;
         if transition.is_none() {
             let (t, landing, said) = self.supervise(link_change, battery_change, input.time_us, dt);
@@ -68,16 +95,7 @@ impl Mission {
                 supervision_landing = true;
             }
             for n in said.into_iter().flatten() {
-                if notice.is_none() {
-                    notice = Some(n);
-                } else {
-                    // Room for every tick's notices while one goes out per tick: the oldest
-                    // is dropped only if ticks of three came faster than one a tick.
-                    if self.notices.is_full() {
-                        self.notices.pop_front();
-                    }
-                    let _ = self.notices.push_back(n);
-                }
+                self.tell(&mut notice, n);
             }
         }
         let mut fault_landing = false;
@@ -101,14 +119,18 @@ impl Mission {
             }
         }
         if transition.is_none() {
-            let flight_command = match input.command {
+            let flight_command = match input.command.or(pilot.command) {
                 Some(OperatorCommand::Kill) => Some(FlightCommand::Kill),
+                _ if pilot.flight == Some(FlightCommand::Kill) => Some(FlightCommand::Kill),
                 Some(OperatorCommand::LandNow | OperatorCommand::Abort) => {
                     Some(FlightCommand::LandNow)
                 }
                 _ if fault_landing || supervision_landing => Some(FlightCommand::LandNow),
-                _ => None,
+                _ => pilot.flight,
             };
+            if matches!(self.phase, Phase::Flying(_)) {
+                self.steer_flight(&nav);
+            }
             transition = self.advance(&nav, dt, flight_command, &mut thrusts, &mut cascade);
         }
         if matches!(self.phase, Phase::Flying(_))
@@ -140,6 +162,11 @@ impl Mission {
         if !matches!(self.phase, Phase::Flying(_)) {
             cascade = None;
         }
+        if pilot.rotors_off {
+            // The kill switch: every rotor at zero from the tick that sees it, whatever the
+            // phase or the bench does.
+            thrusts = [0.0; MAX_ROBOTS];
+        }
         TickOutput {
             thrusts,
             robots: self.robots.clone(),
@@ -154,6 +181,21 @@ impl Mission {
             calibrated,
             nav,
             cascade,
+            killed: pilot.rotors_off,
+        }
+    }
+
+    /// `n` goes out this tick if nothing else does, else in a later one: room for every tick's
+    /// notices while one goes out per tick (the oldest is dropped only if ticks of several
+    /// came faster than one a tick).
+    fn tell(&mut self, notice: &mut Option<crate::mission::supervision::Notice>, n: crate::mission::supervision::Notice) {
+        if notice.is_none() {
+            *notice = Some(n);
+        } else {
+            if self.notices.is_full() {
+                self.notices.pop_front();
+            }
+            let _ = self.notices.push_back(n);
         }
     }
 

@@ -33,6 +33,9 @@ pub struct ParamSpec {
     pub max: f32,
     /// Only whole numbers are accepted (counts, choices).
     pub integer: bool,
+    /// The only values accepted, when not every whole number in range is one (a choice among
+    /// PX4's numbers); empty: every value in range.
+    pub allowed: &'static [f32],
     /// What it does, one line (with the `docs` feature: the host's tables and README; the
     /// firmware does without the text).
     #[cfg(feature = "docs")]
@@ -44,6 +47,22 @@ pub struct ParamSpec {
 }
 
 impl ParamSpec {
+    /// A value it accepts, a fraction `t` (0 to 1) of the way through its range or its
+    /// choices (for tests and fuzzing that want valid values).
+    pub fn valid_value(&self, t: f32) -> f32 {
+        let t = crate::math::clamp(t, 0.0, 1.0);
+        if !self.allowed.is_empty() {
+            let last = self.allowed.len() - 1;
+            return self.allowed[((t * last as f32) as usize).min(last)];
+        }
+        let v = self.min + t * (self.max - self.min);
+        if self.integer {
+            crate::math::clamp(crate::math::round(v), self.min, self.max)
+        } else {
+            v
+        }
+    }
+
     /// Its value in [`MissionConfig::DEFAULT`].
     pub fn default_value(&self) -> f32 {
         (self.get)(&MissionConfig::DEFAULT)
@@ -70,6 +89,7 @@ macro_rules! param {
             min: $min,
             max: $max,
             integer: true,
+            allowed: &[],
             #[cfg(feature = "docs")]
             doc: $doc,
             get: |$c: &MissionConfig| $field as f32,
@@ -84,6 +104,7 @@ macro_rules! param {
             min: 0.0,
             max: 1.0,
             integer: true,
+            allowed: &[],
             #[cfg(feature = "docs")]
             doc: $doc,
             get: |$c: &MissionConfig| if $field { 1.0 } else { 0.0 },
@@ -99,6 +120,7 @@ macro_rules! param {
             min: $min,
             max: $max,
             integer: true,
+            allowed: &[],
             #[cfg(feature = "docs")]
             doc: $doc,
             get: |_: &MissionConfig| $default,
@@ -112,6 +134,7 @@ macro_rules! param {
             min: $min,
             max: $max,
             integer: $int,
+            allowed: &[],
             #[cfg(feature = "docs")]
             doc: $doc,
             get: |$c: &MissionConfig| $field,
@@ -121,7 +144,7 @@ macro_rules! param {
 }
 
 /// Number of parameters.
-pub const COUNT: usize = 103;
+pub const COUNT: usize = 127;
 
 /// Index of the first of the map origin's five parameters, in this order: `ORIG_LAT_DEG`,
 /// `ORIG_LAT_E7`, `ORIG_LON_DEG`, `ORIG_LON_E7`, `ORIG_ALT` (docs/ground-link.md#the-map-origin).
@@ -162,6 +185,8 @@ pub enum ParamError {
     },
     /// A fraction given to a parameter that takes whole numbers.
     NotWhole,
+    /// A number in range that is none of the parameter's choices.
+    NotAChoice,
 }
 
 impl core::fmt::Display for ParamError {
@@ -171,6 +196,7 @@ impl core::fmt::Display for ParamError {
             Self::NotFinite => write!(f, "not a finite number"),
             Self::OutOfRange { min, max } => write!(f, "outside {}..{}", Num(min), Num(max)),
             Self::NotWhole => write!(f, "not a whole number"),
+            Self::NotAChoice => write!(f, "not one of its choices"),
         }
     }
 }
@@ -189,6 +215,9 @@ pub fn check(index: usize, value: f32) -> Result<(), ParamError> {
     }
     if spec.integer && crate::math::floor(value) != value {
         return Err(ParamError::NotWhole);
+    }
+    if !spec.allowed.is_empty() && !spec.allowed.contains(&value) {
+        return Err(ParamError::NotAChoice);
     }
     Ok(())
 }

@@ -8,6 +8,7 @@ mod cascade;
 mod flight;
 mod ground_link;
 mod hardware;
+mod manual;
 mod mission;
 
 /// Every parameter, in the order the protocol numbers them (`param_index`).
@@ -23,6 +24,7 @@ pub static TABLE: [ParamSpec; COUNT] = join(&[
     ground_link::LINK_FAILSAFES,
     ground_link::MAP_ORIGIN,
     hardware::BRING_UP,
+    manual::MANUAL_CONTROL,
 ]);
 
 /// The groups one after another, at compile time; the build fails unless they hold [`COUNT`]

@@ -87,6 +87,7 @@ pub(super) const ADAPTATION: &[ParamSpec] = &[
         min: 0.0,
         max: 1.0,
         integer: true,
+        allowed: &[],
         #[cfg(feature = "docs")]
         doc: "re-form in flight when the measured COM moves: 1 on, 0 off",
         get: |c| if c.adapt.enabled { 1.0 } else { 0.0 },

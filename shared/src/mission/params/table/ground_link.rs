@@ -11,6 +11,7 @@ pub(super) const LINK_FAILSAFES: &[ParamSpec] = &[
         min: 0.0,
         max: 2.0,
         integer: true,
+        allowed: &[],
         #[cfg(feature = "docs")]
         doc: "ground link lost in flight: 0 not watched (no start refused), 1 fly on to the target and land, 2 hold FS_GCS_HOLD_T then land in place",
         get: |c| c.supervision.gcs_action as u8 as f32,
@@ -92,6 +93,7 @@ pub(super) const MAP_ORIGIN: &[ParamSpec] = &[
         min: -1_000.0,
         max: 10_000.0,
         integer: false,
+        allowed: &[],
         #[cfg(feature = "docs")]
         doc: "map origin's altitude above mean sea level",
         get: |_| ORIGIN_DEFAULT_ALT,

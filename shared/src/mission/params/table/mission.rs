@@ -11,6 +11,7 @@ pub(super) const ESTIMATION: &[ParamSpec] = &[
         min: 0.0,
         max: 5.0,
         integer: false,
+        allowed: &[],
         #[cfg(feature = "docs")]
         doc: "standard deviation of a lift reading (estimator noise model); 0: the scenario's noise_sigma",
         get: |c| c.lift_noise_sigma.unwrap_or(0.0),
@@ -126,6 +127,7 @@ pub(super) const TIMING: &[ParamSpec] = &[
         min: 0.0,
         max: 1.0,
         integer: true,
+        allowed: &[],
         #[cfg(feature = "docs")]
         doc: "flight mixer: 0 the paper's equal split, 1 full allocation",
         get: |c| match c.mixer {
