@@ -131,7 +131,15 @@ async def fly(url, log=print, hold_s=3.0):
             reached.append(p.current)
             log(f"mission progress {p.current}/{p.total}")
 
+    modes = []
+
+    async def follow_modes():
+        async for m in drone.telemetry.flight_mode():
+            if not modes or modes[-1] != m:
+                modes.append(m)
+
     progress = asyncio.ensure_future(follow_progress())
+    mode_log = asyncio.ensure_future(follow_modes())
     try:
         # The vehicle may still be loading its payload description: it answers "not now".
         deadline = time.monotonic() + 60
@@ -164,9 +172,19 @@ async def fly(url, log=print, hold_s=3.0):
         log(f"held {hold_s:.0f} s: moved {moved:.3f} m")
         if moved > 0.1:
             raise Failed(f"the vehicle moved {moved:.2f} m while held")
+        held_at = len(modes)
+        progress_at_hold = max(reached, default=0)
         await answered(drone.mission_raw.start_mission(), "the mission's resumption")
-        await first(drone.telemetry.flight_mode(), 10, "the Mission mode again",
-                    lambda m: m == FlightMode.MISSION)
+        # Resumed: the Mission mode seen after the hold, or the progress moving on (on a fast
+        # or loaded run the mode may be Mission and over before a heartbeat is read). Waited
+        # for on what the vehicle says, with a backstop.
+        end = time.monotonic() + 120
+        while not (FlightMode.MISSION in modes[held_at:]
+                   or max(reached, default=0) > progress_at_hold):
+            if time.monotonic() > end:
+                raise Failed(f"not resumed: modes since the hold {modes[held_at:]}, "
+                             f"progress {reached[-1:]}")
+            await asyncio.sleep(0.1)
         log("resumed")
         await first(drone.telemetry.landed_state(), 600, "the landing",
                     lambda s: s == LandedState.ON_GROUND)
@@ -177,6 +195,7 @@ async def fly(url, log=print, hold_s=3.0):
             await asyncio.sleep(0.1)  # polling the progress followed above
     finally:
         progress.cancel()
+        mode_log.cancel()
     if not reached or max(reached) < len(mission):
         raise Failed(f"items reached: progress went to {reached[-1:] or 'nothing'}")
     return {"moved_while_held_m": moved, "progress": reached}

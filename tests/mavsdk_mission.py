@@ -38,4 +38,9 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    code = main()
+    # MAVSDK's server and gRPC threads can keep the interpreter from exiting after a
+    # failure (seen: a failed check then hung to the test's 900 s backstop): leave at once.
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)

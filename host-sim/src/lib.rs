@@ -21,6 +21,7 @@ pub mod log_summary;
 pub mod mission_figures;
 pub mod mission_run;
 pub mod monte_carlo;
+pub mod pilot_script;
 pub mod plant;
 pub mod report;
 pub mod rotor_faults;

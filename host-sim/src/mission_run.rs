@@ -14,7 +14,7 @@
 //! `plant_loop` the loop itself ([`fly`]) and what the plant saw ([`PlantRecord`]); in
 //! `in_process` `shared`'s mission as the autopilot ([`InProcess`], [`run`]).
 
-use shared::manual::ManualSamples;
+use crate::pilot_script::PilotFrame;
 use anyhow::Result;
 use shared::control::navigator::{ImuSample, MocapFix};
 use shared::flight::AdaptEvent;
@@ -56,8 +56,8 @@ pub struct Sensed {
     pub gcs_lost: bool,
     /// The pack's voltage at its terminals, V.
     pub battery_volts: f32,
-    /// A person's sticks and switches since the last tick (`mission --rc`).
-    pub manual: ManualSamples,
+    /// What a person's RC receiver or joystick sent with this tick (`--rc`).
+    pub pilot: Option<PilotFrame>,
 }
 
 /// Something the autopilot reported this tick.
@@ -82,6 +82,8 @@ pub enum Event {
     Notice(String),
     /// The start command was refused: why, as the autopilot says it. The run ends.
     StartRefused(String),
+    /// The sticks steer the payload (Position mode) from this tick on (`true`), or no longer.
+    Steered(bool),
 }
 
 /// What the autopilot commands each tick.

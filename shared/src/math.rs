@@ -102,7 +102,11 @@ pub fn copysign(magnitude: f32, sign: f32) -> f32 {
 pub fn wrap_pi(angle: f32) -> f32 {
     use core::f32::consts::{PI, TAU};
     let wrapped = angle - TAU * floor((angle + PI) / TAU);
-    if wrapped <= -PI { wrapped + TAU } else { wrapped }
+    if wrapped <= -PI {
+        wrapped + TAU
+    } else {
+        wrapped
+    }
 }
 
 /// Arc sine (radians), argument clamped to `[-1, 1]`.

@@ -15,6 +15,7 @@ mod flight_log;
 mod formation;
 mod ground_loss_battery;
 mod imu_faults;
+mod manual_control;
 mod mission;
 mod rotor_out;
 mod route;

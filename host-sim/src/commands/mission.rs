@@ -19,6 +19,7 @@ use crate::commands::fly::MixerArg;
 use crate::inject::{self, Injection};
 use crate::mission_figures;
 use crate::mission_run::{self, MISSION_TIME_LIMIT, MissionOutcome, MissionSetup};
+use crate::pilot_script::PilotScript;
 use crate::report::print_json;
 use crate::say;
 use crate::scenario_file;
@@ -90,6 +91,10 @@ pub struct MissionArgs {
     /// Review and pyulog open it; docs/formats.md#flight-logs).
     #[arg(long, value_name = "FILE.ulg")]
     log: Option<PathBuf>,
+    /// A person at the sticks: play this stick script (timed stick and switch positions, as
+    /// an RC receiver's channels or a joystick's MANUAL_CONTROL; docs/manual-control.md).
+    #[arg(long, value_name = "FILE")]
+    rc: Option<PathBuf>,
 }
 
 /// How a mission came out, for the exit code: dropped, aborted (or its start refused),
@@ -118,6 +123,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
             )
         })
         .transpose()?;
+    let pilot = args.rc.as_deref().map(PilotScript::load).transpose()?;
     let loaded = match &args.scenario {
         Some(path) => scenario_file::load(path)?,
         None => scenario_file::parse(RECT_EX1, std::path::Path::new("rect-ex1 (built in)"))?,
@@ -154,6 +160,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
             mocap_lost_after_takeoff: mocap_lost_after,
             log: args.log.clone(),
             esc_telemetry: args.esc_telemetry,
+            pilot,
             ..MissionSetup::default()
         },
     );

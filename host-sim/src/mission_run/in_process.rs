@@ -30,6 +30,10 @@ pub struct InProcess {
     pub replies: Vec<(OperatorCommand, Result<(), CommandRefusal>)>,
     /// The flight log being written, if one is.
     log: Option<LogFile>,
+    /// The mission's configuration (its RC channel map reads a scripted receiver's frames).
+    config: MissionConfig,
+    /// The sticks steered the payload at the last tick.
+    steered: bool,
 }
 
 impl InProcess {
@@ -45,6 +49,8 @@ impl InProcess {
             refusals: Vec::new(),
             replies: Vec::new(),
             log: None,
+            config,
+            steered: false,
         })
     }
 
@@ -67,7 +73,7 @@ impl Autopilot for InProcess {
                 gcs_heartbeat: sensed.gcs_heartbeat,
                 battery_volts: Some(sensed.battery_volts),
             },
-            manual: sensed.manual,
+            manual: crate::pilot_script::samples(sensed.pilot.as_ref(), &self.config),
         };
         let out = self.mission.step(&input);
         // Recorded as the firmware's control step records it: before a job's result is taken.
@@ -106,6 +112,11 @@ impl Autopilot for InProcess {
         }
         if let Some(n) = out.notice {
             events.push(Event::Notice(n.to_string()));
+        }
+        let steered = self.mission.flight().is_some_and(|f| f.steered());
+        if steered != self.steered {
+            self.steered = steered;
+            events.push(Event::Steered(steered));
         }
         if let Some(reply) = out.reply {
             self.replies.push((reply.command, reply.outcome));
@@ -204,6 +215,14 @@ pub struct MissionOutcome {
     pub battery_dropped_at: Option<f32>,
     /// Lowest pack voltage at the terminals, V.
     pub min_battery_volts: f32,
+    /// Each time the sticks took over the payload (`true`) or let it go, s.
+    pub steered: Vec<(f32, bool)>,
+    /// When a stick script first sent the kill switch on, s.
+    pub kill_sent_at: Option<f32>,
+    /// The first tick from the kill switch's frame on whose every rotor command was zero, s.
+    pub rotors_zero_at: Option<f32>,
+    /// When take-off began, s, if it did.
+    pub takeoff_at: Option<f32>,
 }
 
 /// A flight counts as delivered within this distance of the target, m.
@@ -216,7 +235,12 @@ pub fn run(
     setup: &MissionSetup,
     on_phase: &mut dyn FnMut(f32, &str, &str),
 ) -> Result<(MissionOutcome, InProcess)> {
-    let mut autopilot = InProcess::new(scenario, setup.config)?;
+    // A stick script's switches mapped as `hil` sets them on the vehicle.
+    let mut config = setup.config;
+    if setup.pilot.is_some() {
+        crate::pilot_script::PilotScript::configure(&mut config);
+    }
+    let mut autopilot = InProcess::new(scenario, config)?;
     if let Some(route) = &setup.route {
         autopilot
             .mission
@@ -281,6 +305,10 @@ pub fn run(
         gcs_lost_at: record.gcs_lost_at,
         battery_dropped_at: record.battery_dropped_at,
         min_battery_volts: record.min_battery_volts,
+        steered: record.steered,
+        kill_sent_at: record.kill_sent_at,
+        rotors_zero_at: record.rotors_zero_at,
+        takeoff_at: record.takeoff_at,
     };
     Ok((outcome, autopilot))
 }

@@ -2,7 +2,6 @@
 //! the injected failures applied each control tick, the autopilot's commands taken back, and
 //! what the plant saw recorded ([`PlantRecord`]); docs/system.md#pipeline.
 
-use shared::manual::ManualSamples;
 use anyhow::{Result, anyhow};
 use shared::control::navigator::ImuSample;
 use shared::control::vector::Vec3;
@@ -119,6 +118,12 @@ pub struct PlantRecord {
     pub battery_dropped_at: Option<f32>,
     /// Lowest pack voltage at the terminals, V.
     pub min_battery_volts: f32,
+    /// Each time the sticks took over the payload (`true`) or let it go, s.
+    pub steered: Vec<(f32, bool)>,
+    /// When the stick script first sent the kill switch on, s.
+    pub kill_sent_at: Option<f32>,
+    /// The first tick from the kill switch's frame on whose every rotor command was zero, s.
+    pub rotors_zero_at: Option<f32>,
 }
 
 /// Flies `autopilot` in the plant of `scenario`'s truth until its mission is over, the
@@ -253,6 +258,19 @@ pub fn fly(
         if command.is_none() {
             command = setup_commands.pop();
         }
+        // The stick script's frame, at its rate (times after take-off began; its first step
+        // before it).
+        let pilot = setup.pilot.as_ref().and_then(|script| {
+            let every = (CONTROL_HZ as f32 / script.rate_hz).round().max(1.0) as u64;
+            if !record.ticks.is_multiple_of(every) {
+                return None;
+            }
+            let frame = script.frame_at(t - takeoff_at)?;
+            if script.step_at(t - takeoff_at).kill && record.kill_sent_at.is_none() {
+                record.kill_sent_at = Some(t);
+            }
+            Some(frame)
+        });
         if command.is_none()
             && let Some(&(after, c)) = setup.commands.get(next_command)
             && t >= takeoff_at + after
@@ -298,7 +316,7 @@ pub fn fly(
             gcs_heartbeat,
             gcs_lost,
             battery_volts,
-            manual: ManualSamples::NONE,
+            pilot,
         })?;
         record.ticks += 1;
         record.armed |= out.armed;
@@ -351,6 +369,15 @@ pub fn fly(
                     on_phase(t, "notice", text);
                     record.notices.push((t, text.clone()));
                 }
+                Event::Steered(on) => {
+                    let what = if *on {
+                        "Position: the sticks steer"
+                    } else {
+                        "the sticks no longer steer"
+                    };
+                    on_phase(t, "mode", what);
+                    record.steered.push((t, *on));
+                }
                 Event::StartRefused(why) => {
                     on_phase(t, "refused", why);
                     record.start_refused = Some(why.clone());
@@ -377,6 +404,12 @@ pub fn fly(
                 0.0
             };
             *c = fraction.clamp(0.0, 1.0) * robots.max_thrust;
+        }
+        if record.kill_sent_at.is_some()
+            && record.rotors_zero_at.is_none()
+            && out.thrust.iter().all(|&f| f == 0.0)
+        {
+            record.rotors_zero_at = Some(t);
         }
         let euler = truth_now.attitude.to_euler();
         if t >= takeoff_at {

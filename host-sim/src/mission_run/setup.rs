@@ -54,6 +54,8 @@ pub struct MissionSetup {
     /// The gyro's constant bias, rad/s per body axis, in place of the one drawn from the seed
     /// (`hil --gyro-bias`).
     pub gyro_bias: Option<Vec3>,
+    /// A person at the sticks, scripted (`--rc FILE`, docs/manual-control.md#stick-scripts).
+    pub pilot: Option<crate::pilot_script::PilotScript>,
 }
 
 /// A rotor that stops: from `after` seconds after take-off began, robot `robot`'s rotor
@@ -165,6 +167,7 @@ impl Default for MissionSetup {
             log: None,
             route: None,
             gyro_bias: None,
+            pilot: None,
         }
     }
 }

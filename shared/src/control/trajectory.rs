@@ -556,7 +556,10 @@ mod tests {
         let here = Vec3::new(3.0, 1.0, -1.5);
         plan.resume_from(2, here, limits);
         let back = plan.segment(0).expect("the move back");
-        assert_eq!((back.phase, back.from, back.to), (FlightPhase::Transit, here, hover.to));
+        assert_eq!(
+            (back.phase, back.from, back.to),
+            (FlightPhase::Transit, here, hover.to)
+        );
         assert_eq!(plan.segment(1), Some(&hover));
         assert_eq!(plan.segment(2).map(|s| s.phase), Some(FlightPhase::Land));
         assert_eq!(plan.segment(3), None);

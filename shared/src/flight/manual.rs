@@ -123,7 +123,11 @@ impl ManualSetpoint {
         next.z = pull(next.z, sp.position.z, here.z);
         next.z = math::min(next.z, ground_z + SETTLE_DEPTH);
         let moved = next - sp.position;
-        sp.velocity = if dt > 0.0 { moved * (1.0 / dt) } else { Vec3::ZERO };
+        sp.velocity = if dt > 0.0 {
+            moved * (1.0 / dt)
+        } else {
+            Vec3::ZERO
+        };
         sp.position = next;
         sp.acceleration = Vec3::ZERO;
         sp.yaw = math::wrap_pi(sp.yaw + command.yaw_rate * dt);
@@ -187,7 +191,10 @@ mod tests {
         assert!((down.velocity.z - l.descent_speed).abs() < 1e-6);
         // Inside the dead zone: nothing.
         sticks.throttle = 0.53;
-        assert_eq!(ManualVelocity::from_sticks(&sticks, 0.0, &l).velocity.z, 0.0);
+        assert_eq!(
+            ManualVelocity::from_sticks(&sticks, 0.0, &l).velocity.z,
+            0.0
+        );
     }
 
     #[test]

@@ -22,10 +22,15 @@ impl PilotMode {
     /// The mode of a `COM_FLTMODEn` value; `None` for -1 (unassigned) and for PX4 modes this
     /// vehicle does not fly.
     pub fn from_param(value: f32) -> Option<Self> {
-        [(2.0, Self::Position), (3.0, Self::Mission), (4.0, Self::Hold), (11.0, Self::Land)]
-            .iter()
-            .find(|(v, _)| *v == value)
-            .map(|(_, mode)| *mode)
+        [
+            (2.0, Self::Position),
+            (3.0, Self::Mission),
+            (4.0, Self::Hold),
+            (11.0, Self::Land),
+        ]
+        .iter()
+        .find(|(v, _)| *v == value)
+        .map(|(_, mode)| *mode)
     }
 
     /// Its name for people.
@@ -109,7 +114,10 @@ mod tests {
         assert_eq!(PilotMode::from_param(11.0), Some(PilotMode::Land));
         assert_eq!(PilotMode::from_param(-1.0), None);
         assert_eq!(PilotMode::from_param(0.0), None);
-        assert_eq!(ManualLossAction::from_param(3.0), Some(ManualLossAction::Land));
+        assert_eq!(
+            ManualLossAction::from_param(3.0),
+            Some(ManualLossAction::Land)
+        );
         assert_eq!(ManualLossAction::from_param(2.0), None);
         assert_eq!(ManualLossAction::from_param(f32::NAN), None);
     }

@@ -7,10 +7,10 @@
 //! switch works while a joystick flies. Its position is kept through a loss of the receiver
 //! (a vehicle killed stays killed, then disarms) until a valid frame says otherwise.
 
+use super::ManualSamples;
 use super::config::{ManualConfig, PilotMode};
 use super::kill::{KillAction, KillSwitch};
 use super::source::{Manual, ManualSelector, Source};
-use super::ManualSamples;
 
 /// Seconds to microseconds, never negative.
 fn micros(seconds: f32) -> u64 {
@@ -88,7 +88,12 @@ impl Pilot {
     }
 
     /// This tick's samples at `now_us`.
-    pub fn tick(&mut self, samples: &ManualSamples, now_us: u64, config: &ManualConfig) -> PilotTick {
+    pub fn tick(
+        &mut self,
+        samples: &ManualSamples,
+        now_us: u64,
+        config: &ManualConfig,
+    ) -> PilotTick {
         if let Some(rc) = samples.rc {
             self.selector.receive(Source::Rc, rc, now_us);
             if rc.sticks.is_valid() && config.input_mode != super::source::InputMode::Disabled {
@@ -99,9 +104,11 @@ impl Pilot {
             self.selector.receive(Source::Mavlink, joystick, now_us);
         }
         let manual = self.selector.current(now_us);
+        // Back only after a loss: the first valid sample is no news.
+        let was_lost = matches!(self.last, Manual::Lost(_));
         self.last = manual;
         let valid = matches!(manual, Manual::Valid(..));
-        let (lost, regained) = (self.valid && !valid, !self.valid && valid);
+        let (lost, regained) = (self.valid && !valid, was_lost && valid);
         self.valid = valid;
         let mut switched_to = None;
         if let Manual::Valid(_, input) = manual
@@ -182,7 +189,10 @@ mod tests {
     fn loss_and_return_are_said_once_each() {
         let c = config();
         let mut p = Pilot::new(&c);
-        assert!(p.tick(&rc(false, None), 0, &c).regained);
+        assert!(
+            !p.tick(&rc(false, None), 0, &c).regained,
+            "the first is no news"
+        );
         let none = ManualSamples::NONE;
         assert!(!p.tick(&none, 400_000, &c).lost);
         assert!(p.tick(&none, 600_000, &c).lost);
@@ -196,12 +206,18 @@ mod tests {
         let mut p = Pilot::new(&c);
         p.tick(&rc(false, None), 0, &c);
         let on = p.tick(&rc(true, None), 10_000, &c);
-        assert_eq!((on.kill, on.kill_switched), (KillAction::RotorsOff, Some(true)));
+        assert_eq!(
+            (on.kill, on.kill_switched),
+            (KillAction::RotorsOff, Some(true))
+        );
         // The receiver goes silent: the switch stays on, and the vehicle disarms on time.
         let none = ManualSamples::NONE;
         assert_eq!(p.tick(&none, 3_000_000, &c).kill, KillAction::RotorsOff);
         assert_eq!(p.tick(&none, 5_010_000, &c).kill, KillAction::Disarm);
         let off = p.tick(&rc(false, None), 6_000_000, &c);
-        assert_eq!((off.kill, off.kill_switched), (KillAction::None, Some(false)));
+        assert_eq!(
+            (off.kill, off.kill_switched),
+            (KillAction::None, Some(false))
+        );
     }
 }

@@ -180,7 +180,10 @@ impl core::fmt::Display for CommandRefusal {
                 "no RC receiver: COM_RC_IN_MODE requires one and no valid frame came in COM_RC_LOSS_T"
             ),
             Self::NoManualControl { rc: false } => {
-                write!(f, "no manual control: Position mode needs an RC receiver or a joystick")
+                write!(
+                    f,
+                    "no manual control: Position mode needs an RC receiver or a joystick"
+                )
             }
         }
     }

@@ -17,9 +17,9 @@
 //! ([`super::machine`]) decides what each change means in its phase and says it as a
 //! [`Notice`].
 
-use crate::numbers::Fixed;
 use crate::manual::{ManualLossAction, PilotMode};
 use crate::mission::interface::CommandRefusal;
+use crate::numbers::Fixed;
 
 /// What one tick brings for the supervision: whether a ground station's heartbeat arrived
 /// since the previous tick, and the pack voltage if one is measured.
@@ -413,7 +413,10 @@ impl core::fmt::Display for Notice {
                 Fixed(threshold, 2)
             ),
             Self::ManualLost { response } => {
-                write!(f, "manual control lost (no RC or joystick for COM_RC_LOSS_T)")?;
+                write!(
+                    f,
+                    "manual control lost (no RC or joystick for COM_RC_LOSS_T)"
+                )?;
                 match response {
                     ManualLossResponse::Nothing => Ok(()),
                     ManualLossResponse::MissionGoesOn => write!(f, "; the mission goes on"),

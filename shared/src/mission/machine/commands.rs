@@ -5,9 +5,9 @@
 
 use super::Mission;
 use crate::flight::Route;
+use crate::manual::source::{InputMode, Manual, Source};
 use crate::mission::interface::{CommandRefusal, CommandReply, OperatorCommand};
 use crate::mission::phases::{AbortReason, Phase, Reason, Transition};
-use crate::manual::source::{InputMode, Manual, Source};
 use crate::mission::supervision::GcsLossAction;
 
 impl Mission {
@@ -106,7 +106,13 @@ impl Mission {
             self.leave_steering();
             self.apply_hold();
             if command == OperatorCommand::Resume {
-                return (Some(CommandReply { command, outcome: Ok(()) }), None);
+                return (
+                    Some(CommandReply {
+                        command,
+                        outcome: Ok(()),
+                    }),
+                    None,
+                );
             }
         }
         self.stop_motor_test_for(command);

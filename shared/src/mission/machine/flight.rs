@@ -139,6 +139,7 @@ impl Mission {
                             | AbortReason::ImuNoisy
                             | AbortReason::RobotStalled { .. }
                             | AbortReason::GcsLost
+                            | AbortReason::ManualLost
                             | AbortReason::BatteryCritical { .. }),
                         ) => Reason::Abort(why),
                         _ => Reason::LandNow,

@@ -11,8 +11,8 @@ use crate::manual::PilotMode;
 use crate::mission::interface::{
     CommandReply, ImuDetection, OperatorCommand, TickInput, TickOutput,
 };
-use crate::mission::supervision::Notice;
 use crate::mission::phases::{AbortReason, Phase, Reason, Transition};
+use crate::mission::supervision::Notice;
 use crate::scenario::MAX_ROBOTS;
 
 impl Mission {
@@ -188,7 +188,11 @@ impl Mission {
     /// `n` goes out this tick if nothing else does, else in a later one: room for every tick's
     /// notices while one goes out per tick (the oldest is dropped only if ticks of several
     /// came faster than one a tick).
-    fn tell(&mut self, notice: &mut Option<crate::mission::supervision::Notice>, n: crate::mission::supervision::Notice) {
+    fn tell(
+        &mut self,
+        notice: &mut Option<crate::mission::supervision::Notice>,
+        n: crate::mission::supervision::Notice,
+    ) {
         if notice.is_none() {
             *notice = Some(n);
         } else {
