@@ -6,7 +6,8 @@
 //! Rates: at every step (400 Hz) `sensor_combined`, `vehicle_attitude`,
 //! `vehicle_angular_velocity` and `actuator_outputs`; `vehicle_local_position` at 100 Hz, and
 //! while flying `vehicle_attitude_setpoint` and `vehicle_rates_setpoint` at 100 Hz each;
-//! `vehicle_mocap_odometry` with each fix; `battery_status` and `rail_position` at 10 Hz;
+//! `vehicle_mocap_odometry` with each fix; `battery_status`, `rail_position`,
+//! `manual_control_setpoint` and `manual_control_switches` at 10 Hz;
 //! `vehicle_status` and `fault` when they change and once a second; `lift`, `formation` and
 //! `adaptation` when they happen. What the step says to people ([`step_texts`], the
 //! firmware's `STATUSTEXT`s) is each a logged string.
@@ -176,6 +177,8 @@ impl Recorder {
         let (attitude_sp_turn, rates_sp_turn) = (turn(EVERY_100_HZ, 1), turn(EVERY_100_HZ, 3));
         let (battery_turn, rail_turn) = (turn(EVERY_10_HZ, 2), turn(EVERY_10_HZ, 6));
         let (status_turn, fault_turn) = (turn(EVERY_SECOND, 10), turn(EVERY_SECOND, 14));
+        // Manual control at 10 Hz, on steps of their own (of the third of every four).
+        let (sticks_turn, switches_turn) = (turn(EVERY_10_HZ, 18), turn(EVERY_10_HZ, 26));
         self.step_in_second = (s + 1) % EVERY_SECOND;
         let mut put = |r: Record| sink.record(&r);
 
@@ -298,6 +301,9 @@ impl Recorder {
                 battery_warning: fault.5,
             });
             self.fault = Some(fault);
+        }
+        if sticks_turn || switches_turn {
+            manual_records(t, mission, sticks_turn, &mut put);
         }
         self.estimation(t, out, mission, &mut put);
         if let Some(a) = out.adaptation {
@@ -446,5 +452,35 @@ mod tests {
                 None => assert!(code > 15, "{code} names no phase"),
             }
         }
+    }
+}
+
+/// The manual control in force as PX4's `manual_control_setpoint` (`sticks`) or
+/// `manual_control_switches`.
+fn manual_records(t: u64, mission: &Mission, sticks: bool, put: &mut impl FnMut(Record)) {
+    use shared::manual::source::{Manual, Source};
+    let (valid, source, input) = match mission.manual() {
+        Manual::Valid(source, input) => (true, Some(source), input),
+        Manual::Lost(source) => (false, Some(source), shared::manual::ManualInput::NONE),
+        Manual::Never => (false, None, shared::manual::ManualInput::NONE),
+    };
+    if sticks {
+        let s = input.sticks;
+        put(Record::ManualControlSetpoint {
+            timestamp: t,
+            valid,
+            data_source: match source {
+                Some(Source::Rc) => 0,
+                Some(Source::Mavlink) => 1,
+                None => 255,
+            },
+            sticks: [s.roll, s.pitch, s.yaw, 2.0 * s.throttle - 1.0],
+        });
+    } else {
+        put(Record::ManualControlSwitches {
+            timestamp: t,
+            mode_slot: input.mode_slot.map_or(0, |slot| slot + 1),
+            kill_switch: if mission.kill_switch() { 1 } else { 3 },
+        });
     }
 }

@@ -2,7 +2,8 @@
 //! field names (so Flight Review and PlotJuggler's PX4 layouts find them): `sensor_combined`,
 //! `vehicle_attitude`, `vehicle_angular_velocity`, `vehicle_local_position`,
 //! `vehicle_mocap_odometry`, `actuator_outputs`, `vehicle_status`, `battery_status`,
-//! `vehicle_attitude_setpoint`, `vehicle_rates_setpoint` (each the subset of PX4's fields this
+//! `vehicle_attitude_setpoint`, `vehicle_rates_setpoint`, `manual_control_setpoint`,
+//! `manual_control_switches` (each the subset of PX4's fields this
 //! vehicle has, with PX4's names and types). The rest are this vehicle's own: `rail_position`, `lift`, `formation`, `adaptation`, `fault`.
 //! Each format lists the fields in the order [`Record::pack`] writes them, packed, the
 //! timestamp (us, the flight controller's clock) first.
@@ -47,11 +48,15 @@ pub enum Topic {
     VehicleAttitudeSetpoint,
     /// The cascade's body-rate setpoint and normalised thrust.
     VehicleRatesSetpoint,
+    /// The sticks in force (RC or joystick; docs/manual-control.md).
+    ManualControlSetpoint,
+    /// The mode and kill switches in force.
+    ManualControlSwitches,
 }
 
 impl Topic {
     /// Every topic, in message-id order.
-    pub const ALL: [Topic; 15] = [
+    pub const ALL: [Topic; 17] = [
         Topic::SensorCombined,
         Topic::VehicleAttitude,
         Topic::VehicleAngularVelocity,
@@ -67,6 +72,8 @@ impl Topic {
         Topic::Fault,
         Topic::VehicleAttitudeSetpoint,
         Topic::VehicleRatesSetpoint,
+        Topic::ManualControlSetpoint,
+        Topic::ManualControlSwitches,
     ];
 
     /// The subscription's message id.
@@ -141,6 +148,13 @@ impl Topic {
             Self::VehicleRatesSetpoint => {
                 "vehicle_rates_setpoint:uint64_t timestamp;float roll;float pitch;float yaw;\
                  float[3] thrust_body"
+            }
+            Self::ManualControlSetpoint => {
+                "manual_control_setpoint:uint64_t timestamp;bool valid;uint8_t data_source;\
+                 float roll;float pitch;float yaw;float throttle"
+            }
+            Self::ManualControlSwitches => {
+                "manual_control_switches:uint64_t timestamp;uint8_t mode_slot;uint8_t kill_switch"
             }
         }
     }
@@ -326,6 +340,26 @@ pub enum Record {
         /// PX4's normalised body thrust, as in `VehicleAttitudeSetpoint`.
         thrust_body: [f32; 3],
     },
+    /// `manual_control_setpoint`: the sticks in force, PX4's ranges.
+    ManualControlSetpoint {
+        /// Time, us.
+        timestamp: u64,
+        /// A source is in force and fresh.
+        valid: bool,
+        /// PX4's source: 0 RC, 1 a ground station's joystick (`MAVLINK_0`); 255 none.
+        data_source: u8,
+        /// Roll, pitch, yaw in -1..1 and throttle in -1..1 (PX4's: -1 down, 1 up).
+        sticks: [f32; 4],
+    },
+    /// `manual_control_switches`, PX4's numbers.
+    ManualControlSwitches {
+        /// Time, us.
+        timestamp: u64,
+        /// The mode switch's slot, 1 to 6; 0 none.
+        mode_slot: u8,
+        /// The kill switch: 1 on, 3 off (PX4's `SWITCH_POS_ON`, `_OFF`).
+        kill_switch: u8,
+    },
 }
 
 /// Packed data of one record.
@@ -356,6 +390,8 @@ impl Record {
             Self::Fault { .. } => Topic::Fault,
             Self::VehicleAttitudeSetpoint { .. } => Topic::VehicleAttitudeSetpoint,
             Self::VehicleRatesSetpoint { .. } => Topic::VehicleRatesSetpoint,
+            Self::ManualControlSetpoint { .. } => Topic::ManualControlSetpoint,
+            Self::ManualControlSwitches { .. } => Topic::ManualControlSwitches,
         }
     }
 
@@ -376,7 +412,9 @@ impl Record {
             | Self::Adaptation { timestamp, .. }
             | Self::Fault { timestamp, .. }
             | Self::VehicleAttitudeSetpoint { timestamp, .. }
-            | Self::VehicleRatesSetpoint { timestamp, .. } => timestamp,
+            | Self::VehicleRatesSetpoint { timestamp, .. }
+            | Self::ManualControlSetpoint { timestamp, .. }
+            | Self::ManualControlSwitches { timestamp, .. } => timestamp,
         }
     }
 
@@ -525,6 +563,17 @@ impl Record {
             Self::VehicleRatesSetpoint {
                 rate, thrust_body, ..
             } => p.f32s(&rate).f32s(&thrust_body),
+            Self::ManualControlSetpoint {
+                valid,
+                data_source,
+                sticks,
+                ..
+            } => p.u8(u8::from(valid)).u8(data_source).f32s(&sticks),
+            Self::ManualControlSwitches {
+                mode_slot,
+                kill_switch,
+                ..
+            } => p.u8(mode_slot).u8(kill_switch),
         };
     }
 }
@@ -556,7 +605,7 @@ mod tests {
             .sum()
     }
 
-    fn one_of_each() -> [Record; 15] {
+    fn one_of_each() -> [Record; 17] {
         let t = 1_000;
         [
             Record::SensorCombined {
@@ -648,6 +697,17 @@ mod tests {
                 timestamp: t,
                 rate: [0.1, -0.1, 0.0],
                 thrust_body: [0.0, 0.0, -0.45],
+            },
+            Record::ManualControlSetpoint {
+                timestamp: t,
+                valid: true,
+                data_source: 0,
+                sticks: [0.0, 0.5, 0.0, 0.0],
+            },
+            Record::ManualControlSwitches {
+                timestamp: t,
+                mode_slot: 2,
+                kill_switch: 3,
             },
         ]
     }

@@ -47,10 +47,19 @@ impl Flown {
 }
 
 fn fly(script: &str, commands: Vec<(f32, OperatorCommand)>) -> Flown {
+    fly_logged(script, commands, None)
+}
+
+fn fly_logged(
+    script: &str,
+    commands: Vec<(f32, OperatorCommand)>,
+    log: Option<std::path::PathBuf>,
+) -> Flown {
     let scenario = load("rect-ex1");
     let setup = MissionSetup {
         pilot: Some(PilotScript::parse(script).expect("a good script")),
         commands,
+        log,
         ..MissionSetup::default()
     };
     let mut said = Vec::new();
@@ -130,8 +139,38 @@ fn check_takeover(f: &Flown, label: &str) {
 
 #[test]
 fn a_pilot_takes_over_with_the_mode_switch_flies_north_holds_and_lands_by_throttle() {
-    let f = fly(TAKEOVER, Vec::new());
+    let dir = std::env::temp_dir().join(format!("manual-takeover-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary folder");
+    let path = dir.join("takeover.ulg");
+    let f = fly_logged(TAKEOVER, Vec::new(), Some(path.clone()));
     check_takeover(&f, "RC");
+    // The log has the sticks (PX4's manual_control_setpoint, at 10 Hz) and the switches: the
+    // RC in force, the pitch forward while the pilot flew north, the Position slot (2).
+    let log = flight_log::reader::read_file(&path).expect("the log reads");
+    let sticks = log
+        .topic("manual_control_setpoint")
+        .expect("the sticks logged");
+    let (valid, source, pitch) = (
+        sticks.field("valid").expect("valid"),
+        sticks.field("data_source").expect("data_source"),
+        sticks.field("pitch").expect("pitch"),
+    );
+    let pushed = sticks.records.iter().filter(|r| {
+        valid.get(r, 0) == Some(1.0)
+            && source.get(r, 0) == Some(0.0)
+            && pitch.get(r, 0).is_some_and(|p| p > 0.4)
+    });
+    // 5 s forward at 10 Hz.
+    assert!(
+        (45..=55).contains(&pushed.count()),
+        "records with the pitch forward"
+    );
+    let switches = log
+        .topic("manual_control_switches")
+        .expect("the switches logged");
+    let slot = switches.field("mode_slot").expect("mode_slot");
+    assert!(switches.records.iter().any(|r| slot.get(r, 0) == Some(2.0)));
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

@@ -61,6 +61,11 @@ impl Mission {
         self.position
     }
 
+    /// The manual control in force at the last tick.
+    pub fn manual(&self) -> Manual {
+        self.pilot.current()
+    }
+
     /// Whether the kill switch is on.
     pub fn kill_switch(&self) -> bool {
         self.pilot.kill_on()
