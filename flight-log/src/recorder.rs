@@ -440,21 +440,6 @@ pub fn step_texts(out: &TickOutput, each: &mut impl FnMut(LogLevel, core::fmt::A
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn each_phase_number_reads_back_as_its_phase() {
-        for code in 0..=u8::MAX {
-            match phase_from_code(code) {
-                Some(phase) => assert_eq!(phase_code(phase), code),
-                None => assert!(code > 15, "{code} names no phase"),
-            }
-        }
-    }
-}
-
 /// The manual control in force as PX4's `manual_control_setpoint` (`sticks`) or
 /// `manual_control_switches`.
 fn manual_records(t: u64, mission: &Mission, sticks: bool, put: &mut impl FnMut(Record)) {
@@ -482,5 +467,20 @@ fn manual_records(t: u64, mission: &Mission, sticks: bool, put: &mut impl FnMut(
             mode_slot: input.mode_slot.map_or(0, |slot| slot + 1),
             kill_switch: if mission.kill_switch() { 1 } else { 3 },
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_phase_number_reads_back_as_its_phase() {
+        for code in 0..=u8::MAX {
+            match phase_from_code(code) {
+                Some(phase) => assert_eq!(phase_code(phase), code),
+                None => assert!(code > 15, "{code} names no phase"),
+            }
+        }
     }
 }

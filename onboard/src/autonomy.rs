@@ -36,8 +36,8 @@ use shared::control::trajectory::FlightPhase;
 use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
 use shared::flight::Route;
-use shared::mission::bringup::{BenchConfig, CalibrationFailure, CalibrationKind};
 use shared::manual::ManualSamples;
+use shared::mission::bringup::{BenchConfig, CalibrationFailure, CalibrationKind};
 use shared::mission::supervision::BatteryLevel;
 use shared::mission::{
     CommandRefusal, EscRpm, HardwareFaults, Mission, MissionConfig, MissionPlanner, Phase, Reason,

@@ -5,11 +5,11 @@
 //! truth with a little noise), a motion-capture fix every fourth tick, the drivers' faults,
 //! the ground station's heartbeat and the battery, and takes the mission's outputs back.
 
-use shared::manual::ManualSamples;
 use shared::control::navigator::{ImuSample, MocapFix};
 use shared::control::vector::{Quat, Vec3};
 use shared::geometry::Vec2;
 use shared::liftoff_thrust::lift_off_thrust;
+use shared::manual::ManualSamples;
 use shared::mission::{HardwareFaults, OperatorCommand, Supervision, TickInput, TickOutput};
 use shared::paper::{checked, rect_sim1};
 use shared::scenario::{FlightSetup, GRAVITY, MAX_ROBOTS, Scenario, Truth};

@@ -14,8 +14,8 @@
 //! Pixhawk), the wait for a job excluded, is tracked; the worst so far goes out once a second
 //! of vehicle time as a `NAMED_VALUE_INT` named by the board (`tick_insn` under QEMU).
 
-use shared::manual::ManualSamples;
 use core::sync::atomic::Ordering;
+use shared::manual::ManualSamples;
 
 use link::hil::{Actuators, JobDeadline, VehicleClock};
 
