@@ -433,6 +433,7 @@ fn flight_log_step(timer: &mut Timer, scenario: &shared::scenario::Scenario) {
         faults: HardwareFaults::NONE,
         esc_rpm: None,
         supervision: Supervision::NONE,
+        manual: shared::manual::ManualSamples::NONE,
     };
     let mut out = mission.step(&input);
     out.phase = Phase::Flying(FlightPhase::Hover);
