@@ -80,6 +80,10 @@ pub struct VehicleSnapshot {
     pub landed: u8,
     /// The rotors the vehicle flies without (found stopped), bit `i` for robot `i`.
     pub rotors_out: u16,
+    /// Manual control (an RC receiver or a joystick) has been heard since power-up.
+    pub manual_present: bool,
+    /// Manual control is in force and fresh (not lost).
+    pub manual_valid: bool,
 }
 
 /// Where the vehicle is along its route (docs/ground-link.md#missions).
@@ -124,6 +128,8 @@ impl VehicleSnapshot {
         route: RouteStatus::NONE,
         landed: MavLandedState::MAV_LANDED_STATE_ON_GROUND as u8,
         rotors_out: 0,
+        manual_present: false,
+        manual_valid: false,
     };
 
     fn time_boot_ms(&self) -> u32 {

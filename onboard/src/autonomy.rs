@@ -37,6 +37,7 @@ use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
 use shared::flight::Route;
 use shared::manual::ManualSamples;
+use shared::manual::source::Manual;
 use shared::mission::bringup::{BenchConfig, CalibrationFailure, CalibrationKind};
 use shared::mission::supervision::BatteryLevel;
 use shared::mission::{
@@ -590,6 +591,8 @@ impl Autonomy {
             route: status.route,
             landed: status.landed,
             rotors_out: status.rotors_out,
+            manual_present: !matches!(self.mission.manual(), Manual::Never),
+            manual_valid: matches!(self.mission.manual(), Manual::Valid(..)),
             ..VehicleSnapshot::START
         };
         TickOutput {

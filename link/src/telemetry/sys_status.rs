@@ -55,7 +55,8 @@ impl VehicleSnapshot {
     }
 
     /// `SYS_STATUS`: gyro, accelerometer, motion capture (as vision position), the motor
-    /// outputs, the geofence and, once measured, the battery (its voltage; healthy above its
+    /// outputs, the geofence, once heard manual control (as the RC receiver, healthy while
+    /// not lost: docs/manual-control.md) and, once measured, the battery (its voltage; healthy above its
     /// low threshold); health clear for a failed IMU, no recent fix, or the vehicle outside
     /// the bounds it keeps its flights in. Current and remaining are not measured
     /// (-1, as MAVLink marks unknown values; so is a voltage not measured, `u16::MAX`).
@@ -84,6 +85,16 @@ impl VehicleSnapshot {
             health |= mocap;
         }
         let (mut present, mut enabled) = (present, enabled);
+        // Manual control as PX4 reports its RC receiver (QGroundControl's RC indicator):
+        // present once heard, healthy while not lost.
+        if self.manual_present {
+            let rc = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_RC_RECEIVER;
+            present |= rc;
+            enabled |= rc;
+            if self.manual_valid {
+                health |= rc;
+            }
+        }
         if self.battery_mv != u16::MAX {
             let battery = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_BATTERY;
             present |= battery;
@@ -178,5 +189,27 @@ mod tests {
         .sys_status();
         assert!(low.onboard_control_sensors_enabled.contains(battery));
         assert!(!low.onboard_control_sensors_health.contains(battery));
+    }
+
+    #[test]
+    fn manual_control_is_the_rc_receiver_present_once_heard_and_healthy_while_not_lost() {
+        let rc = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_RC_RECEIVER;
+        let never = VehicleSnapshot::START.sys_status();
+        assert!(!never.onboard_control_sensors_present.contains(rc));
+        let valid = VehicleSnapshot {
+            manual_present: true,
+            manual_valid: true,
+            ..VehicleSnapshot::START
+        }
+        .sys_status();
+        assert!(valid.onboard_control_sensors_present.contains(rc));
+        assert!(valid.onboard_control_sensors_health.contains(rc));
+        let lost = VehicleSnapshot {
+            manual_present: true,
+            ..VehicleSnapshot::START
+        }
+        .sys_status();
+        assert!(lost.onboard_control_sensors_enabled.contains(rc));
+        assert!(!lost.onboard_control_sensors_health.contains(rc));
     }
 }
