@@ -13,9 +13,10 @@ use link::frame::{Encoder, Frame};
 use link::ftp::{FtpMessage, Opcode, PAYLOAD_PATH, Progress, Server, Upload};
 use link::hil::{ImuSample, MocapFix};
 use link::msg::{
-    ATT_POS_MOCAP_DATA, COMMAND_LONG_DATA, HEARTBEAT_DATA, MISSION_REQUEST_LIST_DATA,
-    MavEstimatorType, MavFrame, MavParamType, ODOMETRY_DATA, PARAM_REQUEST_LIST_DATA,
-    PARAM_REQUEST_READ_DATA, PARAM_SET_DATA, SETUP_SIGNING_DATA, TIMESYNC_DATA,
+    ATT_POS_MOCAP_DATA, COMMAND_LONG_DATA, HEARTBEAT_DATA, MANUAL_CONTROL_DATA,
+    MISSION_REQUEST_LIST_DATA, MavEstimatorType, MavFrame, MavParamType, ODOMETRY_DATA,
+    PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA, SETUP_SIGNING_DATA,
+    TIMESYNC_DATA,
 };
 use link::signing::Signing;
 use link::vehicle::crc_extra;
@@ -151,6 +152,19 @@ fn one<M: MessageData>(message: &M) -> Vec<u8> {
     input(Options::default(), Ground::new(None).send(message))
 }
 
+/// A joystick's `MANUAL_CONTROL` to the vehicle (x forward, y right, z throttle 0..1000 with
+/// 500 centred, r yaw).
+fn joystick(x: i16, y: i16, z: i16, r: i16) -> MANUAL_CONTROL_DATA {
+    MANUAL_CONTROL_DATA {
+        target: link::VEHICLE_SYSTEM_ID,
+        x,
+        y,
+        z,
+        r,
+        ..MANUAL_CONTROL_DATA::default()
+    }
+}
+
 fn param_name(name: &str) -> [u8; 16] {
     let mut n = [0u8; 16];
     n[..name.len()].copy_from_slice(name.as_bytes());
@@ -215,6 +229,11 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
             "command-kill",
             one(&OperatorCommand::Kill.to_command_long()),
         ),
+        (
+            "command-position",
+            one(&OperatorCommand::Position.to_command_long()),
+        ),
+        ("manual-control", one(&joystick(300, 0, 500, 0))),
         (
             "command-arm",
             one(&command_long(
@@ -408,6 +427,31 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
         ..Options::default()
     };
     seeds.push(("session-upload-driver", input(upload, &g)));
+    // A joystick that flies: its MANUAL_CONTROL through the start and the checks, Position
+    // mode asked for on the ground (the sticks take over after the take-off), then silence.
+    let mut g = Ground::new(None);
+    g.send(&link::vehicle::gcs_heartbeat())
+        .send(&joystick(0, 0, 500, 0))
+        .send(&OperatorCommand::ConfirmRails.to_command_long())
+        .send(&OperatorCommand::Position.to_command_long());
+    for k in 0..40 {
+        g.send(&link::vehicle::gcs_heartbeat()).send(&joystick(
+            if k % 2 == 0 { 400 } else { 0 },
+            0,
+            500,
+            0,
+        ));
+    }
+    seeds.push((
+        "session-joystick-position",
+        input(
+            Options {
+                ticks: 40,
+                ..driver
+            },
+            &g,
+        ),
+    ));
     // A parameter write and a kill while running.
     let mut g = Ground::new(None);
     g.send(&link::vehicle::gcs_heartbeat())
