@@ -37,6 +37,7 @@ pub const MAX_NAME_CHARS: usize = 64;
 // point with three numbers is an error naming its key rather than a silently dropped number.
 #[derive(Deserialize)]
 #[serde(
+    deny_unknown_fields,
     expecting = "a scenario: name and the [payload], [robots], [estimation], [formation] tables"
 )]
 struct FileToml {
@@ -50,7 +51,7 @@ struct FileToml {
 }
 
 #[derive(Deserialize)]
-#[serde(expecting = "a [payload] table")]
+#[serde(deny_unknown_fields, expecting = "a [payload] table")]
 struct PayloadToml {
     footprint: Vec<Vec<f64>>,
     rail: Vec<Vec<f64>>,
@@ -58,7 +59,7 @@ struct PayloadToml {
 }
 
 #[derive(Deserialize)]
-#[serde(expecting = "a [robots] table")]
+#[serde(deny_unknown_fields, expecting = "a [robots] table")]
 struct RobotsToml {
     count: usize,
     mass: f64,
@@ -71,7 +72,7 @@ struct RobotsToml {
 }
 
 #[derive(Deserialize)]
-#[serde(expecting = "an [estimation] table")]
+#[serde(deny_unknown_fields, expecting = "an [estimation] table")]
 struct EstimationToml {
     grid_min: Vec<f64>,
     grid_max: Vec<f64>,
@@ -82,20 +83,20 @@ struct EstimationToml {
 }
 
 #[derive(Deserialize)]
-#[serde(expecting = "a [formation] table")]
+#[serde(deny_unknown_fields, expecting = "a [formation] table")]
 struct FormationToml {
     balance_eps: f64,
 }
 
 #[derive(Deserialize)]
-#[serde(expecting = "a [truth] table")]
+#[serde(deny_unknown_fields, expecting = "a [truth] table")]
 struct TruthToml {
     com: Vec<f64>,
     mass: f64,
 }
 
 #[derive(Deserialize)]
-#[serde(expecting = "a [flight] table")]
+#[serde(deny_unknown_fields, expecting = "a [flight] table")]
 struct FlightToml {
     target: Vec<f64>,
     disturbance_torque: f64,
@@ -176,8 +177,50 @@ fn key_at(text: &str, offset: usize) -> Option<String> {
     key
 }
 
+/// Edits (insertions, deletions, substitutions) between `a` and `b`.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let above = row[j + 1];
+            row[j + 1] = (above + 1)
+                .min(row[j] + 1)
+                .min(diagonal + usize::from(ca != *cb));
+            diagonal = above;
+        }
+    }
+    row[b.len()]
+}
+
+/// For an unknown key (serde's "unknown field `x`, expected ..."), the known name nearest it
+/// when one is close (a slip of a letter or two): "; did you mean `y`?".
+fn nearest_known(message: &str) -> String {
+    let Some(rest) = message.strip_prefix("unknown field `") else {
+        return String::new();
+    };
+    let Some((unknown, expected)) = rest.split_once('`') else {
+        return String::new();
+    };
+    let known = expected.split('`').skip(1).step_by(2);
+    let best = known
+        .map(|k| (edit_distance(unknown, k), k))
+        .min_by_key(|(d, _)| *d);
+    match best {
+        Some((d, k)) if d > 0 && d <= 2.max(unknown.chars().count() / 3) => {
+            format!("; did you mean `{k}`?")
+        }
+        _ => String::new(),
+    }
+}
+
 fn toml_error(e: &toml::de::Error, text: &str, origin: &Path) -> anyhow::Error {
     let message = e.message().trim().replace('\n', " ");
+    // An unknown key is refused, not ignored: a misspelt one would otherwise fly the default.
+    let message =
+        format!("{message}{}", nearest_known(&message)).replacen("unknown field", "unknown key", 1);
     let Some(span) = e.span() else {
         return anyhow!("{}: {message}", origin.display());
     };
@@ -346,6 +389,39 @@ mod tests {
         assert!(
             err.contains("name: must not contain control characters"),
             "{err}"
+        );
+    }
+
+    #[test]
+    fn edits_count_insertions_deletions_and_substitutions() {
+        assert_eq!(edit_distance("plant", "plantt"), 1);
+        assert_eq!(edit_distance("torqe", "torque"), 1);
+        assert_eq!(edit_distance("abc", "xbz"), 2);
+        assert_eq!(edit_distance("", "wind"), 4);
+    }
+
+    #[test]
+    fn an_unknown_key_is_refused_with_its_line_and_the_key_it_is_near() {
+        let text = "name = \"x\"\n[flight]\ntarget = [0.0, 0.0, 1.0]\ndisturbance_torqe = 0.3\n";
+        let said = format!(
+            "{:#}",
+            parse(text, Path::new("t.toml")).expect_err("refused")
+        );
+        assert!(said.contains("flight.disturbance_torqe: line 4"), "{said}");
+        assert!(said.contains("unknown key"), "{said}");
+        assert!(
+            said.contains("did you mean `disturbance_torque`?"),
+            "{said}"
+        );
+        // Nothing near: no guess.
+        let far = "name = \"x\"\nwind_speed = 5\n";
+        let said = format!(
+            "{:#}",
+            parse(far, Path::new("t.toml")).expect_err("refused")
+        );
+        assert!(
+            said.contains("wind_speed") && !said.contains("did you mean"),
+            "{said}"
         );
     }
 }
