@@ -39,6 +39,22 @@ pub struct LineSettings {
     pub inverted: bool,
 }
 
+/// CRSF's line: 420,000 baud 8N1, not inverted.
+pub const CRSF_LINE: LineSettings = LineSettings {
+    baud: 420_000,
+    even_parity: false,
+    two_stop_bits: false,
+    inverted: false,
+};
+
+/// SBUS's line: 100,000 baud 8E2, inverted (idles low).
+pub const SBUS_LINE: LineSettings = LineSettings {
+    baud: 100_000,
+    even_parity: true,
+    two_stop_bits: true,
+    inverted: true,
+};
+
 impl RcProtocol {
     /// The protocol of an `RC_INPUT_PROTO` value: 2 SBUS, 6 CRSF, anything else none.
     pub fn from_param(value: u8) -> Self {
@@ -53,18 +69,8 @@ impl RcProtocol {
     pub fn line(self) -> Option<LineSettings> {
         match self {
             Self::None => None,
-            Self::Crsf => Some(LineSettings {
-                baud: 420_000,
-                even_parity: false,
-                two_stop_bits: false,
-                inverted: false,
-            }),
-            Self::Sbus => Some(LineSettings {
-                baud: 100_000,
-                even_parity: true,
-                two_stop_bits: true,
-                inverted: true,
-            }),
+            Self::Crsf => Some(CRSF_LINE),
+            Self::Sbus => Some(SBUS_LINE),
         }
     }
 

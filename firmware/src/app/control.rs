@@ -14,8 +14,8 @@
 //! Pixhawk), the wait for a job excluded, is tracked; the worst so far goes out once a second
 //! of vehicle time as a `NAMED_VALUE_INT` named by the board (`tick_insn` under QEMU).
 
-use shared::manual::ManualSamples;
 use core::sync::atomic::Ordering;
+use shared::manual::ManualSamples;
 
 use link::hil::{Actuators, JobDeadline, VehicleClock};
 
@@ -162,9 +162,10 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                         <Selected as Board>::battery_volts()
                     },
                 },
-                // A ground station's joystick (`MANUAL_CONTROL`), its newest sample.
+                // The RC receiver's newest frame (docs/hardware.md#rc-receivers) and a ground
+                // station's joystick (`MANUAL_CONTROL`), each its newest sample.
                 manual: ManualSamples {
-                    rc: None,
+                    rc: super::RC_INPUT.try_take(),
                     joystick: super::MANUAL.try_take(),
                 },
             };
