@@ -99,6 +99,24 @@ pub fn crc8(bytes: &[u8]) -> u8 {
         .fold(0, |crc, &byte| CRC_TABLE[usize::from(crc ^ byte)])
 }
 
+/// Bytes of an `RC_CHANNELS_PACKED` frame, sync to CRC.
+pub const CHANNELS_FRAME_LEN: usize = 4 + PACKED_LEN;
+
+/// The `RC_CHANNELS_PACKED` frame a receiver sends the flight controller for `channels_us`
+/// (pulse widths, us; each taken to 880..=2159 and to the 11-bit value [`rc::from_us`] gives,
+/// so the parser gives back exactly `channels_us` within that range): what the HIL plant
+/// writes into the emulated board's receiver UART (docs/hil.md).
+pub fn encode_channels(channels_us: &[u16; rc::CHANNELS]) -> [u8; CHANNELS_FRAME_LEN] {
+    let packed = rc::pack_channels(&channels_us.map(rc::from_us));
+    let mut frame = [0u8; CHANNELS_FRAME_LEN];
+    frame[0] = SYNC;
+    frame[1] = (CHANNELS_FRAME_LEN - 2) as u8;
+    frame[2] = frame_type::RC_CHANNELS_PACKED;
+    frame[3..3 + PACKED_LEN].copy_from_slice(&packed);
+    frame[CHANNELS_FRAME_LEN - 1] = crc8(&frame[2..CHANNELS_FRAME_LEN - 1]);
+    frame
+}
+
 /// What a `LINK_STATISTICS` frame says about the radio link. Uplink is the pilot's radio to
 /// the receiver, downlink the receiver back to the radio.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -19,6 +19,7 @@
 //! | [`rc`] | the safety pilot's RC channels in microseconds, whichever receiver carries them |
 //! | [`crsf`] | CRSF (ExpressLRS, TBS Crossfire) receivers: frames, CRC, channels, link statistics |
 //! | [`sbus`] | SBUS receivers: 25-byte frames, idle-line framing, failsafe and frame-lost flags |
+//! | [`rc_receiver`] | the receiver's port: protocol and line, which UART, reads to frames, frames counted |
 //! | [`sd_logs`] | the flight logs as numbered files on the microSD card's FAT volume |
 #![no_std]
 #![forbid(unsafe_code)]
@@ -36,6 +37,7 @@ pub mod icm42688;
 pub mod imu;
 pub mod pulse;
 pub mod rc;
+pub mod rc_receiver;
 pub mod reset;
 pub mod sbus;
 pub mod sd_logs;

@@ -66,6 +66,48 @@ pub const fn to_us(value: u16) -> u16 {
     (880 + (5 * value + 4) / 8) as u16
 }
 
+/// The 11-bit channel value whose pulse width is `us` ([`to_us`]'s inverse): the smallest value
+/// [`to_us`] takes to `us`, so that `to_us(from_us(us)) == us` for every `us` from 880 to 2159;
+/// pulse widths outside that range are taken to its ends. What a transmitter (or the HIL plant,
+/// docs/hil.md) puts on the wire for a channel in microseconds.
+pub const fn from_us(us: u16) -> u16 {
+    let us = if us < 880 {
+        880
+    } else if us > 2159 {
+        2159
+    } else {
+        us
+    };
+    // The least `v` with `(5 v + 4) / 8 >= us - 880`: `ceil((8 (us - 880) - 4) / 5)`.
+    let target = 8 * (us as u32 - 880);
+    if target < 4 {
+        return 0;
+    }
+    (target - 4).div_ceil(5) as u16
+}
+
+/// The 16 values' low 11 bits packed least significant bit first ([`unpack_channels`]'s
+/// inverse).
+pub fn pack_channels(values: &[u16; CHANNELS]) -> [u8; PACKED_LEN] {
+    let mut packed = [0u8; PACKED_LEN];
+    let mut bits = 0u32;
+    let mut held = 0u32;
+    let mut at = 0usize;
+    for &value in values {
+        bits |= u32::from(value & MAX_VALUE) << held;
+        held += 11;
+        while held >= 8 {
+            if let Some(byte) = packed.get_mut(at) {
+                *byte = bits as u8;
+            }
+            bits >>= 8;
+            held -= 8;
+            at += 1;
+        }
+    }
+    packed
+}
+
 /// The 16 11-bit values packed least significant bit first in `packed`: channel 0 is bits
 /// 0..=10 (byte 0 and the low three bits of byte 1), channel 1 the next 11, and so on.
 pub fn unpack_channels(packed: &[u8; PACKED_LEN]) -> [u16; CHANNELS] {
@@ -301,6 +343,31 @@ mod tests {
                 assert_eq!(unpack_channels(&pack_bitwise(&values)), values);
             }
         }
+    }
+
+    #[test]
+    fn from_us_inverts_to_us_over_the_whole_range() {
+        for us in 880..=2159u16 {
+            let value = from_us(us);
+            assert_eq!(to_us(value), us, "{us} us");
+            // The smallest such value.
+            assert!(value == 0 || to_us(value - 1) < us, "{us} us");
+        }
+        assert_eq!(from_us(1500), CENTRE_VALUE);
+        assert_eq!((from_us(988), from_us(2012)), (172, 1811));
+        assert_eq!((from_us(0), from_us(u16::MAX)), (0, from_us(2159)));
+        assert_eq!(to_us(from_us(u16::MAX)), 2159);
+    }
+
+    #[test]
+    fn packing_is_the_bitwise_packing() {
+        let distinct: [u16; CHANNELS] = core::array::from_fn(|c| (c as u16 * 131 + 7) & MAX_VALUE);
+        assert_eq!(pack_channels(&distinct), pack_bitwise(&distinct));
+        assert_eq!(unpack_channels(&pack_channels(&distinct)), distinct);
+        // Bits above the 11 are dropped, not carried into the next channel.
+        let mut high = [0u16; CHANNELS];
+        high[0] = 0xF800 | 5;
+        assert_eq!(unpack_channels(&pack_channels(&high))[..2], [5, 0]);
     }
 
     #[test]

@@ -4,7 +4,8 @@
 //! confirmed), `GLOBAL_POSITION_INT` (through the map origin,
 //! docs/ground-link.md#the-map-origin) and the ESC outputs (`ACTUATOR_OUTPUT_STATUS`, and
 //! `SERVO_OUTPUT_RAW` for MAVProxy: docs/ground-link.md#bring-up-commands), the ESCs' own
-//! telemetry (`ESC_STATUS`, `ESC_INFO`: [`crate::esc`]), each on its own interval that a ground station
+//! telemetry (`ESC_STATUS`, `ESC_INFO`: [`crate::esc`]), the RC receiver's channels
+//! (`RC_CHANNELS`, [`RcStatus`]), each on its own interval that a ground station
 //! sets with `MAV_CMD_SET_MESSAGE_INTERVAL` (or asks for once with `MAV_CMD_REQUEST_MESSAGE`),
 //! as MAVLink's message interval protocol has it; the messages built from a
 //! [`VehicleSnapshot`], the vehicle's state after its last control step; and the take-off
@@ -18,19 +19,22 @@
 //! keeps one file a stream: `sys_status` (`SYS_STATUS`,
 //! `EXTENDED_SYS_STATE`), `attitude_position` (`ATTITUDE_QUATERNION`, `LOCAL_POSITION_NED`),
 //! `rail` (the rail positions' `DEBUG_FLOAT_ARRAY`), `outputs` (`ACTUATOR_OUTPUT_STATUS`,
-//! `SERVO_OUTPUT_RAW`) and `global` (`GLOBAL_POSITION_INT`, `HOME_POSITION`,
-//! `GPS_GLOBAL_ORIGIN`).
+//! `SERVO_OUTPUT_RAW`), `global` (`GLOBAL_POSITION_INT`, `HOME_POSITION`,
+//! `GPS_GLOBAL_ORIGIN`) and `rc` (the RC receiver's `RC_CHANNELS`, from its own status rather
+//! than the snapshot).
 
 mod attitude_position;
 mod global;
 mod outputs;
 mod rail;
+mod rc;
 mod schedule;
 mod sys_status;
 
 pub use global::{Home, gps_global_origin};
 pub use outputs::SERVOS_PER_PORT;
 pub use rail::{RAIL_ARRAY_ID, RAIL_ARRAY_NAME};
+pub use rc::{RC_CHANNELS, RcStatus};
 pub use schedule::{MAX_INTERVAL_US, MIN_INTERVAL_US, STREAMS, Schedule, Stream};
 pub use sys_status::LogHealth;
 

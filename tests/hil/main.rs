@@ -1,6 +1,7 @@
 //! The firmware in the loop: its ARM image (`cargo fw-qemu`'s build, made by the tests when
 //! missing or stale; `FIRMWARE_QEMU_ELF` names another) on `qemu-system-arm -M mps2-an500`,
-//! the plant in lockstep over MAVLink. `lockstep` drives it from this process, `flight_log`
+//! the plant in lockstep over MAVLink. `lockstep` drives it from this process, `rc` plays stick
+//! scripts into its RC receiver UART (`hil --rc`), `flight_log`
 //! checks its log (kept as the simulator's, downloaded by pymavlink and MAVProxy), and
 //! `ground` runs the other Python ground stations against it (`tests/*.py`). Without QEMU (or
 //! Python and its packages) each test says it was skipped and why, and passes; with
@@ -17,4 +18,5 @@ mod common;
 mod flight_log;
 mod ground;
 mod lockstep;
+mod rc;
 mod storage_flight;

@@ -591,3 +591,28 @@ fn corrupted_streams_never_move_a_stick() {
     // above that, so the test does not flake; no event is ever a frame whose CRC failed.
     assert!(s.collisions * 200 < CASES as usize, "{s:?}");
 }
+
+#[test]
+fn the_encoder_gives_the_wikis_frame_and_the_parser_gives_its_channels_back() {
+    // The encoder against the tests' own bitwise frame.
+    let us: [u16; CHANNELS] = core::array::from_fn(|c| 988 + c as u16 * 67);
+    let values = us.map(crate::rc::from_us);
+    assert_eq!(encode_channels(&us).to_vec(), channels_frame(&values));
+    // Round trip through the parser, every pulse width of the range on some channel.
+    let mut parser = CrsfParser::new();
+    for first in (880..=2159u16).step_by(CHANNELS) {
+        let sent: [u16; CHANNELS] = core::array::from_fn(|c| (first + c as u16).min(2159));
+        let events = feed(&mut parser, bytes(&encode_channels(&sent)));
+        assert_eq!(events, [channels(sent, false)], "{sent:?}");
+    }
+    // Out of range: taken to the ends.
+    let mut wide = [1500u16; CHANNELS];
+    wide[0] = 0;
+    wide[1] = u16::MAX;
+    let events = feed(&mut parser, bytes(&encode_channels(&wide)));
+    let mut expected = wide;
+    expected[0] = 880;
+    expected[1] = 2159;
+    assert_eq!(events, [channels(expected, false)]);
+    assert_eq!(parser.stats().bad_crc, 0);
+}

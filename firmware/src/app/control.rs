@@ -162,9 +162,10 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                         <Selected as Board>::battery_volts()
                     },
                 },
-                // A ground station's joystick (`MANUAL_CONTROL`), its newest sample.
+                // The RC receiver's newest frame (docs/hardware.md#rc-receivers) and a ground
+                // station's joystick (`MANUAL_CONTROL`), each its newest sample.
                 manual: ManualSamples {
-                    rc: None,
+                    rc: super::RC_INPUT.try_take(),
                     joystick: super::MANUAL.try_take(),
                 },
             };

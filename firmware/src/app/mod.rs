@@ -16,6 +16,7 @@ pub mod comms;
 pub mod control;
 pub mod jobs;
 pub mod logger;
+pub mod rc;
 
 use core::sync::atomic::{AtomicBool, AtomicU8, AtomicU32, Ordering};
 
@@ -200,6 +201,13 @@ pub static GCS_HEARTBEAT: AtomicBool = AtomicBool::new(false);
 /// The newest joystick input (`MANUAL_CONTROL`), checked by the link's service, for the
 /// control task (docs/hardware.md#rc-receivers: the mission does not fly it yet).
 pub static MANUAL: Signal<Cs, shared::manual::ManualInput> = Signal::new();
+/// The newest manual input of the RC receiver (docs/hardware.md#rc-receivers), from the
+/// receiver task for the control step: one sample per channel frame that is not in failsafe.
+pub static RC_INPUT: Signal<Cs, shared::manual::ManualInput> = Signal::new();
+/// The RC receiver's last frame and counts, for the ground station (`RC_CHANNELS`,
+/// `SYS_STATUS`).
+pub static RC_STATUS: Mutex<Cs, Cell<link::telemetry::RcStatus>> =
+    Mutex::new(Cell::new(link::telemetry::RcStatus::NONE));
 /// The pack voltage the HIL plant last sent (`BATTERY_STATUS`), mV; `u32::MAX`: none yet.
 /// Taken only in HIL: on a board the pack is measured by its own ADC.
 pub static LINK_BATTERY_MV: AtomicU32 = AtomicU32::new(u32::MAX);
@@ -243,6 +251,7 @@ pub fn run(
         outputs,
         param_flash,
         log_storage,
+        rc_serial,
         irqs,
     } = parts;
 
@@ -265,6 +274,11 @@ pub fn run(
     match comms::send(link_tx) {
         Ok(token) => comms_spawner.spawn(token),
         Err(_) => panic!("link send task not spawned"),
+    }
+    // Below the control step, beside the link: a frame waits for neither the step nor a job.
+    match rc::rc_receiver(rc_serial) {
+        Ok(token) => comms_spawner.spawn(token),
+        Err(_) => panic!("RC receiver task not spawned"),
     }
     control_tasks(control, comms_spawner);
 

@@ -8,7 +8,7 @@
 //!
 //! A board brings up its clocks and pins, gives the application its MAVLink link as an
 //! `embedded-io-async` byte stream, its actuator outputs, a cycle counter for the tick's cost,
-//! a flash for the parameters, and three spare interrupts for the executors (control, link, thread-mode wake-up) with their
+//! a flash for the parameters, the RC receiver's serial port, and three spare interrupts for the executors (control, link, thread-mode wake-up) with their
 //! priorities set. Everything else is the application's ([`crate::app`]).
 
 use cortex_m::interrupt::InterruptNumber;
@@ -33,6 +33,8 @@ pub mod fram;
 pub mod imu_spi;
 #[cfg(feature = "qemu")]
 pub mod qemu;
+#[cfg(feature = "pixhawk6c")]
+pub mod rc_serial;
 #[cfg(feature = "pixhawk6c")]
 pub mod sdcard;
 #[cfg(feature = "pixhawk6c")]
@@ -79,6 +81,8 @@ pub trait Board: 'static {
     /// Where the mission's items are kept (two slots of whole erase pages, apart from the
     /// other two ranges).
     const MISSION_RANGE: core::ops::Range<u32>;
+    /// The RC receiver's serial port (docs/hardware.md#rc-receivers).
+    type RcSerial: RcSerial + Send + 'static;
     /// Where the flight logs are kept ([`NoLogStorage`] on a board without a driver for it).
     type LogStorage: flight_log::keeper::LogStorage + Send + 'static;
     /// Bytes of the ring between the control step and the logger task (0: no flight log).
@@ -132,6 +136,32 @@ pub trait ActuatorOutputs {
     fn apply(&mut self, thrust: &[f32], rail: &[f32], armed: bool);
 }
 
+/// What one read of the RC receiver's port gave.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RcRead {
+    /// Bytes written to the start of the buffer.
+    pub len: usize,
+    /// The UART flagged a byte (parity, framing, noise) or lost some (overrun).
+    pub line_error: bool,
+    /// The line went idle after the bytes (`false` from a UART that cannot tell).
+    pub idle: bool,
+}
+
+/// The serial port an RC receiver is wired to (docs/hardware.md#rc-receivers): opened on the
+/// port and with the line settings the parameters ask for, then read. The board only moves
+/// bytes; which protocol, which port and what the bytes mean are `drivers::rc_receiver`'s.
+pub trait RcSerial {
+    /// Opens `port` with `line`'s settings (baud, parity, stop bits, inversion), closing what
+    /// was open; a reason when the board cannot give that port.
+    fn open(
+        &mut self,
+        port: drivers::rc_receiver::RcPort,
+        line: drivers::rc_receiver::LineSettings,
+    ) -> Result<(), &'static str>;
+    /// Waits for bytes from the open port and puts them in `buf`.
+    fn read(&mut self, buf: &mut [u8]) -> impl core::future::Future<Output = RcRead>;
+}
+
 /// The interrupts the application's executors run on: spare lines, their priorities set by
 /// the board (control above link, link above the thread-mode wake-up).
 pub struct ExecutorIrqs<I> {
@@ -155,6 +185,8 @@ pub struct Parts<B: Board> {
     pub param_flash: B::ParamFlash,
     /// Where the flight logs go.
     pub log_storage: B::LogStorage,
+    /// The RC receiver's port.
+    pub rc_serial: B::RcSerial,
     /// The executors' interrupts.
     pub irqs: ExecutorIrqs<B::Irq>,
 }

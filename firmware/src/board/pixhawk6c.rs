@@ -151,6 +151,7 @@ impl Board for Pixhawk6c {
     type Irq = Interrupt;
     type ParamFlash = super::fram::Fram;
     type LogStorage = super::sdcard::SdStorage;
+    type RcSerial = super::rc_serial::RcUart;
     /// 32 KiB, 0.35 s of the mission's log, in the log memory (memory.x) with the rest of the
     /// log's buffers.
     const LOG_RING_BYTES: usize = 32 * 1024;
@@ -300,6 +301,8 @@ bind_interrupts!(
     DMA2_STREAM2 => dma::InterruptHandler<peripherals::DMA2_CH2>;
     DMA2_STREAM3 => dma::InterruptHandler<peripherals::DMA2_CH3>;
     DMA2_STREAM4 => dma::InterruptHandler<peripherals::DMA2_CH4>;
+    DMA2_STREAM5 => dma::InterruptHandler<peripherals::DMA2_CH5>;
+    UART8 => usart::InterruptHandler<peripherals::UART8>;
     UART5 => usart::InterruptHandler<peripherals::UART5>;
     USART2 => usart::InterruptHandler<peripherals::USART2>;
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
@@ -553,6 +556,18 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
             .ok()
             .map(|uart| bus(uart, STEPPER_RX[1].take(), 4, "TELEM3")),
     ];
+    // The RC receiver on GPS2 (UART8, RX PE0), receive only; opened for CRSF, reconfigured by
+    // the receiver task for the protocol the parameters ask for.
+    let rc_serial = super::rc_serial::RcUart::new(
+        usart::UartRx::new(
+            p.UART8,
+            p.PE0,
+            p.DMA2_CH5,
+            Irqs,
+            super::rc_serial::config(drivers::rc_receiver::CRSF_LINE),
+        )
+        .ok(),
+    );
     // A core halted by a debug probe freezes the watchdog too, so a breakpoint does not reset.
     pac::DBGMCU.apb4fzr1().modify(|w| w.set_iwdg1(true));
     let outputs = Outputs {
@@ -590,6 +605,7 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
         outputs,
         param_flash: fram,
         log_storage,
+        rc_serial,
         irqs: ExecutorIrqs {
             control: Interrupt::SPDIF_RX,
             link: Interrupt::CEC,

@@ -20,11 +20,12 @@ use serde_json::json;
 use crate::cli::{Outcome, check_map_error, check_range, triple};
 use crate::hil::gcs::GcsBridge;
 use crate::hil::qemu::{Guest, Qemu, QemuLink};
-use crate::hil::run::{HilOutcome, HilSetup, run as run_hil};
+use crate::hil::run::{HilOutcome, HilSetup, run_with_rc as run_hil};
 use crate::hil::session::{LoggedText, PayloadRefused};
 use crate::hil::transport::{Endpoint, Link};
 use crate::inject::{Fault, Injection};
 use crate::mission_run::MISSION_TIME_LIMIT;
+use crate::pilot_script::{PilotScript, PilotSource};
 use crate::plant::sensors::MAX_GIVEN_GYRO_BIAS;
 use crate::report::print_json;
 use crate::say;
@@ -128,6 +129,12 @@ pub struct HilArgs {
     /// the RPM as well as the vehicle's response (docs/firmware.md#esc-telemetry).
     #[arg(long)]
     pub esc_telemetry: bool,
+    /// A stick script (TOML, docs/hil.md): a person at the sticks. `source = "rc"` frames go
+    /// into the board's RC receiver UART as CRSF (with --qemu: QEMU's second serial port),
+    /// `source = "joystick"` frames as MANUAL_CONTROL over the link; the parameters that map
+    /// its switches are set on the vehicle first.
+    #[arg(long, value_name = "FILE")]
+    pub rc: Option<PathBuf>,
 }
 
 /// A MAVLink 2 signing key from 64 hexadecimal digits.
@@ -211,6 +218,13 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
             }
         })
         .transpose()?;
+    let pilot = args.rc.as_deref().map(PilotScript::load).transpose()?;
+    let rc_uart = pilot.as_ref().is_some_and(|p| p.source == PilotSource::Rc);
+    if rc_uart && args.qemu.is_none() {
+        bail!(
+            "--rc with source = \"rc\" needs --qemu: the plant writes CRSF into the emulated board's receiver UART (a board's receiver is its own radio's)"
+        );
+    }
     let loaded = scenario_file::load(&args.scenario)?;
     crate::inject::check_robots(&args.inject, &loaded)?;
     let setup = HilSetup {
@@ -228,6 +242,7 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
         gyro_bias,
         esc_telemetry: args.esc_telemetry,
         keeps_logs: args.qemu.is_some() && args.storage.is_some(),
+        pilot,
     };
     let json = args.json;
     let on_text: Box<dyn FnMut(&LoggedText) + Send> = Box::new(move |t: &LoggedText| {
@@ -237,12 +252,15 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
             let _ = say!("  step {:6}  firmware: {}", t.step, t.text);
         }
     });
+    let mut rc = None;
     let (_qemu, mut link) = if let Some(elf) = &args.qemu {
         let guest = Guest {
             storage: args.storage.as_deref(),
             max_robots,
+            rc: rc_uart,
         };
-        let (qemu, link) = Qemu::start_guest(elf, &guest, args.qemu_link)?;
+        let (mut qemu, link) = Qemu::start_guest(elf, &guest, args.qemu_link)?;
+        rc = qemu.take_rc();
         (Some(qemu), link)
     } else if let Some(path) = &args.serial {
         let endpoint = Endpoint::Serial {
@@ -261,7 +279,7 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
     if !json {
         say!("hil on {}", loaded.name)?;
     }
-    let outcome = match run_hil(&loaded, link, &setup, on_text) {
+    let outcome = match run_hil(&loaded, link, rc, &setup, on_text) {
         Ok(outcome) => outcome,
         Err(e) => {
             // A refused description is an answer of the vehicle's: the report says it too.

@@ -6,6 +6,7 @@
 //! - [`session`]: the conversation: identity, the payload description over MAVLink FTP, the
 //!   start command, lockstep steps, and the log of what the firmware said.
 //! - [`gcs`]: the ground-station bridge (`--gcs`).
+//! - [`rc_link`]: the board's RC receiver UART, CRSF frames from a stick script (`--rc`).
 //! - [`run`]: the plant loop: physics, sensors, lockstep, pacing, the outcome.
 //!
 //! The protocol logic itself (framing, messages, FTP, lockstep matching) is the `link` crate's,
@@ -13,6 +14,7 @@
 
 pub mod gcs;
 pub mod qemu;
+pub mod rc_link;
 pub mod run;
 pub mod session;
 pub mod transport;

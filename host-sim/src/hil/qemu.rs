@@ -34,6 +34,9 @@ const START_TIMEOUT: Duration = Duration::from_secs(20);
 pub struct Qemu {
     child: Child,
     output: Arc<Mutex<String>>,
+    /// The plant's end of the board's RC receiver UART (UART 1), when asked for
+    /// ([`Guest::rc`]), until taken ([`Self::take_rc`]).
+    rc: Option<super::rc_link::RcLink>,
     /// QEMU's working directory when it is this run's own (removed at the end).
     scratch: Option<PathBuf>,
 }
@@ -203,6 +206,9 @@ pub struct Guest<'a> {
     /// The board drives at most this many robots (`max-robots=N` on the guest's command
     /// line; `None`: every robot the link carries).
     pub max_robots: Option<u8>,
+    /// Bring the board's RC receiver UART (CMSDK UART 1, QEMU's second `-serial`) out to this
+    /// process over a Unix socket ([`Qemu::take_rc`]), for `hil --rc` (docs/hil.md).
+    pub rc: bool,
 }
 
 impl Qemu {
@@ -322,6 +328,8 @@ impl Qemu {
             .canonicalize()
             .with_context(|| format!("cannot resolve {}", elf.display()))?;
         let (dir, scratch) = working_dir(storage)?;
+        // The RC receiver's UART: QEMU connects to this socket (bound before it starts).
+        let rc_socket = guest.rc.then(super::rc_link::RcSocket::bind).transpose()?;
         let mut cmd = Command::new(QEMU);
         cmd.current_dir(&dir);
         cmd.args(["-M", "mps2-an500", "-nographic", "-monitor", "none"])
@@ -351,6 +359,15 @@ impl Qemu {
                 cmd.args(["-serial", "null", "-nic"])
                     .arg(format!("socket,udp={plant},localaddr={qemu}"));
             }
+        }
+        // UART 1, the RC receiver's, after UART 0's `-serial` (each branch above gives one).
+        if let Some(socket) = &rc_socket {
+            cmd.args(["-chardev"])
+                .arg(format!(
+                    "socket,id=rc,path={},server=off",
+                    socket.path().display()
+                ))
+                .args(["-serial", "chardev:rc"]);
         }
         // With storage the firmware keeps its flight logs there (docs/formats.md#flight-logs).
         if storage.is_some() {
@@ -409,11 +426,36 @@ impl Qemu {
                 }
             });
         }
-        Ok(Self {
+        let mut qemu = Self {
             child,
             output,
+            rc: None,
             scratch: scratch.then_some(dir),
-        })
+        };
+        if let Some(socket) = rc_socket {
+            let start = Instant::now();
+            qemu.rc = Some(loop {
+                if let Some(link) = socket.accept()? {
+                    break link;
+                }
+                qemu.check_running()?;
+                if start.elapsed() > START_TIMEOUT {
+                    bail!(
+                        "QEMU did not connect its RC receiver UART within {} s{}",
+                        START_TIMEOUT.as_secs(),
+                        qemu.output_note()
+                    );
+                }
+                thread::sleep(Duration::from_millis(5));
+            });
+        }
+        Ok(qemu)
+    }
+
+    /// The plant's end of the board's RC receiver UART, if the guest was started with one
+    /// ([`Guest::rc`]) and it was not taken yet.
+    pub fn take_rc(&mut self) -> Option<super::rc_link::RcLink> {
+        self.rc.take()
     }
 
     /// The QEMU process id (tests stop and resume it to simulate a stalled firmware).

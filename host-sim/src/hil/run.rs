@@ -36,12 +36,14 @@ use shared::mission::OperatorCommand;
 use shared::scenario_wire::{MAX_ENCODED_LEN, encode_scenario};
 
 use super::gcs::GcsBridge;
+use super::rc_link::RcLink;
 use super::session::{FirmwareLog, LoggedText, Restart, Session};
 use super::transport::{ByteCounts, Link};
 use crate::inject::Injection;
 use crate::mission_run::{
     self, Autopilot, Commanded, DELIVERY_RADIUS, Event, MISSION_TIME_LIMIT, MissionSetup, Sensed,
 };
+use crate::pilot_script::{PilotFrame, PilotScript};
 use crate::scenario_file::LoadedScenario;
 
 /// Plant steps between two `BATTERY_STATUS` (10 Hz, as PX4's battery status goes out).
@@ -98,6 +100,10 @@ pub struct HilSetup {
     /// capture lost, the ground link lost (the plant's heartbeat stops and nothing from a
     /// bridged ground station passes), the pack's voltage (its `BATTERY_STATUS`).
     pub injections: Vec<Injection>,
+    /// A stick script (`--rc`, docs/hil.md): its RC frames go into the board's RC receiver UART
+    /// as CRSF, its joystick frames as `MANUAL_CONTROL`; its parameters
+    /// ([`PilotScript::parameters`]) are set on the vehicle before the payload goes up.
+    pub pilot: Option<PilotScript>,
 }
 
 impl Default for HilSetup {
@@ -117,6 +123,7 @@ impl Default for HilSetup {
             esc_telemetry: false,
             mocap_lost_after_takeoff: None,
             injections: Vec::new(),
+            pilot: None,
         }
     }
 }
@@ -164,6 +171,18 @@ pub struct HilOutcome {
     pub takeoff_at_s: Option<f64>,
     /// Everything the firmware said.
     pub log: FirmwareLog,
+    /// The flight, sampled at 100 Hz from take-off.
+    pub series: Vec<crate::mission_run::FlightSample>,
+    /// Largest roll or pitch while airborne, degrees.
+    pub max_tilt_deg: f64,
+    /// When the stick script first sent the kill switch on, simulated s.
+    pub kill_sent_at: Option<f64>,
+    /// The first step from the kill switch's frame on whose every rotor command was zero,
+    /// simulated s.
+    pub rotors_zero_at: Option<f64>,
+    /// RC frames written into the board's receiver UART, and the wall time spent waiting for
+    /// QEMU to take them, s.
+    pub rc_frames_sent: (u64, f64),
 }
 
 /// A command of the plant's own set-up that must be accepted with the step that takes it.
@@ -239,6 +258,8 @@ struct Firmware {
     /// The payload description's wire form (uploaded again after a restart that lost it).
     payload: Vec<u8>,
     restarts_seen: usize,
+    /// The board's RC receiver UART (`--rc` with an RC script).
+    rc: Option<RcLink>,
 }
 
 impl Firmware {
@@ -297,6 +318,16 @@ impl Autopilot for Firmware {
         }
         if self.session.steps().is_multiple_of(BATTERY_EVERY) {
             self.session.send_battery(sensed.battery_volts)?;
+        }
+        // The stick script's frame, before the sample: an RC frame into the receiver UART (in
+        // by the time the sample goes, `RcLink::send`), a joystick's as MANUAL_CONTROL.
+        match (&sensed.pilot, &mut self.rc) {
+            (Some(PilotFrame::Rc(channels)), Some(rc)) => rc.send(channels)?,
+            (Some(PilotFrame::Rc(_)), None) => {
+                bail!("an RC stick script needs the board's receiver UART (hil --qemu)")
+            }
+            (Some(PilotFrame::Joystick(axes)), _) => self.session.send_manual_control(*axes)?,
+            (None, _) => {}
         }
         if let Some(rpm) = &sensed.esc_rpm {
             self.session
@@ -400,6 +431,21 @@ pub fn run(
     setup: &HilSetup,
     on_text: Box<dyn FnMut(&LoggedText) + Send>,
 ) -> Result<HilOutcome> {
+    run_with_rc(scenario, link, None, setup, on_text)
+}
+
+/// How long the firmware may take to answer a `PARAM_SET`.
+const PARAM_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// As [`run`], with the board's RC receiver UART `rc` (QEMU's, [`super::qemu::Qemu::take_rc`])
+/// for a stick script's RC frames.
+pub fn run_with_rc(
+    scenario: &LoadedScenario,
+    link: Link,
+    rc: Option<RcLink>,
+    setup: &HilSetup,
+    on_text: Box<dyn FnMut(&LoggedText) + Send>,
+) -> Result<HilOutcome> {
     let s = &scenario.scenario;
     if s.truth.is_none() {
         bail!("[truth]: hil needs the scenario's truth to simulate the payload");
@@ -410,6 +456,12 @@ pub fn run(
     };
     let mut session = Session::new(link, gcs, on_text);
     let firmware = session.identify(Duration::from_secs(20))?;
+    // The script's switches mapped on the vehicle, before the payload is loaded with them.
+    if setup.pilot.is_some() {
+        for (name, value) in PilotScript::parameters() {
+            session.set_param(name, value, PARAM_TIMEOUT)?;
+        }
+    }
 
     let mut file = [0u8; MAX_ENCODED_LEN];
     let len = encode_scenario(&scenario.name, s, &mut file).map_err(|e| {
@@ -435,6 +487,7 @@ pub fn run(
         confirm_rails: setup.confirm_rails,
         payload: file[..len].to_vec(),
         restarts_seen: 0,
+        rc,
     };
     autopilot.texts_seen = autopilot.session.log().texts.len();
     autopilot.values_seen = autopilot.session.log().values.len();
@@ -451,6 +504,7 @@ pub fn run(
             gyro_bias: setup
                 .gyro_bias
                 .map(|[x, y, z]| shared::control::vector::Vec3::new(x, y, z)),
+            pilot: setup.pilot.clone(),
             ..MissionSetup::default()
         },
     );
@@ -511,6 +565,14 @@ pub fn run(
         takeoff_at_s: record.takeoff_at.map(f64::from),
         lifts: record.lifts,
         log,
+        series: record.series,
+        max_tilt_deg: f64::from(record.max_tilt_deg),
+        kill_sent_at: record.kill_sent_at.map(f64::from),
+        rotors_zero_at: record.rotors_zero_at.map(f64::from),
+        rc_frames_sent: autopilot.rc.as_ref().map_or((0, 0.0), |rc| {
+            let (n, waited) = rc.sent();
+            (n, waited.as_secs_f64())
+        }),
     })
 }
 

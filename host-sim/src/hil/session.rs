@@ -20,7 +20,7 @@ use link::hil::{Actuators, ImuSample, MocapFix, Reply, ReplyMatcher};
 use link::msg::{
     ACTUATOR_OUTPUT_STATUS_DATA, AUTOPILOT_VERSION_DATA, COMMAND_ACK_DATA,
     FILE_TRANSFER_PROTOCOL_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA, MavCmd, MavResult,
-    MavSeverity, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA,
+    MavSeverity, NAMED_VALUE_FLOAT_DATA, NAMED_VALUE_INT_DATA, PARAM_VALUE_DATA,
 };
 use link::status::{BOARD_PREFIX, MissionState, Reassembler, StatusChunk};
 
@@ -72,6 +72,12 @@ pub struct FirmwareLog {
     pub esc_rpm: [i32; link::hil::MAX_ROBOTS],
     /// The ESCs any of its `ESC_INFO`s flagged failed (bit `i` for motor `i`).
     pub esc_failed: u16,
+    /// Its last `RC_CHANNELS`: the 16 channels (us), `chancount` and `rssi`
+    /// (docs/hardware.md#rc-receivers).
+    pub rc_channels: Option<([u16; 16], u8, u8)>,
+    /// The RC receiver's frames, good and bad, from its last `SYS_STATUS` (`errors_count2`,
+    /// `errors_count1`).
+    pub rc_frames: (u16, u16),
 }
 
 /// A restart of the firmware (a reboot it acknowledged, then silence, then a reply to a
@@ -302,6 +308,28 @@ impl Session {
                         1u16.checked_shl(u32::from(m.index) + i as u32).unwrap_or(0);
                 }
             }
+        } else if let Some(m) = frame.decode::<link::msg::RC_CHANNELS_DATA>() {
+            let c = [
+                m.chan1_raw,
+                m.chan2_raw,
+                m.chan3_raw,
+                m.chan4_raw,
+                m.chan5_raw,
+                m.chan6_raw,
+                m.chan7_raw,
+                m.chan8_raw,
+                m.chan9_raw,
+                m.chan10_raw,
+                m.chan11_raw,
+                m.chan12_raw,
+                m.chan13_raw,
+                m.chan14_raw,
+                m.chan15_raw,
+                m.chan16_raw,
+            ];
+            self.log.rc_channels = Some((c, m.chancount, m.rssi));
+        } else if let Some(m) = frame.decode::<link::msg::SYS_STATUS_DATA>() {
+            self.log.rc_frames = (m.errors_count2, m.errors_count1);
         } else if let Some(a) = frame.decode::<COMMAND_ACK_DATA>() {
             if a.command == MavCmd::MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN
                 && a.result == MavResult::MAV_RESULT_ACCEPTED
@@ -415,6 +443,60 @@ impl Session {
                 );
             }
         }
+    }
+
+    /// Sets the vehicle's parameter `name` to `value` and waits (at most `timeout`) for its
+    /// `PARAM_VALUE` with that value in force: an error naming the parameter, with what the
+    /// vehicle said, when it keeps another value or does not answer.
+    pub fn set_param(&mut self, name: &str, value: f32, timeout: Duration) -> Result<()> {
+        let end = Instant::now() + timeout;
+        let texts_before = self.log.texts.len();
+        let set = link::msg::PARAM_SET_DATA {
+            param_value: value,
+            target_system: link::VEHICLE_SYSTEM_ID,
+            target_component: link::VEHICLE_COMPONENT_ID,
+            param_id: name.into(),
+            param_type: link::msg::MavParamType::MAV_PARAM_TYPE_REAL32,
+        };
+        while Instant::now() < end {
+            self.link.send(&set)?;
+            let resend = (Instant::now() + RESEND).min(end);
+            while let Some(frame) = self.next(resend)? {
+                let Some(m) = frame.decode::<PARAM_VALUE_DATA>() else {
+                    continue;
+                };
+                if m.param_id.to_str().unwrap_or("") != name {
+                    continue;
+                }
+                if m.param_value == value {
+                    return Ok(());
+                }
+                let why = self.log.texts[texts_before..]
+                    .last()
+                    .map(|t| format!(": {}", t.text))
+                    .unwrap_or_default();
+                bail!(
+                    "the firmware kept {name} = {} when set to {value}{why}",
+                    m.param_value
+                );
+            }
+        }
+        bail!(
+            "the firmware did not answer PARAM_SET {name} within {} s",
+            timeout.as_secs()
+        )
+    }
+
+    /// Sends a ground station's joystick (`MANUAL_CONTROL` x, y, z, r).
+    pub fn send_manual_control(&mut self, [x, y, z, r]: [i16; 4]) -> Result<()> {
+        self.link.send(&link::msg::MANUAL_CONTROL_DATA {
+            target: link::VEHICLE_SYSTEM_ID,
+            x,
+            y,
+            z,
+            r,
+            ..Default::default()
+        })
     }
 
     /// Sends the simulated ground station's heartbeat (`MAV_TYPE_GCS`, once a second).

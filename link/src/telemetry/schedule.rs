@@ -6,7 +6,7 @@ use crate::MessageData;
 use crate::msg::{
     ACTUATOR_OUTPUT_STATUS_DATA, ATTITUDE_QUATERNION_DATA, DEBUG_FLOAT_ARRAY_DATA, ESC_INFO_DATA,
     ESC_STATUS_DATA, GLOBAL_POSITION_INT_DATA, LOCAL_POSITION_NED_DATA, MavResult,
-    SERVO_OUTPUT_RAW_DATA, SYS_STATUS_DATA,
+    RC_CHANNELS_DATA, SERVO_OUTPUT_RAW_DATA, SYS_STATUS_DATA,
 };
 
 /// A message the vehicle streams.
@@ -33,10 +33,13 @@ pub enum Stream {
     /// `ESC_INFO`: which ESCs answer, the rotors flown without ([`crate::esc`]; sent only
     /// while ESCs report).
     EscInfo = 8,
+    /// `RC_CHANNELS`: the RC receiver's last channels ([`super::RcStatus`]; sent only once a
+    /// receiver has been heard).
+    RcChannels = 9,
 }
 
 /// How many streams there are.
-pub const STREAMS: usize = 9;
+pub const STREAMS: usize = 10;
 
 impl Stream {
     /// Every stream, in the order of their index.
@@ -50,6 +53,7 @@ impl Stream {
         Stream::ActuatorOutputStatus,
         Stream::EscStatus,
         Stream::EscInfo,
+        Stream::RcChannels,
     ];
 
     /// The MAVLink message id.
@@ -64,6 +68,7 @@ impl Stream {
             Self::ActuatorOutputStatus => ACTUATOR_OUTPUT_STATUS_DATA::ID,
             Self::EscStatus => ESC_STATUS_DATA::ID,
             Self::EscInfo => ESC_INFO_DATA::ID,
+            Self::RcChannels => RC_CHANNELS_DATA::ID,
         }
     }
 
@@ -74,14 +79,14 @@ impl Stream {
 
     /// The interval at start and after a request for the default (interval 0), us: 1 Hz for
     /// the status and the ESCs' information, 2 Hz for the rail positions, 4 Hz for the ESC
-    /// outputs and their RPM, 5 Hz for the global position (a map's), 10 Hz for attitude and
-    /// local position.
+    /// outputs and their RPM, 5 Hz for the global position (a map's) and the RC channels (as
+    /// PX4 streams `RC_CHANNELS` on a normal link), 10 Hz for attitude and local position.
     pub const fn default_interval_us(self) -> u32 {
         match self {
             Self::SysStatus | Self::EscInfo => 1_000_000,
             Self::RailPositions => 500_000,
             Self::ServoOutputRaw | Self::ActuatorOutputStatus | Self::EscStatus => 250_000,
-            Self::GlobalPositionInt => 200_000,
+            Self::GlobalPositionInt | Self::RcChannels => 200_000,
             Self::AttitudeQuaternion | Self::LocalPositionNed => 100_000,
         }
     }
@@ -124,6 +129,7 @@ impl Schedule {
                 Stream::ActuatorOutputStatus.default_interval_us(),
                 Stream::EscStatus.default_interval_us(),
                 Stream::EscInfo.default_interval_us(),
+                Stream::RcChannels.default_interval_us(),
             ],
             next_us: [0; STREAMS],
             once: 0,

@@ -90,4 +90,5 @@ crc_extras!(
     SET_GPS_GLOBAL_ORIGIN_DATA,
     crate::msg::COMPONENT_METADATA_DATA,
     crate::msg::MANUAL_CONTROL_DATA,
+    crate::msg::RC_CHANNELS_DATA,
 );

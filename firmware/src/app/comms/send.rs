@@ -200,6 +200,7 @@ impl<W: Write> Sending<W> {
                 Stream::SysStatus => {
                     let mut status = vehicle.sys_status_with_log(crate::app::logger::health());
                     LINK.lock(|l| l.borrow().health.fill(&mut status));
+                    crate::app::RC_STATUS.lock(|r| r.get().fill_sys_status(&mut status));
                     self.encode(&status)
                 }
                 Stream::AttitudeQuaternion => self.encode(&vehicle.attitude_quaternion()),
@@ -223,6 +224,14 @@ impl<W: Write> Sending<W> {
                         self.encode(&vehicle.servo_output_raw(&map, last));
                     } else {
                         self.encode(&vehicle.actuator_output_status(&map));
+                    }
+                }
+                // Only once a receiver has been heard.
+                Stream::RcChannels => {
+                    let time_ms = Instant::now().as_millis() as u32;
+                    match crate::app::RC_STATUS.lock(|r| r.get().rc_channels(time_ms)) {
+                        Some(m) => self.encode(&m),
+                        None => continue,
                     }
                 }
                 Stream::GlobalPositionInt => match vehicle.global_position_int(&origin()) {

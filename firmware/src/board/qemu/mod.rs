@@ -10,6 +10,7 @@
 //! | CMSDK timer 0: the free-running clock ([`time_driver`]) | 0x4000_0000 | 8 |
 //! | CMSDK timer 1: the alarm ([`time_driver`]) | 0x4000_1000 | 9 |
 //! | CMSDK UART 0: the MAVLink link by default ([`uart`]; QEMU's `-serial`) | 0x4000_4000 | RX 0, TX 1 |
+//! | CMSDK UART 1: the RC receiver ([`rc_uart`]; QEMU's second `-serial`) | 0x4000_5000 | RX 2 |
 //! | LAN9118 Ethernet: the MAVLink link with `-append hil-link=ethernet` ([`ethernet`], [`link`]) | 0xA000_0000 | 13 |
 //! | the parameters' flash: a host file over semihosting ([`flash`]) | - | - |
 //! | the flight logs: host files over semihosting ([`logs`]) | - | - |
@@ -24,6 +25,7 @@ pub mod ethernet;
 pub mod flash;
 pub mod link;
 pub mod logs;
+pub mod rc_uart;
 pub mod time_driver;
 pub mod uart;
 
@@ -43,6 +45,8 @@ pub enum Irq {
     Uart0Rx = 0,
     /// UART 0 sent a byte.
     Uart0Tx = 1,
+    /// UART 1 (the RC receiver) received a byte.
+    Uart1Rx = 2,
     /// Timer 0 wrapped.
     Timer0 = 8,
     /// Timer 1 reached zero.
@@ -133,6 +137,7 @@ impl Board for QemuMps2An500 {
     type Irq = Irq;
     type ParamFlash = flash::FileFlash;
     type LogStorage = logs::LogFiles;
+    type RcSerial = rc_uart::RcUart;
     const LOG_RING_BYTES: usize = 64 * 1024;
 
     /// Only when QEMU's command line asks for it (`flight-log=on`: `host-sim hil --storage`
@@ -155,7 +160,7 @@ impl Board for QemuMps2An500 {
     }
 }
 
-/// Brings the board up: timers, UART, interrupt priorities.
+/// Brings the board up: timers, the link, the RC receiver's UART, interrupt priorities.
 pub fn init() -> Parts<QemuMps2An500> {
     let Some(mut p) = cortex_m::Peripherals::take() else {
         // Only reachable if called twice; the firmware calls it once from its entry.
@@ -165,6 +170,7 @@ pub fn init() -> Parts<QemuMps2An500> {
     unsafe {
         p.NVIC.set_priority(Irq::Uart0Rx, PRIO_IO);
         p.NVIC.set_priority(Irq::Uart0Tx, PRIO_IO);
+        p.NVIC.set_priority(Irq::Uart1Rx, PRIO_IO);
         p.NVIC.set_priority(Irq::Timer0, PRIO_IO);
         p.NVIC.set_priority(Irq::Timer1, PRIO_IO);
         p.NVIC.set_priority(Irq::Ethernet, PRIO_IO);
@@ -175,6 +181,7 @@ pub fn init() -> Parts<QemuMps2An500> {
     time_driver::init();
     let (link_rx, link_tx, ethernet) = link::init();
     LINK_IS_ETHERNET.store(ethernet, core::sync::atomic::Ordering::Relaxed);
+    let rc_serial = rc_uart::RcUart::init();
     // SAFETY: the handlers of these lines are in the vector table below.
     unsafe {
         NVIC::unmask(Irq::Timer0);
@@ -186,6 +193,7 @@ pub fn init() -> Parts<QemuMps2An500> {
             NVIC::unmask(Irq::Uart0Tx);
         }
         NVIC::unmask(Irq::ThreadWake);
+        NVIC::unmask(Irq::Uart1Rx);
     }
     Parts {
         link_rx,
@@ -193,6 +201,7 @@ pub fn init() -> Parts<QemuMps2An500> {
         outputs: NoOutputs,
         param_flash: flash::FileFlash::open(),
         log_storage: logs::LogFiles::new(),
+        rc_serial,
         irqs: ExecutorIrqs {
             control: Irq::ControlExecutor,
             link: Irq::LinkExecutor,
@@ -239,6 +248,9 @@ pub static __INTERRUPTS: [Vector; 32] = {
     };
     v[Irq::Uart0Tx as usize] = Vector {
         handler: uart::on_tx_interrupt,
+    };
+    v[Irq::Uart1Rx as usize] = Vector {
+        handler: rc_uart::on_rx_interrupt,
     };
     v[Irq::Ethernet as usize] = Vector {
         handler: ethernet::on_interrupt,

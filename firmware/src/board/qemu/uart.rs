@@ -22,15 +22,19 @@ const INTCLEAR: usize = BASE + 0x0C;
 const BAUDDIV: usize = BASE + 0x10;
 
 const STATE_TX_FULL: u32 = 1 << 0;
-const STATE_RX_FULL: u32 = 1 << 1;
+/// `STATE`: a received byte waits in the data register.
+pub(super) const STATE_RX_FULL: u32 = 1 << 1;
 const CTRL_TX_EN: u32 = 1 << 0;
-const CTRL_RX_EN: u32 = 1 << 1;
+/// `CTRL`: the receiver on.
+pub(super) const CTRL_RX_EN: u32 = 1 << 1;
 const CTRL_TX_INT_EN: u32 = 1 << 2;
-const CTRL_RX_INT_EN: u32 = 1 << 3;
+/// `CTRL`: the receive interrupt on.
+pub(super) const CTRL_RX_INT_EN: u32 = 1 << 3;
 const INT_TX: u32 = 1 << 0;
-const INT_RX: u32 = 1 << 1;
+/// `INTSTATUS`/`INTCLEAR`: the receive interrupt.
+pub(super) const INT_RX: u32 = 1 << 1;
 /// Smallest divider the UART accepts (QEMU models no baud rate; below 16 it refuses to send).
-const MIN_BAUDDIV: u32 = 16;
+pub(super) const MIN_BAUDDIV: u32 = 16;
 
 /// Received bytes not yet read by the link task.
 static RX: Pipe<CriticalSectionRawMutex, 1024> = Pipe::new();
