@@ -563,6 +563,11 @@ impl Autonomy {
             self.status = status;
         }
         let status = self.status;
+        let manual = match self.mission.manual() {
+            Manual::Never => ManualState::Never,
+            Manual::Valid(..) => ManualState::Valid,
+            Manual::Lost(_) => ManualState::Lost,
+        };
         let telemetry = VehicleSnapshot {
             attitude: [q.w, q.x, q.y, q.z],
             rates: [attitude.rate.x, attitude.rate.y, attitude.rate.z],
@@ -591,8 +596,8 @@ impl Autonomy {
             route: status.route,
             landed: status.landed,
             rotors_out: status.rotors_out,
-            manual_present: !matches!(self.mission.manual(), Manual::Never),
-            manual_valid: matches!(self.mission.manual(), Manual::Valid(..)),
+            manual_present: manual != ManualState::Never,
+            manual_valid: manual == ManualState::Valid,
             ..VehicleSnapshot::START
         };
         TickOutput {
@@ -648,4 +653,12 @@ fn calibration_report(
             (CommandResult::Failed, None)
         }
     }
+}
+
+/// Whether manual control was heard and is in force, for telemetry.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum ManualState {
+    Never,
+    Valid,
+    Lost,
 }

@@ -168,7 +168,10 @@ fn takeover_rc_toml_takes_over_into_position_mode_and_lands_by_throttle_as_the_s
     report(format_args!(
         "hil takeover: {north:.3} m north ({sim_north:.3} m in the simulator), {east:.3} m east"
     ));
-    assert!(north > 0.3, "{north} m north");
+    assert!(
+        (0.85..=1.15).contains(&north),
+        "{north} m north (1 m asked)"
+    );
     assert!(
         (north - sim_north).abs() < 0.05,
         "{north} m, simulator {sim_north} m"

@@ -185,10 +185,28 @@ fn a_pilot_with_only_a_joystick_takes_over_from_the_ground_station_the_same_way(
 
 #[test]
 fn the_kill_switch_stops_every_rotor_in_the_tick_that_sees_it_and_disarms_later() {
-    let f = fly(
+    let dir = std::env::temp_dir().join(format!("manual-kill-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary folder");
+    let path = dir.join("kill.ulg");
+    let f = fly_logged(
         "source = \"rc\"\n[[at]]\nt = 0\n[[at]]\nt = 12\nkill = true\n",
         Vec::new(),
+        Some(path.clone()),
     );
+    // The log shows it: the switch on (PX4's 1) from the kill on, every rotor's output zero
+    // from the kill's tick, and the vehicle's words.
+    let log = flight_log::reader::read_file(&path).expect("the log reads");
+    let switches = log
+        .topic("manual_control_switches")
+        .expect("the switches logged");
+    let kill = switches.field("kill_switch").expect("kill_switch");
+    assert!(switches.records.iter().any(|r| kill.get(r, 0) == Some(1.0)));
+    assert!(
+        log.strings
+            .iter()
+            .any(|s| s.text.contains("kill switch on"))
+    );
+    let _ = std::fs::remove_dir_all(&dir);
     let sent = f.outcome.kill_sent_at.expect("the kill frame went out");
     let zero = f.outcome.rotors_zero_at.expect("the rotors stopped");
     assert_eq!(

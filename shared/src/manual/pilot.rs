@@ -72,6 +72,12 @@ impl Pilot {
         self.kill.configure(micros(config.kill_disarm_time));
     }
 
+    /// No source has sent a valid sample since power-up and the kill switch is off: a tick
+    /// without samples changes nothing.
+    pub fn unheard(&self) -> bool {
+        matches!(self.last, Manual::Never) && !self.kill_on && !self.kill.is_on()
+    }
+
     /// The manual control in force at the last tick.
     pub fn current(&self) -> Manual {
         self.last

@@ -73,8 +73,22 @@ impl Mission {
 
     /// This tick's manual samples and what they ask.
     pub(super) fn pilot_step(&mut self, input: &TickInput, dt: f32) -> PilotStep {
-        let config = self.config.manual;
-        let tick = self.pilot.tick(&input.manual, input.time_us, &config);
+        // No person has been heard and nothing came: nothing to do (the usual tick of a
+        // vehicle without manual control costs the control step no more than this test).
+        if input.manual.rc.is_none()
+            && input.manual.joystick.is_none()
+            && self.pilot.unheard()
+            && self.manual_hold.is_none()
+        {
+            return PilotStep::default();
+        }
+        let tick = self
+            .pilot
+            .tick(&input.manual, input.time_us, &self.config.manual);
+        let (failsafe_delay, loss_action) = (
+            self.config.manual.failsafe_delay,
+            self.config.manual.loss_action,
+        );
         let flying = matches!(self.phase, Phase::Flying(_));
         let mut step = PilotStep::default();
         match tick.kill {
@@ -100,9 +114,9 @@ impl Mission {
         if tick.lost {
             let response = if self.position && flying && self.steerable() {
                 self.leave_steering();
-                self.manual_hold = Some(config.failsafe_delay);
+                self.manual_hold = Some(failsafe_delay);
                 self.apply_hold();
-                ManualLossResponse::Hold(config.failsafe_delay, config.loss_action)
+                ManualLossResponse::Hold(failsafe_delay, loss_action)
             } else if flying {
                 ManualLossResponse::MissionGoesOn
             } else {
@@ -122,7 +136,7 @@ impl Mission {
                 self.manual_hold = None;
                 self.apply_hold();
                 if acting {
-                    match config.loss_action {
+                    match loss_action {
                         ManualLossAction::Hold => {
                             self.position = false;
                             self.held = true;
