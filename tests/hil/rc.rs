@@ -14,6 +14,7 @@ use host_sim::hil::session::LoggedText;
 use host_sim::mission_run::{self, MissionSetup};
 use host_sim::pilot_script::PilotScript;
 use host_sim::scenario_file;
+use shared::mission::OperatorCommand;
 
 /// The control period, s.
 const STEP_S: f64 = 0.0025;
@@ -25,6 +26,15 @@ fn report(line: std::fmt::Arguments<'_>) {
 
 /// Flies rect-ex1 through the firmware with `script`; `None` when the test is skipped.
 fn fly(test: &str, script: &PilotScript) -> Option<HilOutcome> {
+    fly_with(test, script, Vec::new())
+}
+
+/// [`fly`], with a ground station's `commands` (s after take-off began).
+fn fly_with(
+    test: &str,
+    script: &PilotScript,
+    commands: Vec<(f32, OperatorCommand)>,
+) -> Option<HilOutcome> {
     let elf = image_or_skip(test)?;
     let _slot = qemu_slot();
     let loaded =
@@ -39,6 +49,7 @@ fn fly(test: &str, script: &PilotScript) -> Option<HilOutcome> {
     assert!(rc.is_some(), "the receiver UART is connected");
     let setup = HilSetup {
         pilot: Some(script.clone()),
+        commands,
         ..HilSetup::default()
     };
     let print: Box<dyn FnMut(&LoggedText) + Send> =
@@ -193,4 +204,67 @@ fn takeover_rc_toml_takes_over_into_position_mode_and_lands_by_throttle_as_the_s
     assert!(!o.dropped);
     assert!(o.max_tilt_deg < 10.0, "tilt {}", o.max_tilt_deg);
     assert!(!o.delivered, "the pilot landed it elsewhere");
+}
+
+/// A pilot with only a joystick: the ground station's Position mode (`DO_SET_MODE`, PX4's
+/// POSCTL) at 12 s and the joystick's `MANUAL_CONTROL` over the link, the same flight as the
+/// RC take-over: 1 m north, a still hold, a landing by throttle, as the simulator flies it.
+#[test]
+fn a_joystick_alone_takes_over_with_the_ground_stations_mode_and_lands_by_throttle() {
+    let path = workspace().join("tests/pilot/takeover-rc.toml");
+    let text = std::fs::read_to_string(&path).expect("the script");
+    let joystick = text
+        .replace("source = \"rc\"", "source = \"joystick\"")
+        .replace("mode = \"position\"\n", "");
+    let script = PilotScript::parse(&joystick).expect("a joystick script");
+    let commands = vec![(12.0, OperatorCommand::Position)];
+    let Some(o) = fly_with("a_joystick_alone", &script, commands.clone()) else {
+        return;
+    };
+    let loaded =
+        scenario_file::load(&workspace().join("tests/scenarios/rect-ex1.toml")).expect("rect-ex1");
+    let (sim, _) = mission_run::run(
+        &loaded.scenario,
+        &MissionSetup {
+            pilot: Some(script.clone()),
+            commands,
+            ..MissionSetup::default()
+        },
+        &mut |_, _, _| {},
+    )
+    .expect("simulator");
+    let takeoff = o.takeoff_at_s.expect("took off");
+    let position = said_at(&o, "mode: Position").expect("Position mode") - takeoff;
+    assert!(
+        (position - 12.0).abs() < 0.1,
+        "Position mode {position} s after take-off"
+    );
+    let sim_north = {
+        let at = |after: f32| {
+            let t = sim.takeoff_at.expect("took off") + after;
+            sim.series.iter().find(|s| s.t >= t).expect("flying").xy[0]
+        };
+        at(21.0) - at(13.9)
+    };
+    let north = at(&o, 21.0)[0] - at(&o, 13.9)[0];
+    report(format_args!(
+        "hil joystick takeover: {north:.3} m north ({sim_north:.3} m in the simulator)"
+    ));
+    assert!(
+        (0.85..=1.15).contains(&north),
+        "{north} m north (1 m asked)"
+    );
+    assert!(
+        (north - sim_north).abs() < 0.05,
+        "{north} m, simulator {sim_north} m"
+    );
+    let (a, b) = (at(&o, 21.0), at(&o, 24.0));
+    let drift = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+    assert!(drift < 0.1, "drifted {drift} m in 3 s of centred sticks");
+    assert!(
+        said_at(&o, "phase: disarmed").is_some(),
+        "it lands and disarms"
+    );
+    assert!(!o.dropped);
+    assert!(o.max_tilt_deg < 10.0, "tilt {}", o.max_tilt_deg);
 }

@@ -243,6 +243,8 @@ pub fn run(args: &HilArgs) -> Result<Outcome> {
         esc_telemetry: args.esc_telemetry,
         keeps_logs: args.qemu.is_some() && args.storage.is_some(),
         pilot,
+        // The ground station's commands come from `--gcs` (a bridged ground station).
+        commands: Vec::new(),
     };
     let json = args.json;
     let on_text: Box<dyn FnMut(&LoggedText) + Send> = Box::new(move |t: &LoggedText| {

@@ -104,6 +104,9 @@ pub struct HilSetup {
     /// as CRSF, its joystick frames as `MANUAL_CONTROL`; its parameters
     /// ([`PilotScript::parameters`]) are set on the vehicle before the payload goes up.
     pub pilot: Option<PilotScript>,
+    /// Operator commands after the start, as a ground station sends them: (seconds after
+    /// take-off began, command), each a `COMMAND_LONG` (`DO_SET_MODE` for a mode).
+    pub commands: Vec<(f32, OperatorCommand)>,
 }
 
 impl Default for HilSetup {
@@ -124,6 +127,7 @@ impl Default for HilSetup {
             mocap_lost_after_takeoff: None,
             injections: Vec::new(),
             pilot: None,
+            commands: Vec::new(),
         }
     }
 }
@@ -505,6 +509,7 @@ pub fn run_with_rc(
                 .gyro_bias
                 .map(|[x, y, z]| shared::control::vector::Vec3::new(x, y, z)),
             pilot: setup.pilot.clone(),
+            commands: setup.commands.clone(),
             ..MissionSetup::default()
         },
     );
