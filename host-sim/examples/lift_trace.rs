@@ -35,6 +35,7 @@ fn main() -> anyhow::Result<()> {
             map_error: 1.0,
             disturbance_peak: 0.0,
             disturbance_phase: [0.0, 0.0],
+            ..PlantConfig::MODEL
         });
         if std::env::var("MOVE_FIRST").is_ok() {
             let mv = shared::rail::moves::RailMove::plan(

@@ -8,6 +8,7 @@
 //! (cascade, mixer, plan, take-off check, land detector, failsafes) are `shared`'s, the same
 //! the mission flies.
 
+use crate::plant::departures::ApplyDepartures;
 use anyhow::{Result, anyhow, bail};
 use shared::control::allocation::MixerKind;
 use shared::control::navigator::Navigator;
@@ -88,6 +89,8 @@ pub struct FlightSetup {
     pub seed: u64,
     /// Command-to-thrust over-read factor of the plant's rotors.
     pub map_error: f32,
+    /// How the plant departs from the model (the scenario's `[plant]`).
+    pub plant: scenario_toml::PlantDepartures,
 }
 
 /// One row of the time series (100 Hz).
@@ -185,8 +188,12 @@ pub fn fly_formation(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightO
         map_error: setup.map_error,
         disturbance_peak: flight.disturbance_torque,
         disturbance_phase: [phase(), phase()],
+        ..PlantConfig::MODEL
     });
-    let mut sensors = Sensors::new(setup.seed);
+    setup.plant.apply(plant.config_mut(), setup.seed);
+    plant.refresh();
+    let mut sensors = Sensors::new(setup.seed)
+        .with_mocap_departures(setup.plant.mocap_latency, setup.plant.mocap_dropout);
 
     // The flight software, as the mission builds it after the formation decision.
     let model = FlightModel::build(
@@ -387,6 +394,7 @@ pub fn run_lift_from(
         map_error,
         disturbance_peak: 0.0,
         disturbance_phase: [0.0, 0.0],
+        ..PlantConfig::MODEL
     });
     let mut sensors = Sensors::new(seed);
     let mut navigator = Navigator::new();

@@ -4,6 +4,10 @@
 //! `shared::scenario`, so the simulator and the firmware accept the same scenarios. Any
 //! problem comes back as an error naming the file and the key.
 
+mod plant;
+
+pub use plant::PlantDepartures;
+
 use std::fs::File;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -25,6 +29,8 @@ pub struct LoadedScenario {
     pub path: PathBuf,
     /// The checked values.
     pub scenario: Scenario,
+    /// How the simulated plant departs from the model (`[plant]`; the model without it).
+    pub plant: PlantDepartures,
 }
 
 /// Largest scenario file read, bytes. The paper's files are under 1 KiB; the cap keeps a
@@ -48,6 +54,7 @@ struct FileToml {
     formation: FormationToml,
     truth: Option<TruthToml>,
     flight: Option<FlightToml>,
+    plant: Option<plant::PlantToml>,
 }
 
 #[derive(Deserialize)]
@@ -312,10 +319,17 @@ pub fn parse(text: &str, origin: &Path) -> Result<LoadedScenario> {
         })
     };
     let scenario = input(&file).map_err(|err| anyhow!("{}: {err}", origin.display()))?;
+    let plant = match &file.plant {
+        Some(p) => p
+            .departures()
+            .map_err(|why| anyhow!("{}: {why}", origin.display()))?,
+        None => PlantDepartures::MODEL,
+    };
     Ok(LoadedScenario {
         name: file.name,
         path: origin.to_path_buf(),
         scenario,
+        plant,
     })
 }
 

@@ -129,6 +129,48 @@ fn the_qemu_firmware_flies_the_mission_as_the_host_does() {
     }
 }
 
+/// The scenario's `[plant]` is the plant side's (never sent to the vehicle): the firmware
+/// flies the departed plant as the simulator's mission does, to the bit.
+#[test]
+fn the_firmware_flies_a_plant_that_departs_from_the_model_as_the_host_does() {
+    let Some(elf) =
+        image_or_skip("the_firmware_flies_a_plant_that_departs_from_the_model_as_the_host_does")
+    else {
+        return;
+    };
+    let _slot = qemu_slot();
+    let mut loaded = rect_ex1();
+    loaded.plant = scenario_file::PlantDepartures {
+        rotor_efficiency_spread: 0.08,
+        motor_time_constant: 0.04,
+        inertia_scale: 1.5,
+        robot_mass_scale: 1.3,
+        mocap_latency: 0.08,
+        mocap_dropout: 0.1,
+    };
+    let setup = MissionSetup {
+        plant: loaded.plant,
+        ..MissionSetup::default()
+    };
+    let (host, _) =
+        mission_run::run(&loaded.scenario, &setup, &mut |_, _, _| {}).expect("host mission");
+    let (qemu, link) = Qemu::start(&elf, QemuLink::Ethernet).expect("QEMU starts");
+    let fw = run(&loaded, link, &HilSetup::default(), print_text())
+        .unwrap_or_else(|e| panic!("hil run failed: {e:#}\nQEMU said: {}", qemu.output()));
+    report(format_args!(
+        "hil rect-ex1 with [plant]: delivered {} ({:.3} m; host {:.3} m), estimate {:?}",
+        fw.delivered, fw.final_position_error_m, host.final_position_error_m, fw.estimate
+    ));
+    assert!(host.delivered && fw.delivered, "{:?}", fw.aborted);
+    assert_eq!(fw.lifts, host.lifts, "lifts");
+    assert_eq!(fw.estimate, host.estimate, "estimate");
+    assert_eq!(
+        fw.final_position_error_m,
+        f64::from(host.final_position_error_m),
+        "final position error"
+    );
+}
+
 #[test]
 fn a_bad_payload_is_refused_naming_its_key_and_the_start_denied() {
     let Some(elf) = image_or_skip("a_bad_payload_is_refused_naming_its_key_and_the_start_denied")

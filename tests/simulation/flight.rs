@@ -23,6 +23,7 @@ fn fly(name: &str, formation: FormationChoice, mixer: MixerKind) -> FlightOutcom
         believed_mass: truth.mass,
         seed: 7,
         map_error: 1.0,
+        plant: scenario_file::PlantDepartures::MODEL,
     };
     harness::fly_formation(&s, &setup).expect("flight runs")
 }

@@ -17,5 +17,6 @@ mod ground_loss_battery;
 mod imu_faults;
 mod manual_control;
 mod mission;
+mod plant_departures;
 mod rotor_out;
 mod route;

@@ -357,6 +357,7 @@ fn a_take_off_that_does_not_leave_the_ground_stops_the_rotors() {
         // The rotors make 1/2.5 of what is commanded: at most 45 N against 44 N of weight,
         // held back further by the collective limit.
         map_error: 2.5,
+        plant: host_sim::scenario_file::PlantDepartures::MODEL,
     };
     let out = harness::fly_formation(&s, &setup).expect("flight runs");
     assert!(

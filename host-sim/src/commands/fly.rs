@@ -168,6 +168,7 @@ pub fn run(args: &FlyArgs) -> Result<Outcome> {
         believed_mass: mass,
         seed: args.seed,
         map_error,
+        plant: loaded.plant,
     };
     let started = Instant::now();
     let outcome = harness::fly_formation(s, &setup)?;

@@ -161,6 +161,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
             log: args.log.clone(),
             esc_telemetry: args.esc_telemetry,
             pilot,
+            plant: loaded.plant,
             ..MissionSetup::default()
         },
     );

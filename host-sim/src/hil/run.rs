@@ -510,6 +510,8 @@ pub fn run_with_rc(
                 .map(|[x, y, z]| shared::control::vector::Vec3::new(x, y, z)),
             pilot: setup.pilot.clone(),
             commands: setup.commands.clone(),
+            // The scenario's `[plant]`: the plant side's, never sent to the vehicle.
+            plant: scenario.plant,
             ..MissionSetup::default()
         },
     );

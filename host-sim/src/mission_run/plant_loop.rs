@@ -2,6 +2,7 @@
 //! the injected failures applied each control tick, the autopilot's commands taken back, and
 //! what the plant saw recorded ([`PlantRecord`]); docs/system.md#pipeline.
 
+use crate::plant::departures::ApplyDepartures;
 use anyhow::{Result, anyhow};
 use shared::control::navigator::ImuSample;
 use shared::control::vector::Vec3;
@@ -158,8 +159,13 @@ pub fn fly(
         // The paper's disturbance acts on the flight; it is switched on at take-off.
         disturbance_peak: 0.0,
         disturbance_phase: [0.4 + setup.seed as f32 % 3.0, 1.9],
+        ..PlantConfig::MODEL
     });
-    let mut sensors = Sensors::new(setup.seed);
+    // The plant's departures from the model (`[plant]`, docs/formats.md#the-plant-section).
+    setup.plant.apply(plant.config_mut(), setup.seed);
+    plant.refresh();
+    let mut sensors = Sensors::new(setup.seed)
+        .with_mocap_departures(setup.plant.mocap_latency, setup.plant.mocap_dropout);
     if let Some(bias) = setup.gyro_bias {
         sensors = sensors.with_gyro_bias(bias);
     }

@@ -56,6 +56,8 @@ pub struct MissionSetup {
     pub gyro_bias: Option<Vec3>,
     /// A person at the sticks, scripted (`--rc FILE`, docs/manual-control.md#stick-scripts).
     pub pilot: Option<crate::pilot_script::PilotScript>,
+    /// How the plant departs from the model (the scenario's `[plant]`).
+    pub plant: scenario_toml::PlantDepartures,
 }
 
 /// A rotor that stops: from `after` seconds after take-off began, robot `robot`'s rotor
@@ -168,6 +170,7 @@ impl Default for MissionSetup {
             route: None,
             gyro_bias: None,
             pilot: None,
+            plant: scenario_toml::PlantDepartures::MODEL,
         }
     }
 }

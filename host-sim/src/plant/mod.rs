@@ -21,6 +21,7 @@
 //! Frames: rapier runs directly in the flight software's frames: world NED (gravity along +z,
 //! the ground's top face at z = 0) and body FRD, so nothing is converted.
 
+pub mod departures;
 pub mod sensors;
 
 use rapier3d::prelude::*;
@@ -68,6 +69,13 @@ pub struct PlantConfig {
     pub disturbance_peak: f32,
     /// Phase of the disturbance (from the run's seed), rad.
     pub disturbance_phase: [f32; 2],
+    /// Each rotor's thrust for its command relative to the model's (`[plant]`
+    /// `rotor_efficiency_spread`); empty: every rotor as the model.
+    pub efficiency: Vec<f32>,
+    /// The rotors' first-order lag, s (the model's: [`MOTOR_TIME_CONSTANT`]).
+    pub motor_time_constant: f32,
+    /// The payload's inertia about its COM relative to the uniform plate's (1: the model).
+    pub inertia_scale: f32,
 }
 
 /// The truth, as the sensors see it.
@@ -108,11 +116,12 @@ fn mass_properties(config: &PlantConfig) -> MassProperties {
         0.0
     };
     let flat = config.mass * PLATE_THICKNESS * PLATE_THICKNESS / 12.0;
+    let scale = config.inertia_scale;
     let inertia = Vector::new(
         density * plate.yy + flat,
         density * plate.xx + flat,
         density * (plate.xx + plate.yy),
-    );
+    ) * scale;
     let mut mass = MassProperties::new(
         Vector::new(config.com.x, config.com.y, mid),
         config.mass,
@@ -132,7 +141,41 @@ fn vec3(v: Vector) -> Vec3 {
     Vec3::new(v.x, v.y, v.z)
 }
 
+impl PlantConfig {
+    /// What every field the model fixes is in the model: each rotor as commanded, the model's
+    /// motor lag, the uniform plate's inertia, no payload, no disturbance (the rest to fill).
+    pub const MODEL: Self = Self {
+        footprint: Vec::new(),
+        com: Vec2::new(0.0, 0.0),
+        mass: 0.0,
+        robot_mass: 0.0,
+        rotor_points: Vec::new(),
+        spin: Vec::new(),
+        torque_per_thrust: 0.0,
+        max_thrust: 0.0,
+        map_error: 1.0,
+        disturbance_peak: 0.0,
+        disturbance_phase: [0.0; 2],
+        efficiency: Vec::new(),
+        motor_time_constant: MOTOR_TIME_CONSTANT,
+        inertia_scale: 1.0,
+    };
+}
+
 impl Plant {
+    /// The configuration, to change before the first step (then [`Self::refresh`]).
+    pub fn config_mut(&mut self) -> &mut PlantConfig {
+        &mut self.config
+    }
+
+    /// The mass properties made again from the configuration (after [`Self::config_mut`]).
+    pub fn refresh(&mut self) {
+        let mass = mass_properties(&self.config);
+        if let Some(rb) = self.world.bodies.get_mut(self.body) {
+            rb.set_additional_mass_properties(mass, true);
+        }
+    }
+
     /// A payload resting on flat ground at the world origin, rotors off.
     pub fn new(config: PlantConfig) -> Self {
         let mut world = PhysicsWorld {
@@ -269,10 +312,17 @@ impl Plant {
 
     /// One physics step of `PHYSICS_DT` with rotor commands `commands` (N, commanded units).
     pub fn step(&mut self, commands: &[f32]) {
-        let alpha = PHYSICS_DT / MOTOR_TIME_CONSTANT;
+        let alpha = (PHYSICS_DT / self.config.motor_time_constant.max(PHYSICS_DT)).min(1.0);
         let scale = 1.0 / self.config.map_error;
-        for ((t, &c), &health) in self.thrusts.iter_mut().zip(commands).zip(&self.health) {
-            let target = c.clamp(0.0, self.config.max_thrust) * scale * health;
+        for (i, ((t, &c), &health)) in self
+            .thrusts
+            .iter_mut()
+            .zip(commands)
+            .zip(&self.health)
+            .enumerate()
+        {
+            let efficiency = self.config.efficiency.get(i).copied().unwrap_or(1.0);
+            let target = c.clamp(0.0, self.config.max_thrust) * scale * health * efficiency;
             *t += (target - *t) * alpha;
         }
         let disturbance = self.disturbance(self.time());

@@ -77,7 +77,17 @@ pub struct Sensors {
     imu_queue: VecDeque<ImuSample>,
     pending: VecDeque<(f32, MocapFix)>,
     next_fix: f32,
+    /// Motion capture's latency, s.
+    mocap_latency: f32,
+    /// The fraction of fixes lost, in bursts, and the draws that lose them (a stream of its
+    /// own: without dropout the sensors' noise is what it was).
+    mocap_dropout: f32,
+    dropout_rng: ChaCha8Rng,
+    in_dropout: bool,
 }
+
+/// Mean length of a burst of lost motion-capture fixes (occlusions last tens of ms).
+const DROPOUT_BURST_FIXES: f32 = 5.0;
 
 fn noise(rng: &mut ChaCha8Rng, sigma: f32) -> f32 {
     Normal::new(0.0, sigma).map_or(0.0, |n| n.sample(rng))
@@ -96,7 +106,37 @@ impl Sensors {
             imu_queue: VecDeque::new(),
             pending: VecDeque::new(),
             next_fix: 0.0,
+            mocap_latency: MOCAP_LATENCY,
+            mocap_dropout: 0.0,
+            dropout_rng: ChaCha8Rng::seed_from_u64(seed ^ 0xD209_0F75),
+            in_dropout: false,
         }
+    }
+
+    /// Motion capture `latency` s late, losing `dropout` of its fixes in bursts (the
+    /// scenario's `[plant]` `mocap_latency`, `mocap_dropout`).
+    pub fn with_mocap_departures(mut self, latency: f32, dropout: f32) -> Self {
+        self.mocap_latency = latency.max(0.0);
+        self.mocap_dropout = dropout.clamp(0.0, 0.99);
+        self
+    }
+
+    /// Whether the next fix is lost: a two-state chain whose bursts last
+    /// [`DROPOUT_BURST_FIXES`] on average and whose share of lost fixes is the dropout.
+    fn fix_lost(&mut self) -> bool {
+        let d = self.mocap_dropout;
+        if d <= 0.0 {
+            return false;
+        }
+        let leave = 1.0 / DROPOUT_BURST_FIXES;
+        let enter = (d * leave / (1.0 - d)).min(1.0);
+        let u: f32 = rand::RngExt::random(&mut self.dropout_rng);
+        self.in_dropout = if self.in_dropout {
+            u >= leave
+        } else {
+            u < enter
+        };
+        self.in_dropout
     }
 
     /// The same sensors with the gyro's constant bias `bias` (rad/s, body axes) in place of the
@@ -157,7 +197,9 @@ impl Sensors {
                 attitude: truth.attitude * Quat::from_rotation_vector(tremor),
                 stamp_us: now_us,
             };
-            self.pending.push_back((t + MOCAP_LATENCY, fix));
+            if !self.fix_lost() {
+                self.pending.push_back((t + self.mocap_latency, fix));
+            }
         }
         if self.pending.front().is_some_and(|(at, _)| *at <= t + 1e-6) {
             self.pending.pop_front().map(|(_, fix)| fix)
@@ -196,5 +238,45 @@ mod tests {
             mean += b.gyro * (1.0 / n as f32);
         }
         assert!((mean - bias).norm() < 3e-4, "mean gyro at rest {mean:?}");
+    }
+}
+
+#[cfg(test)]
+mod departure_tests {
+    use super::*;
+
+    #[test]
+    fn fixes_come_late_by_the_latency_and_a_dropout_loses_its_share_in_bursts() {
+        let rest = TrueState {
+            position: Vec3::ZERO,
+            velocity: Vec3::ZERO,
+            attitude: Quat::IDENTITY,
+            rate: Vec3::ZERO,
+        };
+        let mut s = Sensors::new(3).with_mocap_departures(0.05, 0.0);
+        let first = (0..100u64)
+            .find_map(|k| s.mocap(&rest, k * 2500).map(|f| (k, f)))
+            .expect("a fix");
+        assert_eq!(first.0 * 2500 - first.1.stamp_us, 50_000, "50 ms late");
+        let mut s = Sensors::new(3).with_mocap_departures(0.01, 0.3);
+        let (mut got, mut runs, mut was_lost) = (0u32, 0u32, false);
+        let n = 40_000u64;
+        let mut expected = 0u64;
+        for k in 0..n {
+            let fix = s.mocap(&rest, k * 2500);
+            if k % 4 == 0 && k >= 4 {
+                expected += 1;
+            }
+            got += u32::from(fix.is_some());
+            let lost = k % 4 == 0 && k >= 4 && fix.is_none();
+            runs += u32::from(lost && !was_lost);
+            if k % 4 == 0 {
+                was_lost = lost;
+            }
+        }
+        let lost = 1.0 - f64::from(got) / expected as f64;
+        assert!((0.25..0.35).contains(&lost), "lost {lost}");
+        let mean_burst = (expected as f64 - f64::from(got)) / f64::from(runs.max(1));
+        assert!(mean_burst > 3.0, "bursts of {mean_burst} fixes");
     }
 }

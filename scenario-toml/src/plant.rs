@@ -1,0 +1,126 @@
+//! The `[plant]` section (docs/formats.md#the-plant-section): how the simulated world departs
+//! from the model the controller assumes. Simulation only: never sent to the vehicle. Every key
+//! defaults to the model's value, so a file without the section flies as the model.
+
+use serde::Deserialize;
+
+/// How the plant departs from the controller's model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlantDepartures {
+    /// Each rotor's thrust for its command is scaled by 1 + u, u drawn uniformly in
+    /// +-spread per rotor from the run's seed.
+    pub rotor_efficiency_spread: f32,
+    /// The rotors' first-order lag, s.
+    pub motor_time_constant: f32,
+    /// The payload's inertia about its COM relative to the uniform plate's.
+    pub inertia_scale: f32,
+    /// Each robot's true mass relative to the description's.
+    pub robot_mass_scale: f32,
+    /// Motion capture's latency, s.
+    pub mocap_latency: f32,
+    /// The fraction of motion-capture fixes lost, in bursts.
+    pub mocap_dropout: f32,
+}
+
+impl PlantDepartures {
+    /// The model itself: the plant the controller assumes.
+    pub const MODEL: Self = Self {
+        rotor_efficiency_spread: 0.0,
+        motor_time_constant: 0.02,
+        inertia_scale: 1.0,
+        robot_mass_scale: 1.0,
+        mocap_latency: 0.01,
+        mocap_dropout: 0.0,
+    };
+}
+
+impl Default for PlantDepartures {
+    fn default() -> Self {
+        Self::MODEL
+    }
+}
+
+/// The section as written.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields, expecting = "a [plant] table")]
+pub(crate) struct PlantToml {
+    rotor_efficiency_spread: Option<f64>,
+    motor_time_constant: Option<f64>,
+    inertia_scale: Option<f64>,
+    robot_mass_scale: Option<f64>,
+    mocap_latency: Option<f64>,
+    mocap_dropout: Option<f64>,
+}
+
+/// Each key's name, range and what it is (units in the range's words).
+const RANGES: [(&str, f64, f64, &str); 6] = [
+    ("rotor_efficiency_spread", 0.0, 0.5, ""),
+    ("motor_time_constant", 0.005, 0.5, " s"),
+    ("inertia_scale", 0.1, 10.0, ""),
+    ("robot_mass_scale", 0.5, 3.0, ""),
+    ("mocap_latency", 0.0, 0.5, " s"),
+    ("mocap_dropout", 0.0, 0.9, ""),
+];
+
+impl PlantToml {
+    /// The departures, each value checked against its range; the error names the key.
+    pub(crate) fn departures(&self) -> Result<PlantDepartures, String> {
+        let m = PlantDepartures::MODEL;
+        let given = [
+            self.rotor_efficiency_spread,
+            self.motor_time_constant,
+            self.inertia_scale,
+            self.robot_mass_scale,
+            self.mocap_latency,
+            self.mocap_dropout,
+        ];
+        let defaults = [
+            m.rotor_efficiency_spread,
+            m.motor_time_constant,
+            m.inertia_scale,
+            m.robot_mass_scale,
+            m.mocap_latency,
+            m.mocap_dropout,
+        ];
+        let mut v = [0.0f32; 6];
+        for (i, ((name, lo, hi, unit), value)) in RANGES.iter().zip(given).enumerate() {
+            v[i] = match value {
+                None => defaults[i],
+                Some(x) if x.is_finite() && (*lo..=*hi).contains(&x) => x as f32,
+                Some(x) => {
+                    return Err(format!("plant.{name}: {x} is outside {lo} to {hi}{unit}"));
+                }
+            };
+        }
+        Ok(PlantDepartures {
+            rotor_efficiency_spread: v[0],
+            motor_time_constant: v[1],
+            inertia_scale: v[2],
+            robot_mass_scale: v[3],
+            mocap_latency: v[4],
+            mocap_dropout: v[5],
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_section_is_the_model_and_a_value_out_of_range_is_named() {
+        let none: PlantToml = toml::from_str("").expect("empty");
+        assert_eq!(none.departures(), Ok(PlantDepartures::MODEL));
+        let some: PlantToml =
+            toml::from_str("inertia_scale = 1.5\nmotor_time_constant = 0.04").expect("parses");
+        let d = some.departures().expect("in range");
+        assert_eq!((d.inertia_scale, d.motor_time_constant), (1.5, 0.04));
+        assert_eq!(d.robot_mass_scale, 1.0);
+        let bad: PlantToml = toml::from_str("mocap_dropout = 1.0").expect("parses");
+        let said = bad.departures().expect_err("refused");
+        assert!(
+            said.contains("plant.mocap_dropout: 1 is outside 0 to 0.9"),
+            "{said}"
+        );
+    }
+}

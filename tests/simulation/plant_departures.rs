@@ -1,0 +1,215 @@
+//! The scenario's `[plant]` (docs/formats.md#the-plant-section): a plant that departs from the
+//! model the controller assumes, in `mission` and `fly` (the HIL plant is the same loop:
+//! `hil::lockstep`). Without the section, or with the model's values, the flight is the
+//! model's to the bit; each departure changes what the plant does, and the vehicle still
+//! delivers the paper's case with all of them at once.
+
+use crate::common::{host_sim, scenario_path};
+use host_sim::harness::{self, FlightSetup, FormationChoice};
+use host_sim::mission_run::{self, MissionOutcome, MissionSetup};
+use host_sim::scenario_file::{self, PlantDepartures};
+use shared::control::allocation::MixerKind;
+
+fn mission(plant: PlantDepartures) -> MissionOutcome {
+    let loaded = scenario_file::load(&scenario_path("rect-ex1")).expect("rect-ex1");
+    let setup = MissionSetup {
+        plant,
+        ..MissionSetup::default()
+    };
+    mission_run::run(&loaded.scenario, &setup, &mut |_, _, _| {})
+        .expect("runs")
+        .0
+}
+
+#[test]
+fn the_models_values_fly_the_model_and_each_departure_changes_the_flight() {
+    let model = mission(PlantDepartures::MODEL);
+    assert!(model.delivered);
+    let m = PlantDepartures::MODEL;
+    let departures = [
+        (
+            "rotor_efficiency_spread",
+            PlantDepartures {
+                rotor_efficiency_spread: 0.08,
+                ..m
+            },
+        ),
+        (
+            "motor_time_constant",
+            PlantDepartures {
+                motor_time_constant: 0.06,
+                ..m
+            },
+        ),
+        (
+            "inertia_scale",
+            PlantDepartures {
+                inertia_scale: 2.0,
+                ..m
+            },
+        ),
+        (
+            "robot_mass_scale",
+            PlantDepartures {
+                robot_mass_scale: 1.3,
+                ..m
+            },
+        ),
+        (
+            "mocap_latency",
+            PlantDepartures {
+                mocap_latency: 0.06,
+                ..m
+            },
+        ),
+        (
+            "mocap_dropout",
+            PlantDepartures {
+                mocap_dropout: 0.2,
+                ..m
+            },
+        ),
+    ];
+    for (key, plant) in departures {
+        let o = mission(plant);
+        assert!(
+            o.delivered,
+            "{key}: not delivered ({} m)",
+            o.final_position_error_m
+        );
+        assert!(!o.dropped, "{key}");
+        let same_lifts = o.lifts == model.lifts;
+        let same_end = o.final_position_error_m == model.final_position_error_m
+            && o.max_tilt_deg == model.max_tilt_deg;
+        assert!(
+            !(same_lifts && same_end),
+            "{key}: the flight is the model's to the bit"
+        );
+    }
+}
+
+#[test]
+fn every_departure_at_once_still_delivers_the_papers_case() {
+    let o = mission(PlantDepartures {
+        rotor_efficiency_spread: 0.08,
+        motor_time_constant: 0.04,
+        inertia_scale: 1.5,
+        robot_mass_scale: 1.3,
+        mocap_latency: 0.08,
+        mocap_dropout: 0.1,
+    });
+    assert!(o.delivered, "{} m", o.final_position_error_m);
+    assert!(o.final_position_error_m < 0.1);
+    assert!(o.max_tilt_deg < 10.0, "tilt {}", o.max_tilt_deg);
+}
+
+#[test]
+fn the_section_in_a_file_reaches_mission_and_fly_and_a_section_of_model_values_changes_nothing() {
+    let base = std::fs::read_to_string(scenario_path("rect-ex1")).expect("rect-ex1");
+    let dir = std::env::temp_dir().join(format!("plant-section-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary folder");
+    let write = |name: &str, section: &str| {
+        let path = dir.join(name);
+        std::fs::write(&path, format!("{base}\n[plant]\n{section}")).expect("written");
+        path.to_string_lossy().to_string()
+    };
+    let plain = scenario_path("rect-ex1").to_string_lossy().to_string();
+    let model = write(
+        "model.toml",
+        "motor_time_constant = 0.02\ninertia_scale = 1.0\n",
+    );
+    let heavy = write(
+        "heavy.toml",
+        "inertia_scale = 3.0\nmotor_time_constant = 0.06\n",
+    );
+    let json = |args: &[&str]| -> serde_json::Value {
+        let out = host_sim(args);
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).expect("JSON")
+    };
+    let keys = [
+        "measurements",
+        "lifts",
+        "final_position_error_m",
+        "max_tilt_deg",
+    ];
+    let pick = |v: &serde_json::Value| keys.map(|k| v[k].clone());
+    let plain_m = json(&["mission", "--scenario", &plain, "--json"]);
+    let model_m = json(&["mission", "--scenario", &model, "--json"]);
+    let heavy_m = json(&["mission", "--scenario", &heavy, "--json"]);
+    assert_eq!(
+        pick(&plain_m),
+        pick(&model_m),
+        "the model's values are the model"
+    );
+    assert_ne!(pick(&plain_m), pick(&heavy_m), "mission reads [plant]");
+    assert_eq!(heavy_m["delivered"], true);
+    let fly = |path: &str| {
+        json(&[
+            "fly",
+            "--scenario",
+            path,
+            "--formation",
+            "optimized",
+            "--json",
+        ])
+    };
+    let flown = [
+        "final_position_error_m",
+        "max_tilt_deg",
+        "rms_tracking_error_m",
+        "max_height_m",
+    ];
+    let pick_f = |v: &serde_json::Value| flown.map(|k| v[k].clone());
+    let (plain_f, model_f, heavy_f) = (fly(&plain), fly(&model), fly(&heavy));
+    assert_eq!(pick_f(&plain_f), pick_f(&model_f));
+    assert_ne!(pick_f(&plain_f), pick_f(&heavy_f), "fly reads [plant]");
+    // A value out of range is refused naming the key, as every scenario key is.
+    let bad = write("bad.toml", "inertia_scale = 50.0\n");
+    let out = host_sim(&["validate", "--scenario", &bad]);
+    assert_eq!(out.status.code(), Some(1));
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("plant.inertia_scale: 50 is outside 0.1 to 10"),
+        "{said}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn fly_takes_the_departures_too() {
+    let loaded = scenario_file::load(&scenario_path("rect-ex1")).expect("rect-ex1");
+    let truth = loaded.scenario.truth.expect("truth");
+    let setup = |plant| FlightSetup {
+        formation: FormationChoice::Optimized,
+        mixer: MixerKind::EqualSplit,
+        believed_com: truth.com,
+        believed_mass: truth.mass,
+        seed: 1,
+        map_error: 1.0,
+        plant,
+    };
+    let model =
+        harness::fly_formation(&loaded.scenario, &setup(PlantDepartures::MODEL)).expect("flies");
+    let lagging = harness::fly_formation(
+        &loaded.scenario,
+        &setup(PlantDepartures {
+            motor_time_constant: 0.06,
+            ..PlantDepartures::MODEL
+        }),
+    )
+    .expect("flies");
+    assert_ne!(model.samples.len(), 0);
+    assert!(
+        model
+            .samples
+            .iter()
+            .zip(&lagging.samples)
+            .any(|(a, b)| a.position != b.position),
+        "the lag changes the flight"
+    );
+}
