@@ -20,6 +20,10 @@ pub struct PlantDepartures {
     pub mocap_latency: f32,
     /// The fraction of motion-capture fixes lost, in bursts.
     pub mocap_dropout: f32,
+    /// The mean wind, north and east, m/s.
+    pub wind: [f32; 2],
+    /// The gusts about it, m/s RMS per horizontal axis (Dryden's first-order form).
+    pub gust: f32,
 }
 
 impl PlantDepartures {
@@ -31,6 +35,8 @@ impl PlantDepartures {
         robot_mass_scale: 1.0,
         mocap_latency: 0.01,
         mocap_dropout: 0.0,
+        wind: [0.0; 2],
+        gust: 0.0,
     };
 }
 
@@ -50,7 +56,14 @@ pub(crate) struct PlantToml {
     robot_mass_scale: Option<f64>,
     mocap_latency: Option<f64>,
     mocap_dropout: Option<f64>,
+    wind: Option<Vec<f64>>,
+    gust: Option<f64>,
 }
+
+/// Largest mean wind per axis, m/s (a strong breeze: no payload of this kind flies in more).
+const MAX_WIND: f64 = 15.0;
+/// Largest gusts, m/s RMS.
+const MAX_GUST: f64 = 5.0;
 
 /// Each key's name, range and what it is (units in the range's words).
 const RANGES: [(&str, f64, f64, &str); 6] = [
@@ -92,6 +105,28 @@ impl PlantToml {
                 }
             };
         }
+        let wind = match self.wind.as_deref() {
+            None => [0.0; 2],
+            Some(&[n, e]) if [n, e].iter().all(|w| w.is_finite() && w.abs() <= MAX_WIND) => {
+                [n as f32, e as f32]
+            }
+            Some(&[n, e]) => {
+                return Err(format!(
+                    "plant.wind: [{n}, {e}] has a component beyond {MAX_WIND} m/s"
+                ));
+            }
+            Some(other) => {
+                return Err(format!(
+                    "plant.wind: [north, east] in m/s, two numbers (got {})",
+                    other.len()
+                ));
+            }
+        };
+        let gust = match self.gust {
+            None => 0.0,
+            Some(g) if g.is_finite() && (0.0..=MAX_GUST).contains(&g) => g as f32,
+            Some(g) => return Err(format!("plant.gust: {g} is outside 0 to {MAX_GUST} m/s")),
+        };
         Ok(PlantDepartures {
             rotor_efficiency_spread: v[0],
             motor_time_constant: v[1],
@@ -99,6 +134,8 @@ impl PlantToml {
             robot_mass_scale: v[3],
             mocap_latency: v[4],
             mocap_dropout: v[5],
+            wind,
+            gust,
         })
     }
 }
@@ -116,6 +153,16 @@ mod tests {
         let d = some.departures().expect("in range");
         assert_eq!((d.inertia_scale, d.motor_time_constant), (1.5, 0.04));
         assert_eq!(d.robot_mass_scale, 1.0);
+        let windy: PlantToml = toml::from_str("wind = [2.0, -1.0]\ngust = 1.0").expect("parses");
+        let d = windy.departures().expect("in range");
+        assert_eq!((d.wind, d.gust), ([2.0, -1.0], 1.0));
+        let three: PlantToml = toml::from_str("wind = [2.0, 0.0, 1.0]").expect("parses");
+        assert!(
+            three
+                .departures()
+                .expect_err("refused")
+                .contains("two numbers (got 3)")
+        );
         let bad: PlantToml = toml::from_str("mocap_dropout = 1.0").expect("parses");
         let said = bad.departures().expect_err("refused");
         assert!(

@@ -147,6 +147,8 @@ fn the_firmware_flies_a_plant_that_departs_from_the_model_as_the_host_does() {
         robot_mass_scale: 1.3,
         mocap_latency: 0.08,
         mocap_dropout: 0.1,
+        wind: [2.0, 0.0],
+        gust: 0.5,
     };
     let setup = MissionSetup {
         plant: loaded.plant,

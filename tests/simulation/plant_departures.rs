@@ -69,6 +69,14 @@ fn the_models_values_fly_the_model_and_each_departure_changes_the_flight() {
                 ..m
             },
         ),
+        (
+            "wind",
+            PlantDepartures {
+                wind: [2.0, -1.0],
+                ..m
+            },
+        ),
+        ("gust", PlantDepartures { gust: 1.0, ..m }),
     ];
     for (key, plant) in departures {
         let o = mission(plant);
@@ -88,6 +96,8 @@ fn the_models_values_fly_the_model_and_each_departure_changes_the_flight() {
     }
 }
 
+/// Every departure simulated at once, the gusts at half the RMS the rotor monitor survives
+/// today (below).
 #[test]
 fn every_departure_at_once_still_delivers_the_papers_case() {
     let o = mission(PlantDepartures {
@@ -97,6 +107,10 @@ fn every_departure_at_once_still_delivers_the_papers_case() {
         robot_mass_scale: 1.3,
         mocap_latency: 0.08,
         mocap_dropout: 0.1,
+        wind: [2.0, 0.0],
+        // 1 m/s RMS (the figure) lands 0.12 m off and, with the wind alone, the rotor
+        // monitor takes the gusts for a stopped rotor: docs/formats.md#the-plant-section.
+        gust: 0.5,
     });
     assert!(o.delivered, "{} m", o.final_position_error_m);
     assert!(o.final_position_error_m < 0.1);

@@ -31,6 +31,11 @@ impl ApplyDepartures for PlantDepartures {
         config.motor_time_constant = self.motor_time_constant;
         config.inertia_scale = self.inertia_scale;
         config.robot_mass *= self.robot_mass_scale;
+        config.wind = super::wind::WindConfig {
+            mean: self.wind,
+            gust: self.gust,
+            seed,
+        };
     }
 }
 

@@ -23,6 +23,7 @@
 
 pub mod departures;
 pub mod sensors;
+pub mod wind;
 
 use rapier3d::prelude::*;
 use shared::control::vector::{Quat, Vec3};
@@ -76,6 +77,8 @@ pub struct PlantConfig {
     pub motor_time_constant: f32,
     /// The payload's inertia about its COM relative to the uniform plate's (1: the model).
     pub inertia_scale: f32,
+    /// The wind and its gusts ([`wind::Wind`]; calm: the model).
+    pub wind: wind::WindConfig,
 }
 
 /// The truth, as the sensors see it.
@@ -103,6 +106,8 @@ pub struct Plant {
     play: Vec<(f32, f32)>,
     /// Physics steps taken: time is counted, not summed, so it never drifts.
     steps: u64,
+    /// The air's motion over the payload.
+    wind: wind::Wind,
 }
 
 /// Mass properties of payload and robots: the payload's mass at its true COM with the inertia
@@ -159,6 +164,7 @@ impl PlantConfig {
         efficiency: Vec::new(),
         motor_time_constant: MOTOR_TIME_CONSTANT,
         inertia_scale: 1.0,
+        wind: wind::WindConfig::CALM,
     };
 }
 
@@ -168,8 +174,10 @@ impl Plant {
         &mut self.config
     }
 
-    /// The mass properties made again from the configuration (after [`Self::config_mut`]).
+    /// The mass properties and the wind made again from the configuration (after
+    /// [`Self::config_mut`]).
     pub fn refresh(&mut self) {
+        self.wind = wind::Wind::new(&self.config.wind);
         let mass = mass_properties(&self.config);
         if let Some(rb) = self.world.bodies.get_mut(self.body) {
             rb.set_additional_mass_properties(mass, true);
@@ -208,6 +216,7 @@ impl Plant {
                 .insert_with_parent(collider, body, &mut world.bodies);
         }
         let n = config.rotor_points.len();
+        let config_wind = config.wind;
         Self {
             world,
             body,
@@ -216,6 +225,7 @@ impl Plant {
             health: vec![1.0; n],
             play: vec![(0.0, 0.0); n],
             steps: 0,
+            wind: wind::Wind::new(&config_wind),
         }
     }
 
@@ -362,6 +372,14 @@ impl Plant {
             rb.add_force_at_point(force, at, true);
             let spin = f32::from(self.config.spin.get(i).copied().unwrap_or(1));
             yaw_torque += spin * self.config.torque_per_thrust * t;
+        }
+        // The wind's drag on the footprint, at its centroid.
+        if let Some(drag) = self
+            .wind
+            .drag(vec3(rb.linvel()), &self.config.footprint, PHYSICS_DT)
+        {
+            let at = pose * Vector::new(drag.at.x, drag.at.y, -0.5 * PLATE_THICKNESS);
+            rb.add_force_at_point(vector(drag.force), at, true);
         }
         let body_torque = vector(disturbance) + Vector::new(0.0, 0.0, yaw_torque);
         rb.add_torque(rotation * body_torque, true);
