@@ -49,6 +49,9 @@ pub enum Command {
     /// Bench measurements made into the vehicle's parameters (`calibrate thrust`: the thrust
     /// map from a motor sweep).
     Calibrate(commands::calibrate::CalibrateArgs),
+    /// Many missions on the paper's cases, each plant drawn from a dispersion of the
+    /// `[plant]` departures; `campaign merge` joins shards.
+    Campaign(commands::campaign::CampaignArgs),
 }
 
 /// Options every command takes.
@@ -141,6 +144,7 @@ where
         Command::Params(args) => commands::params::run(&args),
         Command::Plot(args) => commands::plot::run(&args),
         Command::Calibrate(args) => commands::calibrate::run(&args),
+        Command::Campaign(args) => commands::campaign::run(&args),
     }
     .map_err(CliError::Failed)
 }

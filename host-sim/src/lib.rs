@@ -8,6 +8,7 @@
 #![allow(clippy::manual_is_multiple_of)]
 
 pub mod bench_csv;
+pub mod campaign;
 pub mod cli;
 pub mod commands;
 pub mod estimate_report;

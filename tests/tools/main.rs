@@ -7,6 +7,7 @@
 mod common;
 
 mod broken_scenarios;
+mod campaign;
 mod command_line;
 mod docs_links;
 mod figures;

@@ -1,6 +1,7 @@
 //! One module per `host-sim` command: argument types, the run, and its report.
 
 pub mod calibrate;
+pub mod campaign;
 pub mod estimate;
 pub mod fly;
 pub mod formation;

@@ -1,0 +1,472 @@
+//! A campaign (docs/commands.md#campaign): many missions, each on one of the paper's six
+//! cases with a plant drawn from a dispersion of the `[plant]` departures
+//! (docs/formats.md#the-plant-section), in parallel (rayon), reproducible by seed, and what
+//! came of them: delivered within [`DELIVERED_WITHIN`], dropped, aborted by reason (every abort
+//! of a healthy vehicle is a false alarm), the final error's median, 95th percentile and
+//! maximum.
+//!
+//! Trial `i`'s payload and plant depend on the seed and `i` alone, so `--shard K/N` (the
+//! trials whose index is `K - 1` modulo `N`) runs a disjoint slice of the same set, and the
+//! shards' results merged ([`merge`]) give the report one run would have printed.
+
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result, anyhow, bail};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::mission_run::{self, MissionSetup};
+use crate::scenario_file::{self, LoadedScenario, PlantDepartures};
+
+/// A mission delivered its payload when it landed this close to the target, m.
+pub const DELIVERED_WITHIN: f32 = 0.1;
+/// Most trials of one campaign (or one shard's campaign).
+pub const MAX_TRIALS: usize = 100_000;
+
+/// The paper's six cases, built in.
+const CASES: [(&str, &str); 6] = [
+    (
+        "rect-ex1",
+        include_str!("../../tests/scenarios/rect-ex1.toml"),
+    ),
+    (
+        "rect-ex2",
+        include_str!("../../tests/scenarios/rect-ex2.toml"),
+    ),
+    (
+        "rect-sim1",
+        include_str!("../../tests/scenarios/rect-sim1.toml"),
+    ),
+    (
+        "rect-sim2",
+        include_str!("../../tests/scenarios/rect-sim2.toml"),
+    ),
+    ("L-sim1", include_str!("../../tests/scenarios/L-sim1.toml")),
+    ("L-sim2", include_str!("../../tests/scenarios/L-sim2.toml")),
+];
+
+/// The range each departure is drawn from, uniformly (low, high).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Dispersion {
+    /// `rotor_efficiency_spread`.
+    pub rotor_efficiency_spread: [f32; 2],
+    /// `motor_time_constant`, s.
+    pub motor_time_constant: [f32; 2],
+    /// `inertia_scale`.
+    pub inertia_scale: [f32; 2],
+    /// `robot_mass_scale`.
+    pub robot_mass_scale: [f32; 2],
+    /// `mocap_latency`, s.
+    pub mocap_latency: [f32; 2],
+    /// `mocap_dropout`.
+    pub mocap_dropout: [f32; 2],
+    /// Each component of `wind`, m/s.
+    pub wind: [f32; 2],
+    /// `gust`, m/s RMS.
+    pub gust: [f32; 2],
+}
+
+impl Dispersion {
+    /// The defaults (docs/commands.md#campaign): what a vehicle of this kind meets indoors and
+    /// in a light breeze.
+    pub const DEFAULT: Self = Self {
+        rotor_efficiency_spread: [0.0, 0.05],
+        motor_time_constant: [0.015, 0.04],
+        inertia_scale: [0.7, 1.5],
+        robot_mass_scale: [0.9, 1.15],
+        mocap_latency: [0.005, 0.03],
+        mocap_dropout: [0.0, 0.05],
+        wind: [-1.0, 1.0],
+        gust: [0.0, 0.3],
+    };
+
+    /// A dispersion file (TOML: each key a `[low, high]` range, the defaults for what it does
+    /// not give); an unknown key, a range that is not low to high or a value outside the
+    /// `[plant]` key's own range is an error naming it.
+    pub fn load(path: &std::path::Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read the dispersion file {}", path.display()))?;
+        let d: Self = toml::from_str(&text)
+            .map_err(|e| anyhow!("{}: {}", path.display(), e.message().trim()))?;
+        d.check()
+            .map_err(|why| anyhow!("{}: {why}", path.display()))?;
+        Ok(d)
+    }
+
+    /// Every range low to high, and both ends valid `[plant]` values.
+    pub fn check(&self) -> Result<(), String> {
+        for (name, [lo, hi]) in self.ranges() {
+            if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+                return Err(format!(
+                    "{name}: [{lo}, {hi}] is not a range from low to high"
+                ));
+            }
+        }
+        for end in [0, 1] {
+            let plant = self.at(|[lo, hi]| if end == 0 { lo } else { hi });
+            let text = plant_toml(&plant);
+            let probe = format!("{}\n[plant]\n{text}", CASES[0].1);
+            scenario_file::parse(&probe, std::path::Path::new("dispersion"))
+                .map_err(|e| format!("{:#}", e).replace("dispersion: ", ""))?;
+        }
+        Ok(())
+    }
+
+    fn ranges(&self) -> [(&'static str, [f32; 2]); 8] {
+        [
+            ("rotor_efficiency_spread", self.rotor_efficiency_spread),
+            ("motor_time_constant", self.motor_time_constant),
+            ("inertia_scale", self.inertia_scale),
+            ("robot_mass_scale", self.robot_mass_scale),
+            ("mocap_latency", self.mocap_latency),
+            ("mocap_dropout", self.mocap_dropout),
+            ("wind", self.wind),
+            ("gust", self.gust),
+        ]
+    }
+
+    /// The departures with each value `pick(range)` (both wind components alike).
+    fn at(&self, mut pick: impl FnMut([f32; 2]) -> f32) -> PlantDepartures {
+        let wind = pick(self.wind);
+        PlantDepartures {
+            rotor_efficiency_spread: pick(self.rotor_efficiency_spread),
+            motor_time_constant: pick(self.motor_time_constant),
+            inertia_scale: pick(self.inertia_scale),
+            robot_mass_scale: pick(self.robot_mass_scale),
+            mocap_latency: pick(self.mocap_latency),
+            mocap_dropout: pick(self.mocap_dropout),
+            wind: [wind, pick(self.wind)],
+            gust: pick(self.gust),
+        }
+    }
+
+    /// A plant drawn from the dispersion with `rng`.
+    pub fn draw(&self, rng: &mut ChaCha8Rng) -> PlantDepartures {
+        self.at(|[lo, hi]| {
+            if hi > lo {
+                rng.random_range(lo..=hi)
+            } else {
+                lo
+            }
+        })
+    }
+}
+
+impl Default for Dispersion {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// `plant` as the keys of a `[plant]` section.
+fn plant_toml(p: &PlantDepartures) -> String {
+    format!(
+        "rotor_efficiency_spread = {}\nmotor_time_constant = {}\ninertia_scale = {}\nrobot_mass_scale = {}\nmocap_latency = {}\nmocap_dropout = {}\nwind = [{}, {}]\ngust = {}\n",
+        p.rotor_efficiency_spread,
+        p.motor_time_constant,
+        p.inertia_scale,
+        p.robot_mass_scale,
+        p.mocap_latency,
+        p.mocap_dropout,
+        p.wind[0],
+        p.wind[1],
+        p.gust
+    )
+}
+
+/// What one campaign runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CampaignSetup {
+    /// Trials in the whole campaign.
+    pub trials: usize,
+    /// The campaign's seed.
+    pub seed: u64,
+    /// The plants' dispersion.
+    pub dispersion: Dispersion,
+    /// This run's shard, `(k, n)`: the trials whose index is `k - 1` modulo `n` (`(1, 1)`: all).
+    pub shard: (usize, usize),
+}
+
+/// How a trial came out.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrialResult {
+    /// The trial's index in the campaign.
+    pub trial: usize,
+    /// The paper case flown.
+    pub scenario: String,
+    /// `delivered`, `not delivered`, `dropped` or `aborted`.
+    pub outcome: String,
+    /// Why it aborted, as the vehicle said it.
+    pub aborted: Option<String>,
+    /// Distance from the target where it ended, m (none when dropped).
+    pub final_error_m: Option<f32>,
+}
+
+/// A trial's own random stream: the campaign's seed and the trial's index, nothing else.
+fn trial_rng(seed: u64, trial: usize) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(seed ^ (trial as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
+/// The paper case and plant of trial `trial`, and the seed its mission flies with.
+fn trial_of(setup: &CampaignSetup, trial: usize) -> Result<(LoadedScenario, u64)> {
+    let (name, text) = CASES[trial % CASES.len()];
+    let mut loaded = scenario_file::parse(text, std::path::Path::new(name))?;
+    let mut rng = trial_rng(setup.seed, trial);
+    loaded.plant = setup.dispersion.draw(&mut rng);
+    let mission_seed: u64 = rng.random();
+    Ok((loaded, mission_seed))
+}
+
+/// Runs trial `trial`.
+pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
+    let (loaded, mission_seed) = trial_of(setup, trial)?;
+    let mission_setup = MissionSetup {
+        seed: mission_seed,
+        plant: loaded.plant,
+        ..MissionSetup::default()
+    };
+    let (o, _) = mission_run::run(&loaded.scenario, &mission_setup, &mut |_, _, _| {})?;
+    let outcome = if o.dropped {
+        "dropped"
+    } else if o.aborted.is_some() {
+        "aborted"
+    } else if o.delivered && o.final_position_error_m <= DELIVERED_WITHIN {
+        "delivered"
+    } else {
+        "not delivered"
+    };
+    Ok(TrialResult {
+        trial,
+        scenario: loaded.name,
+        outcome: outcome.to_string(),
+        aborted: o.aborted.map(|r| r.to_string()),
+        final_error_m: (!o.dropped).then_some(o.final_position_error_m),
+    })
+}
+
+/// The trials of `setup`'s shard, run in parallel; `progress` sees each as it ends.
+pub fn run(setup: &CampaignSetup, progress: &(dyn Fn() + Sync)) -> Result<Vec<TrialResult>> {
+    let (k, n) = setup.shard;
+    if n == 0 || k == 0 || k > n {
+        bail!("--shard {k}/{n}: K runs from 1 to N");
+    }
+    if setup.trials == 0 || setup.trials > MAX_TRIALS {
+        bail!("--trials {}: 1 to {MAX_TRIALS}", setup.trials);
+    }
+    let mut results: Vec<TrialResult> = (0..setup.trials)
+        .filter(|i| i % n == k - 1)
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|i| {
+            let r = run_trial(setup, i);
+            progress();
+            r
+        })
+        .collect::<Result<_>>()?;
+    results.sort_by_key(|r| r.trial);
+    Ok(results)
+}
+
+/// The final error's spread, m (none without a mission that was not dropped).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ErrorSpread {
+    /// Median.
+    pub p50: Option<f32>,
+    /// 95th percentile.
+    pub p95: Option<f32>,
+    /// Largest.
+    pub max: Option<f32>,
+}
+
+/// What a campaign found.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// Trials run.
+    pub trials: usize,
+    /// Delivered within [`DELIVERED_WITHIN`].
+    pub delivered: usize,
+    /// Ended without delivering there, neither dropped nor aborted.
+    pub not_delivered: usize,
+    /// Dropped.
+    pub dropped: usize,
+    /// Aborted, by reason.
+    pub aborted: BTreeMap<String, usize>,
+    /// Aborts of a healthy vehicle (no fault is injected: every abort).
+    pub false_alarms: usize,
+    /// The final error of the missions that were not dropped.
+    pub final_error_m: ErrorSpread,
+}
+
+/// The nearest-rank `q` quantile of sorted `values` (none when there are none).
+fn quantile(sorted: &[f32], q: f32) -> Option<f32> {
+    if sorted.is_empty() {
+        return None;
+    }
+    let rank = (q * sorted.len() as f32).ceil() as usize;
+    Some(sorted[rank.clamp(1, sorted.len()) - 1])
+}
+
+/// The report of `results` (in any order).
+pub fn report(results: &[TrialResult]) -> Report {
+    let mut aborted = BTreeMap::new();
+    let count = |what: &str| results.iter().filter(|r| r.outcome == what).count();
+    for r in results.iter().filter(|r| r.outcome == "aborted") {
+        let why = r.aborted.clone().unwrap_or_else(|| "unknown".to_string());
+        *aborted.entry(why).or_insert(0) += 1;
+    }
+    let mut errors: Vec<f32> = results
+        .iter()
+        .filter_map(|r| r.final_error_m)
+        .filter(|e| e.is_finite())
+        .collect();
+    errors.sort_by(f32::total_cmp);
+    Report {
+        trials: results.len(),
+        delivered: count("delivered"),
+        not_delivered: count("not delivered"),
+        dropped: count("dropped"),
+        false_alarms: count("aborted"),
+        aborted,
+        final_error_m: ErrorSpread {
+            p50: quantile(&errors, 0.5),
+            p95: quantile(&errors, 0.95),
+            max: errors.last().copied(),
+        },
+    }
+}
+
+/// One run's (or shard's) output as `campaign --json` prints it: the set-up, the report and
+/// every trial.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CampaignOutput {
+    /// Trials in the whole campaign.
+    pub campaign_trials: usize,
+    /// The campaign's seed.
+    pub seed: u64,
+    /// The dispersion.
+    pub dispersion: Dispersion,
+    /// The shard, `[k, n]`.
+    pub shard: [usize; 2],
+    /// What this run found.
+    #[serde(flatten)]
+    pub report: Report,
+    /// Each trial.
+    pub results: Vec<TrialResult>,
+}
+
+/// The shards' outputs as one campaign's: they must be of one campaign (seed, trials,
+/// dispersion, shard count), each shard once, and hold every trial.
+pub fn merge(parts: &[CampaignOutput]) -> Result<CampaignOutput> {
+    let Some(first) = parts.first() else {
+        bail!("no shard to merge");
+    };
+    let n = first.shard[1];
+    let mut seen = vec![false; n.max(1)];
+    for p in parts {
+        if p.seed != first.seed
+            || p.campaign_trials != first.campaign_trials
+            || p.dispersion != first.dispersion
+            || p.shard[1] != n
+        {
+            bail!(
+                "shard {}/{} is of another campaign (its seed, trials, dispersion or shard count differ)",
+                p.shard[0],
+                p.shard[1]
+            );
+        }
+        let k = p.shard[0];
+        if k == 0 || k > n || std::mem::replace(&mut seen[k - 1], true) {
+            bail!("shard {k}/{n} given twice or out of range");
+        }
+    }
+    if let Some(missing) = seen.iter().position(|s| !s) {
+        bail!("shard {}/{n} is missing", missing + 1);
+    }
+    let mut results: Vec<TrialResult> = parts.iter().flat_map(|p| p.results.clone()).collect();
+    results.sort_by_key(|r| r.trial);
+    if results.len() != first.campaign_trials
+        || results.iter().enumerate().any(|(i, r)| r.trial != i)
+    {
+        bail!("the shards do not hold each of the campaign's trials once");
+    }
+    Ok(CampaignOutput {
+        campaign_trials: first.campaign_trials,
+        seed: first.seed,
+        dispersion: first.dispersion,
+        shard: [1, 1],
+        report: report(&results),
+        results,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_trials_plant_depends_on_the_seed_and_its_index_alone() {
+        let setup = CampaignSetup {
+            trials: 10,
+            seed: 4,
+            dispersion: Dispersion::DEFAULT,
+            shard: (1, 1),
+        };
+        let a = trial_of(&setup, 7).expect("a trial");
+        let b = trial_of(
+            &CampaignSetup {
+                shard: (2, 3),
+                ..setup
+            },
+            7,
+        )
+        .expect("a trial");
+        assert_eq!((a.0.plant, a.1), (b.0.plant, b.1));
+        assert_eq!(a.0.name, "rect-ex2", "trial 7: the second case of six");
+        let c = trial_of(&setup, 8).expect("a trial");
+        assert_ne!(a.0.plant, c.0.plant);
+        let d = Dispersion::DEFAULT;
+        let p = a.0.plant;
+        assert!((d.inertia_scale[0]..=d.inertia_scale[1]).contains(&p.inertia_scale));
+    }
+
+    #[test]
+    fn percentiles_are_nearest_rank_and_outcomes_are_counted() {
+        let r = |trial, outcome: &str, e| TrialResult {
+            trial,
+            scenario: "x".into(),
+            outcome: outcome.into(),
+            aborted: (outcome == "aborted").then(|| "position lost".into()),
+            final_error_m: e,
+        };
+        let results: Vec<_> = (0..20)
+            .map(|i| r(i, "delivered", Some(i as f32 * 0.01)))
+            .chain([r(20, "aborted", Some(0.5)), r(21, "dropped", None)])
+            .collect();
+        let rep = report(&results);
+        assert_eq!(
+            (rep.trials, rep.delivered, rep.dropped, rep.false_alarms),
+            (22, 20, 1, 1)
+        );
+        assert_eq!(rep.aborted.get("position lost"), Some(&1));
+        // 21 finite errors: 0.00..0.19 and 0.5.
+        // The 11th of 21: trial 10's 0.10 m.
+        assert_eq!(rep.final_error_m.p50, Some(10.0 * 0.01));
+        assert_eq!(rep.final_error_m.max, Some(0.5));
+    }
+
+    #[test]
+    fn a_dispersion_out_of_order_or_out_of_range_is_refused_naming_it() {
+        let mut d = Dispersion::DEFAULT;
+        d.gust = [0.5, 0.1];
+        assert!(d.check().expect_err("refused").contains("gust"));
+        let mut d = Dispersion::DEFAULT;
+        d.inertia_scale = [0.5, 50.0];
+        assert!(d.check().expect_err("refused").contains("inertia_scale"));
+        assert_eq!(Dispersion::DEFAULT.check(), Ok(()));
+        let e = toml::from_str::<Dispersion>("wind_speed = [0.0, 1.0]").expect_err("refused");
+        assert!(e.message().contains("wind_speed"));
+    }
+}
