@@ -247,13 +247,7 @@ impl PilotScript {
             "COM_FLTMODE4",
         ];
         for (name, mode) in names.into_iter().zip(MODE_SLOTS) {
-            let value = match mode {
-                PilotMode::Position => 2.0,
-                PilotMode::Mission => 3.0,
-                PilotMode::Hold => 4.0,
-                PilotMode::Land => 11.0,
-            };
-            p.push((name, value));
+            p.push((name, mode.param_value()));
         }
         p
     }

@@ -22,15 +22,19 @@ impl PilotMode {
     /// The mode of a `COM_FLTMODEn` value; `None` for -1 (unassigned) and for PX4 modes this
     /// vehicle does not fly.
     pub fn from_param(value: f32) -> Option<Self> {
-        [
-            (2.0, Self::Position),
-            (3.0, Self::Mission),
-            (4.0, Self::Hold),
-            (11.0, Self::Land),
-        ]
-        .iter()
-        .find(|(v, _)| *v == value)
-        .map(|(_, mode)| *mode)
+        [Self::Position, Self::Mission, Self::Hold, Self::Land]
+            .into_iter()
+            .find(|mode| mode.param_value() == value)
+    }
+
+    /// Its `COM_FLTMODEn` value (PX4's number).
+    pub fn param_value(self) -> f32 {
+        match self {
+            Self::Position => 2.0,
+            Self::Mission => 3.0,
+            Self::Hold => 4.0,
+            Self::Land => 11.0,
+        }
     }
 
     /// Its name for people.

@@ -12,12 +12,12 @@ use super::config::{ManualConfig, PilotMode};
 use super::kill::{KillAction, KillSwitch};
 use super::source::{Manual, ManualSelector, Source};
 
-/// Seconds to microseconds, never negative.
-fn micros(seconds: f32) -> u64 {
-    if seconds.is_nan() || seconds <= 0.0 {
-        0
-    } else {
+/// Seconds to microseconds, never negative (NaN: 0).
+const fn micros(seconds: f32) -> u64 {
+    if seconds > 0.0 {
         (seconds * 1e6) as u64
+    } else {
+        0
     }
 }
 
@@ -56,8 +56,8 @@ impl Pilot {
     /// No sample yet, for `config`.
     pub const fn new(config: &ManualConfig) -> Self {
         Self {
-            selector: ManualSelector::new(config.input_mode, micros_const(config.loss_time)),
-            kill: KillSwitch::new(micros_const(config.kill_disarm_time)),
+            selector: ManualSelector::new(config.input_mode, micros(config.loss_time)),
+            kill: KillSwitch::new(micros(config.kill_disarm_time)),
             kill_on: false,
             slot: None,
             valid: false,
@@ -140,15 +140,6 @@ impl Pilot {
             kill,
             kill_switched,
         }
-    }
-}
-
-/// [`micros`] for constants (no float comparison of NaN needed: the defaults are finite).
-const fn micros_const(seconds: f32) -> u64 {
-    if seconds <= 0.0 {
-        0
-    } else {
-        (seconds * 1e6) as u64
     }
 }
 

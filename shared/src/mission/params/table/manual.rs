@@ -23,13 +23,7 @@ macro_rules! flight_mode {
                 $slot,
                 ": -1 unassigned, 2 Position, 3 Mission, 4 Hold, 11 Land (PX4's numbers)"
             ),
-            get: |c| match c.manual.flight_modes[$slot - 1] {
-                None => -1.0,
-                Some(PilotMode::Position) => 2.0,
-                Some(PilotMode::Mission) => 3.0,
-                Some(PilotMode::Hold) => 4.0,
-                Some(PilotMode::Land) => 11.0,
-            },
+            get: |c| c.manual.flight_modes[$slot - 1].map_or(-1.0, PilotMode::param_value),
             set: |c, v| c.manual.flight_modes[$slot - 1] = PilotMode::from_param(v),
         }
     };
