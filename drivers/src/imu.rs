@@ -1,10 +1,14 @@
 //! From IMU samples to the control tick: the board's mounting rotation into the
 //! body frame the controller uses (x forward, y right, z down: docs/models.md#conventions), a
-//! second-order Butterworth anti-alias filter at the sample rate, decimation to the 400 Hz
-//! tick, and the IMU's health: a stalled, saturated or implausible IMU is a fault with a name.
+//! second-order Butterworth anti-alias filter and the rotors' notches ([`crate::rotor_notch`])
+//! at the sample rate, decimation to the 400 Hz tick, and the IMU's health: a stalled, saturated
+//! or implausible IMU is a fault with a name.
 
 use shared::control::vector::Vec3;
 use shared::scenario::GRAVITY;
+
+use crate::biquad::{Biquad, BiquadCoefficients};
+use crate::rotor_notch::RotorNotches;
 
 /// How the IMU sits on the board: a yaw about the body's z axis (PX4's `ROTATION_YAW_*`,
 /// applied as PX4 does: body = R * sensor). The Pixhawk 6C's ICM-42688-P is yaw 270 deg
@@ -30,52 +34,6 @@ impl Mounting {
             Self::Yaw180 => [-x, -y, z],
             Self::Yaw270 => [y, -x, z],
         }
-    }
-}
-
-/// A second-order Butterworth low-pass (bilinear transform, prewarped), one channel.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LowPass {
-    b: [f32; 3],
-    a: [f32; 2],
-    state: [f32; 2],
-}
-
-impl LowPass {
-    /// A filter cutting at `cutoff_hz` for samples at `sample_hz`; a pass-through if the
-    /// cutoff is not below the Nyquist frequency or not positive.
-    pub fn new(cutoff_hz: f32, sample_hz: f32) -> Self {
-        if !(cutoff_hz > 0.0 && cutoff_hz < 0.5 * sample_hz) {
-            return Self {
-                b: [1.0, 0.0, 0.0],
-                a: [0.0, 0.0],
-                state: [0.0; 2],
-            };
-        }
-        let k = shared::math::tan(core::f32::consts::PI * cutoff_hz / sample_hz);
-        let q = core::f32::consts::FRAC_1_SQRT_2;
-        let norm = 1.0 / (1.0 + k / q + k * k);
-        let b0 = k * k * norm;
-        Self {
-            b: [b0, 2.0 * b0, b0],
-            a: [2.0 * (k * k - 1.0) * norm, (1.0 - k / q + k * k) * norm],
-            state: [0.0; 2],
-        }
-    }
-
-    /// Starts the filter settled at `value` (no start-up transient).
-    pub fn reset(&mut self, value: f32) {
-        // Transposed direct form II at rest: input and output both `value`.
-        self.state[1] = value * (self.b[2] - self.a[1]);
-        self.state[0] = value * (self.b[1] - self.a[0]) + self.state[1];
-    }
-
-    /// One sample in, one out.
-    pub fn apply(&mut self, x: f32) -> f32 {
-        let y = self.b[0] * x + self.state[0];
-        self.state[0] = self.b[1] * x - self.a[0] * y + self.state[1];
-        self.state[1] = self.b[2] * x - self.a[1] * y;
-        y
     }
 }
 
@@ -119,26 +77,36 @@ impl core::fmt::Display for ImuFault {
 /// Ticks without a sample that make a stall: 5 ticks, 12.5 ms at 400 Hz.
 pub const STALL_TICKS: u16 = 5;
 
-/// Filters every sample, hands the latest filtered one to each tick, and watches the IMU.
+/// Ticks in a row with a reading at full scale that make a saturated IMU: 4 ticks, 10 ms at
+/// 400 Hz. A hard touchdown clips the accelerometer for a few milliseconds (the plant's
+/// payload settling back after a lift reaches 19 g for about 2 ms), as PX4 counts clipping
+/// without failing the sensor; a sensor pinned at full scale stays there.
+pub const SATURATED_TICKS: u16 = 4;
+
+/// Filters every sample, hands the latest filtered one to each tick, and watches the IMU;
+/// notches follow up to `ROTORS` rotors (the board's ESC outputs).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ImuFrontEnd {
+pub struct ImuFrontEnd<const ROTORS: usize = 8> {
     mounting: Mounting,
-    gyro: [LowPass; 3],
-    accel: [LowPass; 3],
+    notches: RotorNotches<ROTORS>,
+    gyro: [Biquad; 3],
+    accel: [Biquad; 3],
     latest: Option<TickSample>,
     started: bool,
     samples: u16,
     empty_ticks: u16,
     saturated: bool,
+    saturated_ticks: u16,
 }
 
-impl ImuFrontEnd {
+impl<const ROTORS: usize> ImuFrontEnd<ROTORS> {
     /// A front end for an IMU mounted `mounting`, sampling at `sample_hz`, filtered at
     /// `cutoff_hz` (below half the tick rate, so the decimation does not alias).
     pub fn new(mounting: Mounting, sample_hz: f32, cutoff_hz: f32) -> Self {
-        let lp = LowPass::new(cutoff_hz, sample_hz);
+        let lp = Biquad::new(BiquadCoefficients::low_pass(cutoff_hz, sample_hz));
         Self {
             mounting,
+            notches: RotorNotches::new(sample_hz),
             gyro: [lp; 3],
             accel: [lp; 3],
             latest: None,
@@ -146,7 +114,14 @@ impl ImuFrontEnd {
             samples: 0,
             empty_ticks: 0,
             saturated: false,
+            saturated_ticks: 0,
         }
+    }
+
+    /// Follows the rotors' speeds, RPM in the ESCs' order (from their telemetry; an empty
+    /// slice when there is none, and then nothing is notched).
+    pub fn follow_rotors(&mut self, rpm: &[f32]) {
+        self.notches.follow(rpm);
     }
 
     /// One sample (sensor axes, SI units; `saturated` if the sensor read at full scale).
@@ -160,15 +135,19 @@ impl ImuFrontEnd {
             }
             self.started = true;
         }
-        let mut out = TickSample {
-            gyro: [0.0; 3],
-            accel: [0.0; 3],
+        // The anti-alias filter, then the notches: a notch that comes on settles at the
+        // filtered signal, not at one noisy sample.
+        let mut smooth = [0.0f32; 6];
+        for axis in 0..3 {
+            smooth[axis] = self.gyro[axis].apply(gyro[axis]);
+            smooth[3 + axis] = self.accel[axis].apply(accel[axis]);
+        }
+        let [gx, gy, gz, ax, ay, az] = self.notches.apply(smooth);
+        let out = TickSample {
+            gyro: [gx, gy, gz],
+            accel: [ax, ay, az],
             samples: 0,
         };
-        for axis in 0..3 {
-            out.gyro[axis] = self.gyro[axis].apply(gyro[axis]);
-            out.accel[axis] = self.accel[axis].apply(accel[axis]);
-        }
         self.samples = self.samples.saturating_add(1);
         self.saturated |= saturated;
         self.latest = Some(out);
@@ -192,7 +171,12 @@ impl ImuFrontEnd {
         if self.empty_ticks >= STALL_TICKS || self.latest.is_none() {
             return Err(ImuFault::Stalled(self.empty_ticks));
         }
-        if saturated {
+        self.saturated_ticks = if saturated {
+            self.saturated_ticks.saturating_add(1)
+        } else {
+            0
+        };
+        if self.saturated_ticks >= SATURATED_TICKS {
             return Err(ImuFault::Saturated);
         }
         let mut out = self.latest.ok_or(ImuFault::Stalled(self.empty_ticks))?;
@@ -230,7 +214,7 @@ mod tests {
     }
 
     fn gain_at(freq: f32) -> f32 {
-        let mut lp = LowPass::new(80.0, 2000.0);
+        let mut lp = Biquad::new(BiquadCoefficients::low_pass(80.0, 2000.0));
         let mut peak = 0.0f32;
         for n in 0..4000 {
             let y = lp.apply(shared::math::sin(
@@ -247,7 +231,7 @@ mod tests {
     /// after decimation to 400 Hz) is down by 2 x 12 dB per octave over 2.3 octaves.
     #[test]
     fn the_anti_alias_filter_responds_as_a_butterworth() {
-        let mut lp = LowPass::new(80.0, 2000.0);
+        let mut lp = Biquad::new(BiquadCoefficients::low_pass(80.0, 2000.0));
         let mut y = 0.0;
         for _ in 0..500 {
             y = lp.apply(1.0);
@@ -257,7 +241,7 @@ mod tests {
         assert!(gain_at(400.0) < 0.05, "{}", gain_at(400.0));
         assert!(gain_at(10.0) > 0.99);
         // Settled start: the first output equals a constant input.
-        let mut lp = LowPass::new(80.0, 2000.0);
+        let mut lp = Biquad::new(BiquadCoefficients::low_pass(80.0, 2000.0));
         lp.reset(9.8);
         assert!((lp.apply(9.8) - 9.8).abs() < 1e-4);
         assert!((lp.apply(9.8) - 9.8).abs() < 1e-4);
@@ -265,7 +249,7 @@ mod tests {
 
     #[test]
     fn ticks_take_the_latest_filtered_sample_in_body_axes() {
-        let mut imu = ImuFrontEnd::new(Mounting::Yaw270, 2000.0, 80.0);
+        let mut imu = ImuFrontEnd::<8>::new(Mounting::Yaw270, 2000.0, 80.0);
         assert_eq!(imu.tick(), Err(ImuFault::Stalled(1)), "nothing yet");
         for _ in 0..5 {
             imu.push([0.0, 0.5, 0.0], [0.0, 0.0, -9.8], false);
@@ -294,7 +278,7 @@ mod tests {
 
     #[test]
     fn a_silent_imu_stalls_and_a_saturated_one_is_reported() {
-        let mut imu = ImuFrontEnd::new(Mounting::Identity, 2000.0, 80.0);
+        let mut imu = ImuFrontEnd::<8>::new(Mounting::Identity, 2000.0, 80.0);
         imu.push([0.0; 3], [0.0, 0.0, -9.8], false);
         assert!(imu.tick().is_ok());
         for tick in 1..STALL_TICKS {
@@ -309,7 +293,16 @@ mod tests {
             "the last sample stays for the landing"
         );
         imu.push([0.0; 3], [0.0, 0.0, -9.8], true);
-        assert_eq!(imu.tick(), Err(ImuFault::Saturated));
+        assert!(
+            imu.tick().is_ok(),
+            "one clipped tick is a bump, not a fault"
+        );
+        for _ in 2..SATURATED_TICKS {
+            imu.push([0.0; 3], [0.0, 0.0, -9.8], true);
+            assert!(imu.tick().is_ok());
+        }
+        imu.push([0.0; 3], [0.0, 0.0, -9.8], true);
+        assert_eq!(imu.tick(), Err(ImuFault::Saturated), "pinned at full scale");
         imu.push([0.0; 3], [0.0, 0.0, -9.8], false);
         assert!(imu.tick().is_ok(), "a clean sample clears it");
     }

@@ -12,6 +12,8 @@
 //! | [`thrust_map`] | rotor thrust to ESC command, a table replaceable by a bench calibration |
 //! | [`icm42688`] | the ICM-42688-P IMU: registers, start-up, 20-byte FIFO packets, scaling |
 //! | [`imu`] | mounting rotation, anti-alias filter and decimation to the tick, IMU health |
+//! | [`biquad`] | second-order filters: the IMU's anti-alias low-pass and notches |
+//! | [`rotor_notch`] | notches following each rotor's rotation and blade-pass frequencies |
 //! | [`tmc2209`] | the TMC2209 stepper driver's single-wire UART: datagrams, CRC, registers |
 //! | [`stepper`] | a robot's rail axis on a TMC2209: velocity commands, arc length, stalls |
 //! | [`reset`] | why the STM32H7 last reset (RCC_RSR), for the start-up report |
@@ -29,6 +31,7 @@
 extern crate std;
 
 pub mod battery;
+pub mod biquad;
 pub mod crsf;
 pub mod dshot;
 pub mod dshot_telemetry;
@@ -39,6 +42,7 @@ pub mod pulse;
 pub mod rc;
 pub mod rc_receiver;
 pub mod reset;
+pub mod rotor_notch;
 pub mod sbus;
 pub mod sd_logs;
 pub mod stepper;

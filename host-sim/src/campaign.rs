@@ -67,6 +67,10 @@ pub struct Dispersion {
     pub wind: [f32; 2],
     /// `gust`, m/s RMS.
     pub gust: [f32; 2],
+    /// `imu_vibration`, m/s^2 RMS.
+    pub imu_vibration: [f32; 2],
+    /// `gyro_vibration`, rad/s RMS.
+    pub gyro_vibration: [f32; 2],
 }
 
 impl Dispersion {
@@ -81,6 +85,8 @@ impl Dispersion {
         mocap_dropout: [0.0, 0.05],
         wind: [-1.0, 1.0],
         gust: [0.0, 0.3],
+        imu_vibration: [0.0, 15.0],
+        gyro_vibration: [0.0, 0.3],
     };
 
     /// A dispersion file (TOML: each key a `[low, high]` range, the defaults for what it does
@@ -115,7 +121,7 @@ impl Dispersion {
         Ok(())
     }
 
-    fn ranges(&self) -> [(&'static str, [f32; 2]); 8] {
+    fn ranges(&self) -> [(&'static str, [f32; 2]); 10] {
         [
             ("rotor_efficiency_spread", self.rotor_efficiency_spread),
             ("motor_time_constant", self.motor_time_constant),
@@ -125,6 +131,8 @@ impl Dispersion {
             ("mocap_dropout", self.mocap_dropout),
             ("wind", self.wind),
             ("gust", self.gust),
+            ("imu_vibration", self.imu_vibration),
+            ("gyro_vibration", self.gyro_vibration),
         ]
     }
 
@@ -140,6 +148,8 @@ impl Dispersion {
             mocap_dropout: pick(self.mocap_dropout),
             wind: [wind, pick(self.wind)],
             gust: pick(self.gust),
+            imu_vibration: pick(self.imu_vibration),
+            gyro_vibration: pick(self.gyro_vibration),
         }
     }
 
@@ -164,7 +174,7 @@ impl Default for Dispersion {
 /// `plant` as the keys of a `[plant]` section.
 fn plant_toml(p: &PlantDepartures) -> String {
     format!(
-        "rotor_efficiency_spread = {}\nmotor_time_constant = {}\ninertia_scale = {}\nrobot_mass_scale = {}\nmocap_latency = {}\nmocap_dropout = {}\nwind = [{}, {}]\ngust = {}\n",
+        "rotor_efficiency_spread = {}\nmotor_time_constant = {}\ninertia_scale = {}\nrobot_mass_scale = {}\nmocap_latency = {}\nmocap_dropout = {}\nwind = [{}, {}]\ngust = {}\nimu_vibration = {}\ngyro_vibration = {}\n",
         p.rotor_efficiency_spread,
         p.motor_time_constant,
         p.inertia_scale,
@@ -173,7 +183,9 @@ fn plant_toml(p: &PlantDepartures) -> String {
         p.mocap_dropout,
         p.wind[0],
         p.wind[1],
-        p.gust
+        p.gust,
+        p.imu_vibration,
+        p.gyro_vibration
     )
 }
 

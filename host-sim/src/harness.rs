@@ -193,7 +193,13 @@ pub fn fly_formation(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightO
     setup.plant.apply(plant.config_mut(), setup.seed);
     plant.refresh();
     let mut sensors = Sensors::new(setup.seed)
-        .with_mocap_departures(setup.plant.mocap_latency, setup.plant.mocap_dropout);
+        .with_mocap_departures(setup.plant.mocap_latency, setup.plant.mocap_dropout)
+        .with_vibration(
+            setup.plant.imu_vibration,
+            setup.plant.gyro_vibration,
+            &plant,
+            setup.seed,
+        );
 
     // The flight software, as the mission builds it after the formation decision.
     let model = FlightModel::build(
@@ -229,6 +235,7 @@ pub fn fly_formation(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightO
         }
         let now_us = plant.time_us();
         let truth_now = plant.state();
+        sensors.hear_rotors(&plant);
         let imu = sensors.imu(&truth_now, dt);
         if let Some(fix) = sensors.mocap(&truth_now, now_us) {
             navigator.motion_capture(&fix);

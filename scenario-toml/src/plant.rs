@@ -24,6 +24,11 @@ pub struct PlantDepartures {
     pub wind: [f32; 2],
     /// The gusts about it, m/s RMS per horizontal axis (Dryden's first-order form).
     pub gust: f32,
+    /// The frame's vibration on the raw accelerometer at hover thrust, m/s^2 RMS per axis, at
+    /// the rotors' rotation and blade-pass frequencies.
+    pub imu_vibration: f32,
+    /// The same on the raw gyro, rad/s RMS per axis.
+    pub gyro_vibration: f32,
 }
 
 impl PlantDepartures {
@@ -37,6 +42,8 @@ impl PlantDepartures {
         mocap_dropout: 0.0,
         wind: [0.0; 2],
         gust: 0.0,
+        imu_vibration: 0.0,
+        gyro_vibration: 0.0,
     };
 }
 
@@ -56,6 +63,8 @@ pub(crate) struct PlantToml {
     robot_mass_scale: Option<f64>,
     mocap_latency: Option<f64>,
     mocap_dropout: Option<f64>,
+    imu_vibration: Option<f64>,
+    gyro_vibration: Option<f64>,
     wind: Option<Vec<f64>>,
     gust: Option<f64>,
 }
@@ -66,13 +75,15 @@ const MAX_WIND: f64 = 15.0;
 const MAX_GUST: f64 = 5.0;
 
 /// Each key's name, range and what it is (units in the range's words).
-const RANGES: [(&str, f64, f64, &str); 6] = [
+const RANGES: [(&str, f64, f64, &str); 8] = [
     ("rotor_efficiency_spread", 0.0, 0.5, ""),
     ("motor_time_constant", 0.005, 0.5, " s"),
     ("inertia_scale", 0.1, 10.0, ""),
     ("robot_mass_scale", 0.5, 3.0, ""),
     ("mocap_latency", 0.0, 0.5, " s"),
     ("mocap_dropout", 0.0, 0.9, ""),
+    ("imu_vibration", 0.0, 60.0, " m/s^2"),
+    ("gyro_vibration", 0.0, 3.0, " rad/s"),
 ];
 
 impl PlantToml {
@@ -86,6 +97,8 @@ impl PlantToml {
             self.robot_mass_scale,
             self.mocap_latency,
             self.mocap_dropout,
+            self.imu_vibration,
+            self.gyro_vibration,
         ];
         let defaults = [
             m.rotor_efficiency_spread,
@@ -94,8 +107,10 @@ impl PlantToml {
             m.robot_mass_scale,
             m.mocap_latency,
             m.mocap_dropout,
+            m.imu_vibration,
+            m.gyro_vibration,
         ];
-        let mut v = [0.0f32; 6];
+        let mut v = [0.0f32; RANGES.len()];
         for (i, ((name, lo, hi, unit), value)) in RANGES.iter().zip(given).enumerate() {
             v[i] = match value {
                 None => defaults[i],
@@ -136,6 +151,8 @@ impl PlantToml {
             mocap_dropout: v[5],
             wind,
             gust,
+            imu_vibration: v[6],
+            gyro_vibration: v[7],
         })
     }
 }
@@ -162,6 +179,17 @@ mod tests {
                 .departures()
                 .expect_err("refused")
                 .contains("two numbers (got 3)")
+        );
+        let shaking: PlantToml =
+            toml::from_str("imu_vibration = 10.0\ngyro_vibration = 0.3").expect("parses");
+        let d = shaking.departures().expect("in range");
+        assert_eq!((d.imu_vibration, d.gyro_vibration), (10.0, 0.3));
+        let violent: PlantToml = toml::from_str("imu_vibration = 80.0").expect("parses");
+        assert!(
+            violent
+                .departures()
+                .expect_err("refused")
+                .contains("plant.imu_vibration: 80 is outside 0 to 60 m/s^2")
         );
         let bad: PlantToml = toml::from_str("mocap_dropout = 1.0").expect("parses");
         let said = bad.departures().expect_err("refused");

@@ -20,3 +20,4 @@ mod mission;
 mod plant_departures;
 mod rotor_out;
 mod route;
+mod vibration;

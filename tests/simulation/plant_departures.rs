@@ -111,6 +111,8 @@ fn every_departure_at_once_still_delivers_the_papers_case() {
         // 1 m/s RMS (the figure) lands 0.12 m off and, with the wind alone, the rotor
         // monitor takes the gusts for a stopped rotor: docs/formats.md#the-plant-section.
         gust: 0.5,
+        imu_vibration: 10.0,
+        gyro_vibration: 0.3,
     });
     assert!(o.delivered, "{} m", o.final_position_error_m);
     assert!(o.final_position_error_m < 0.1);

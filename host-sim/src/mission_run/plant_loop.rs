@@ -165,7 +165,13 @@ pub fn fly(
     setup.plant.apply(plant.config_mut(), setup.seed);
     plant.refresh();
     let mut sensors = Sensors::new(setup.seed)
-        .with_mocap_departures(setup.plant.mocap_latency, setup.plant.mocap_dropout);
+        .with_mocap_departures(setup.plant.mocap_latency, setup.plant.mocap_dropout)
+        .with_vibration(
+            setup.plant.imu_vibration,
+            setup.plant.gyro_vibration,
+            &plant,
+            setup.seed,
+        );
     if let Some(bias) = setup.gyro_bias {
         sensors = sensors.with_gyro_bias(bias);
     }
@@ -239,7 +245,10 @@ pub fn fly(
             stopped_over.get_or_insert(plant.state().position);
         }
         let truth_now = plant.state();
+        sensors.hear_rotors(&plant);
         let mut imu = sensors.imu(&truth_now, dt);
+        // The board's front end finds a saturated or stalled IMU (on the raw path).
+        faults.imu = sensors.imu_fault().is_some();
         if let Some(fault) = &setup.imu_fault {
             let begin = if fault.from_start {
                 fault.after

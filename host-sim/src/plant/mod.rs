@@ -23,6 +23,7 @@
 
 pub mod departures;
 pub mod sensors;
+pub mod vibration;
 pub mod wind;
 
 use rapier3d::prelude::*;

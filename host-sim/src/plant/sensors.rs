@@ -19,7 +19,10 @@ use shared::control::navigator::{ImuSample, MocapFix};
 use shared::control::vector::{Quat, Vec3};
 use shared::scenario::GRAVITY;
 
-use crate::plant::TrueState;
+use drivers::imu::ImuFault;
+
+use super::vibration::{VibratingImu, Vibration};
+use crate::plant::{Plant, TrueState};
 
 /// Gyro white noise, rad/s (1 sigma).
 pub const GYRO_NOISE: f32 = 0.005;
@@ -84,6 +87,10 @@ pub struct Sensors {
     mocap_dropout: f32,
     dropout_rng: ChaCha8Rng,
     in_dropout: bool,
+    /// The raw 2 kHz path through the board's front end, when the frame vibrates.
+    raw: Option<VibratingImu>,
+    /// What the front end last found wrong with the IMU.
+    imu_fault: Option<ImuFault>,
 }
 
 /// Mean length of a burst of lost motion-capture fixes (occlusions last tens of ms).
@@ -110,7 +117,46 @@ impl Sensors {
             mocap_dropout: 0.0,
             dropout_rng: ChaCha8Rng::seed_from_u64(seed ^ 0xD209_0F75),
             in_dropout: false,
+            raw: None,
+            imu_fault: None,
         }
+    }
+
+    /// The IMU's samples made raw at 2 kHz with the frame's `accel_rms` (m/s^2) and `gyro_rms`
+    /// (rad/s) vibration and passed through the board's front end (the scenario's `[plant]`
+    /// `imu_vibration`, `gyro_vibration`: [`super::vibration`]), for `plant`'s rotors; without
+    /// vibration the samples stay the tick-rate model's.
+    pub fn with_vibration(
+        mut self,
+        accel_rms: f32,
+        gyro_rms: f32,
+        plant: &Plant,
+        seed: u64,
+    ) -> Self {
+        if accel_rms > 0.0 || gyro_rms > 0.0 {
+            let rotors = plant.thrusts().len();
+            let vibration = Vibration {
+                accel_rms,
+                gyro_rms,
+                hover_thrust: plant.total_mass() * GRAVITY / rotors.max(1) as f32,
+            };
+            self.raw = Some(VibratingImu::new(vibration, rotors, seed));
+        }
+        self
+    }
+
+    /// The rotors' speeds and thrusts now, for the vibration and the front end's notches (a
+    /// no-op without vibration).
+    pub fn hear_rotors(&mut self, plant: &Plant) {
+        if let Some(raw) = &mut self.raw {
+            raw.rotors(plant.rotor_rpm(), plant.thrusts());
+        }
+    }
+
+    /// What the board's front end found wrong with the IMU at the last sample (saturated,
+    /// stalled), on the raw path; `None` on the tick-rate model.
+    pub fn imu_fault(&self) -> Option<ImuFault> {
+        self.imu_fault
     }
 
     /// Motion capture `latency` s late, losing `dropout` of its fixes in bursts (the
@@ -160,11 +206,17 @@ impl Sensors {
         let specific = truth
             .attitude
             .inverse_rotate(acceleration - Vec3::DOWN * GRAVITY);
-        let rng = &mut self.rng;
-        let mut n = |s: f32| Vec3::new(noise(rng, s), noise(rng, s), noise(rng, s));
-        let sample = ImuSample {
-            gyro: truth.rate + self.gyro_bias + n(GYRO_NOISE),
-            accel: specific + n(ACCEL_NOISE),
+        let sample = if let Some(raw) = &mut self.raw {
+            let ([gyro, accel], fault) = raw.tick(truth.rate + self.gyro_bias, specific, dt);
+            self.imu_fault = fault;
+            ImuSample { gyro, accel }
+        } else {
+            let rng = &mut self.rng;
+            let mut n = |s: f32| Vec3::new(noise(rng, s), noise(rng, s), noise(rng, s));
+            ImuSample {
+                gyro: truth.rate + self.gyro_bias + n(GYRO_NOISE),
+                accel: specific + n(ACCEL_NOISE),
+            }
         };
         self.imu_queue.push_back(sample);
         if self.imu_queue.len() > IMU_DELAY_SAMPLES {
