@@ -81,6 +81,13 @@ impl LandDetector {
         self.contact == Contact::Airborne
     }
 
+    /// True while, landing, the vehicle's lowest point rests within [`Self::LAND_HEIGHT`] of
+    /// the ground and it is nearly still (the time that makes it landed is running): the
+    /// ground carries part of it.
+    pub fn settling(&self) -> bool {
+        self.contact == Contact::Airborne && self.still_for > 0.0
+    }
+
     /// One step with the estimated position and velocity (NED) and the tilt (its sine
     /// squared); `descending` when the plan is landing.
     pub fn update(
@@ -151,10 +158,13 @@ mod tests {
         d.update(Vec3::new(0.0, 0.0, -0.2), Vec3::ZERO, 0.0, false, 0.01);
         assert!(d.airborne());
         let on_edge = Vec3::new(0.0, 0.0, -0.06);
-        for _ in 0..51 {
+        d.update(on_edge, Vec3::ZERO, 0.0049, true, 0.01);
+        assert!(d.settling());
+        for _ in 0..50 {
             d.update(on_edge, Vec3::ZERO, 0.0049, true, 0.01);
         }
         assert_eq!(d.contact(), Contact::Landed);
+        assert!(!d.settling(), "landed, no longer settling");
         // Level at the same height, it is 6 cm clear: not down.
         let mut level = LandDetector::new(0.0, 0.9);
         level.update(Vec3::new(0.0, 0.0, -0.2), Vec3::ZERO, 0.0, false, 0.01);
@@ -162,6 +172,7 @@ mod tests {
             level.update(on_edge, Vec3::ZERO, 0.0, true, 0.01);
         }
         assert!(level.airborne());
+        assert!(!level.settling());
         assert!(level.clear_of_ground(on_edge, 0.0, 0.05));
         assert!(!level.clear_of_ground(on_edge, 0.0049, 0.0));
     }

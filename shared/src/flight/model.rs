@@ -28,7 +28,9 @@ pub struct FlightModel {
 
 /// The farthest of `points` from the payload frame's origin, m (0 for none).
 pub fn reach_of(points: &[Vec2]) -> f32 {
-    points.iter().fold(0.0, |m, p| crate::math::max(m, p.norm()))
+    points
+        .iter()
+        .fold(0.0, |m, p| crate::math::max(m, p.norm()))
 }
 
 impl FlightModel {

@@ -340,7 +340,8 @@ impl FlightStack {
     /// After a tick's [`Self::step`]: watches the rotors with the accelerometer's specific
     /// force `accel` (body frame, m/s^2), the tick's rotor commands `thrusts` and what the
     /// ESCs tell, `esc` (each rotor's RPM, the rotors they report stopped). The monitor judges
-    /// the vehicle's response only in the air, clear of the ground, and the RPM in the air.
+    /// the vehicle's response only in the air, clear of the ground and not resting on an edge
+    /// ([`LandDetector::settling`]), and the RPM in the air.
     /// Rotors found stopped are flown without from the next tick, and the next tick begins
     /// the landing ([`LandingCause::RotorOut`]; under a descent without position, that descent
     /// goes on). With `imu_trusted` false (the IMU failed: its samples explain nothing) only
@@ -359,13 +360,12 @@ impl FlightStack {
         }
         let n = self.mixer.count();
         let all = if n >= 16 { u16::MAX } else { (1u16 << n) - 1 };
-        // Clear by the lowest point, not the origin: in wind a vehicle leaning into it comes
-        // down on one edge, and the ground's push there is a wrench no rotor made.
-        let clear = self.land.clear_of_ground(
-            nav.position.position,
-            nav.sin2_tilt(),
-            3.0 * LandDetector::LAND_HEIGHT,
-        );
+        // Clear of the ground, and not resting on it: in wind a vehicle leaning into it comes
+        // down on one edge, its origin up to 0.1 m up, and the ground's push there is a
+        // wrench no rotor made. Resting is the land detector's: its lowest point down and
+        // still (a rotor stopping in the air tips the payload fast, and is watched on).
+        let clear = nav.height_above(self.ground_z) > 3.0 * LandDetector::LAND_HEIGHT
+            && !self.land.settling();
         let newly_reported = esc.stopped & all & !self.monitor.out();
         let vehicle = *self.controller.model();
         let found = self.monitor.update(&MonitorInput {
