@@ -7,6 +7,7 @@ use crate::control::allocation::{Mixer, MixerKind, RotorLayout};
 use crate::control::navigator::{ImuSample, MocapFix, Navigator};
 use crate::control::vector::{Quat, Vec3};
 use crate::control::vehicle::VehicleModel;
+use crate::flight::model::reach_of;
 use crate::flight::{FlightConfig, FlightModel, FlightStack};
 use crate::geometry::Vec2;
 use crate::scenario::{
@@ -142,6 +143,7 @@ pub fn hovering_flight(mixer: MixerKind) -> Option<(Navigator, FlightStack)> {
         mixer: Mixer::build(mixer, &layout).ok()?,
         vehicle: VehicleModel::from_payload(&RECT, com, 3.5, &RECT_ROTORS, 0.1, 14.2),
         com,
+        reach: reach_of(&RECT_ROTORS),
     };
     let above = Vec3::new(0.0, 0.0, -0.5);
     let mut navigator = Navigator::new();

@@ -17,6 +17,7 @@ use crate::control::position_estimator::{
     PositionEstimator, PositionEstimatorGains, PositionState,
 };
 use crate::control::vector::{Quat, Vec3};
+use crate::math;
 use crate::scenario::GRAVITY;
 
 /// One IMU sample in the body frame (FRD).
@@ -52,6 +53,14 @@ impl NavState {
     /// Height above a ground at NED z `ground_z`, m.
     pub fn height_above(&self, ground_z: f32) -> f32 {
         ground_z - self.position.position.z
+    }
+
+    /// Sine squared of the tilt from level (0 when level), from the attitude quaternion's
+    /// body z axis: a few multiplications, no trigonometry.
+    pub fn sin2_tilt(&self) -> f32 {
+        let q = self.attitude.attitude;
+        let cos = 1.0 - 2.0 * (q.x * q.x + q.y * q.y);
+        math::max(1.0 - cos * cos, 0.0)
     }
 
     /// Cosine of the tilt from level (1 when level).

@@ -19,6 +19,18 @@ pub struct FlightModel {
     /// The COM the mixer's torques are about (body frame, from the payload frame's origin,
     /// where the IMU sits), m.
     pub com: Vec2,
+    /// The farthest any part of the vehicle (the footprint's corners, the rail the robots
+    /// ride) is from the payload frame's origin, m: how far below the origin a tilted
+    /// vehicle's lowest point can be (the land detector's and the rotor monitor's "clear of
+    /// the ground").
+    pub reach: f32,
+}
+
+/// The farthest of `points` from the payload frame's origin, m (0 for none).
+pub fn reach_of(points: &[Vec2]) -> f32 {
+    points
+        .iter()
+        .fold(0.0, |m, p| crate::math::max(m, p.norm()))
 }
 
 impl FlightModel {
@@ -53,10 +65,15 @@ impl FlightModel {
             robots.mass,
             robots.max_thrust,
         );
+        let reach = crate::math::max(
+            reach_of(&scenario.payload.footprint),
+            reach_of(rail.vertices()),
+        );
         Ok(Self {
             mixer,
             vehicle,
             com,
+            reach,
         })
     }
 }

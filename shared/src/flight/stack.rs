@@ -275,7 +275,7 @@ impl FlightStack {
             segment: 0,
             segment_time: 0.0,
             phase: FlightPhase::Takeoff,
-            land: LandDetector::new(start.z),
+            land: LandDetector::new(start.z, model.reach),
             saturation: Saturation::default(),
             collective: 0.0,
             ground_z: start.z,
@@ -340,7 +340,8 @@ impl FlightStack {
     /// After a tick's [`Self::step`]: watches the rotors with the accelerometer's specific
     /// force `accel` (body frame, m/s^2), the tick's rotor commands `thrusts` and what the
     /// ESCs tell, `esc` (each rotor's RPM, the rotors they report stopped). The monitor judges
-    /// the vehicle's response only in the air, clear of the ground, and the RPM in the air.
+    /// the vehicle's response only in the air, clear of the ground and not resting on an edge
+    /// ([`LandDetector::settling`]), and the RPM in the air.
     /// Rotors found stopped are flown without from the next tick, and the next tick begins
     /// the landing ([`LandingCause::RotorOut`]; under a descent without position, that descent
     /// goes on). With `imu_trusted` false (the IMU failed: its samples explain nothing) only
@@ -359,7 +360,12 @@ impl FlightStack {
         }
         let n = self.mixer.count();
         let all = if n >= 16 { u16::MAX } else { (1u16 << n) - 1 };
-        let clear = nav.height_above(self.ground_z) > 3.0 * LandDetector::LAND_HEIGHT;
+        // Clear of the ground, and not resting on it: in wind a vehicle leaning into it comes
+        // down on one edge, its origin up to 0.1 m up, and the ground's push there is a
+        // wrench no rotor made. Resting is the land detector's: its lowest point down and
+        // still (a rotor stopping in the air tips the payload fast, and is watched on).
+        let clear = nav.height_above(self.ground_z) > 3.0 * LandDetector::LAND_HEIGHT
+            && !self.land.settling();
         let newly_reported = esc.stopped & all & !self.monitor.out();
         let vehicle = *self.controller.model();
         let found = self.monitor.update(&MonitorInput {
@@ -666,9 +672,13 @@ impl FlightStack {
         let descending = matches!(self.phase, FlightPhase::Land | FlightPhase::Done)
             || self.landing.is_some()
             || steered_down;
-        let contact = self
-            .land
-            .update(position.position, position.velocity, descending, dt);
+        let contact = self.land.update(
+            position.position,
+            position.velocity,
+            nav.sin2_tilt(),
+            descending,
+            dt,
+        );
         if let Some(until) = self.failsafe_until {
             if self.clock >= until {
                 return self.stop(FlightStop::Landed);
@@ -720,7 +730,11 @@ impl FlightStack {
             if self.after_plan < self.config.touchdown_timeout {
                 return None;
             }
-            let near_ground = nav.height_above(self.ground_z) < 3.0 * LandDetector::LAND_HEIGHT;
+            let near_ground = !self.land.clear_of_ground(
+                nav.position.position,
+                nav.sin2_tilt(),
+                3.0 * LandDetector::LAND_HEIGHT,
+            );
             return if near_ground {
                 self.stop(FlightStop::Landed)
             } else {
