@@ -24,6 +24,11 @@ pub struct PlantDepartures {
     pub wind: [f32; 2],
     /// The gusts about it, m/s RMS per horizontal axis (Dryden's first-order form).
     pub gust: f32,
+    /// Whether each rotor's thrust rises near the ground (Cheeseman and Bennett's model).
+    pub ground_effect: bool,
+    /// The pack's internal resistance, Ohm: its voltage falls with the rotors' current and
+    /// each rotor's thrust for its command with the voltage squared.
+    pub battery_sag: f32,
 }
 
 impl PlantDepartures {
@@ -37,6 +42,8 @@ impl PlantDepartures {
         mocap_dropout: 0.0,
         wind: [0.0; 2],
         gust: 0.0,
+        ground_effect: false,
+        battery_sag: 0.0,
     };
 }
 
@@ -58,6 +65,8 @@ pub(crate) struct PlantToml {
     mocap_dropout: Option<f64>,
     wind: Option<Vec<f64>>,
     gust: Option<f64>,
+    ground_effect: Option<bool>,
+    battery_sag: Option<f64>,
 }
 
 /// Largest mean wind per axis, m/s (a strong breeze: no payload of this kind flies in more).
@@ -66,13 +75,15 @@ const MAX_WIND: f64 = 15.0;
 const MAX_GUST: f64 = 5.0;
 
 /// Each key's name, range and what it is (units in the range's words).
-const RANGES: [(&str, f64, f64, &str); 6] = [
+const RANGES: [(&str, f64, f64, &str); 7] = [
     ("rotor_efficiency_spread", 0.0, 0.5, ""),
     ("motor_time_constant", 0.005, 0.5, " s"),
     ("inertia_scale", 0.1, 10.0, ""),
     ("robot_mass_scale", 0.5, 3.0, ""),
     ("mocap_latency", 0.0, 0.5, " s"),
     ("mocap_dropout", 0.0, 0.9, ""),
+    // A fresh 4S pack of this size has some 0.01 to 0.02 Ohm; worn or cold, several times that.
+    ("battery_sag", 0.0, 0.2, " Ohm"),
 ];
 
 impl PlantToml {
@@ -86,6 +97,7 @@ impl PlantToml {
             self.robot_mass_scale,
             self.mocap_latency,
             self.mocap_dropout,
+            self.battery_sag,
         ];
         let defaults = [
             m.rotor_efficiency_spread,
@@ -94,8 +106,9 @@ impl PlantToml {
             m.robot_mass_scale,
             m.mocap_latency,
             m.mocap_dropout,
+            m.battery_sag,
         ];
-        let mut v = [0.0f32; 6];
+        let mut v = [0.0f32; 7];
         for (i, ((name, lo, hi, unit), value)) in RANGES.iter().zip(given).enumerate() {
             v[i] = match value {
                 None => defaults[i],
@@ -136,6 +149,8 @@ impl PlantToml {
             mocap_dropout: v[5],
             wind,
             gust,
+            ground_effect: self.ground_effect.unwrap_or(m.ground_effect),
+            battery_sag: v[6],
         })
     }
 }
@@ -168,6 +183,36 @@ mod tests {
         assert!(
             said.contains("plant.mocap_dropout: 1 is outside 0 to 0.9"),
             "{said}"
+        );
+    }
+
+    #[test]
+    fn ground_effect_and_the_packs_sag_are_read_and_a_sag_out_of_range_is_named() {
+        let given: PlantToml =
+            toml::from_str("ground_effect = true\nbattery_sag = 0.03").expect("parses");
+        let d = given.departures().expect("in range");
+        assert!(d.ground_effect);
+        assert_eq!(d.battery_sag, 0.03);
+        assert_eq!(d.gust, 0.0);
+        let bad: PlantToml = toml::from_str("battery_sag = 0.5").expect("parses");
+        let said = bad.departures().expect_err("refused");
+        assert!(
+            said.contains("plant.battery_sag: 0.5 is outside 0 to 0.2 Ohm"),
+            "{said}"
+        );
+        let negative: PlantToml = toml::from_str("battery_sag = -0.01").expect("parses");
+        assert!(
+            negative
+                .departures()
+                .expect_err("refused")
+                .contains("plant.battery_sag")
+        );
+        let Err(not_a_bool) = toml::from_str::<PlantToml>("ground_effect = 1") else {
+            panic!("a number for ground_effect is refused");
+        };
+        assert!(
+            not_a_bool.to_string().contains("ground_effect"),
+            "{not_a_bool}"
         );
     }
 }

@@ -149,6 +149,8 @@ fn the_firmware_flies_a_plant_that_departs_from_the_model_as_the_host_does() {
         mocap_dropout: 0.1,
         wind: [2.0, 0.0],
         gust: 0.5,
+        ground_effect: false,
+        battery_sag: 0.0,
     };
     let setup = MissionSetup {
         plant: loaded.plant,
