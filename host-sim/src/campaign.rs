@@ -85,7 +85,7 @@ impl Dispersion {
         mocap_dropout: [0.0, 0.05],
         wind: [-1.0, 1.0],
         gust: [0.0, 0.3],
-        battery_sag: [0.0, 0.03],
+        battery_sag: [0.0, 0.01],
         ground_effect: 0.5,
     };
 

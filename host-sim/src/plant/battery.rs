@@ -6,8 +6,8 @@
 //! `T^1.5 / sqrt(2 rho A)` (J. G. Leishman, Principles of Helicopter Aerodynamics, ch. 2) over
 //! the propeller's figure of merit ([`FIGURE_OF_MERIT`]) and the motor and ESC's efficiency
 //! ([`DRIVE_EFFICIENCY`]): for the 10-inch propeller, 4.3 g/W at its largest thrust (14.2 N,
-//! 23 A at 14.8 V) and 6 g/W at half of it, as 10-inch propellers on 4S measure on thrust
-//! stands.
+//! 23 A at 14.8 V) and 6 g/W at half of it. The robots' motor is not described; these figures
+//! are to be checked against a thrust-stand table of the real motor and propeller.
 //!
 //! The model's pack ([`PACK_VOLTS`], [`PACK_SAG_VOLTS`]) is the one the command-to-thrust map
 //! was measured with: its reading sags with the load, its rotors do not feel it. The `[plant]`

@@ -4,10 +4,9 @@
 //! above the ground makes `T_IGE / T_OGE = 1 / (1 - (R / 4z)^2)` of the thrust it makes clear
 //! of the ground at the same power. The formula diverges at `z = R / 4`; the gain is held at its
 //! value at `z = R / 2`, [`MAX_GAIN`] (4/3), below that: the method of images it rests on is not
-//! meant for a rotor that close, and small propellers measured down to about half a radius gain
-//! some 1.3 (Sanchez-Cuevas, Heredia and Ollero, "Characterization of the aerodynamic ground
-//! effect and its influence in multirotor control", Int. J. Aerospace Engineering, 2017,
-//! Fig. 3, comparing the same model with their rotors).
+//! meant for a rotor that close (Sanchez-Cuevas, Heredia and Ollero, "Characterization of the
+//! aerodynamic ground effect and its influence in multirotor control", Int. J. Aerospace
+//! Engineering, 2017, compare the same model with small rotors measured near the ground).
 
 /// A rotor's radius, m: the 10-inch propeller the plant assumes
 /// ([`super::RPM_AT_MAX_THRUST`]).
