@@ -71,6 +71,10 @@ pub struct Dispersion {
     pub imu_vibration: [f32; 2],
     /// `gyro_vibration`, rad/s RMS.
     pub gyro_vibration: [f32; 2],
+    /// `battery_sag`, Ohm.
+    pub battery_sag: [f32; 2],
+    /// The share of trials flown with `ground_effect` on, 0 to 1.
+    pub ground_effect: f32,
 }
 
 impl Dispersion {
@@ -87,6 +91,8 @@ impl Dispersion {
         gust: [0.0, 0.3],
         imu_vibration: [0.0, 15.0],
         gyro_vibration: [0.0, 0.3],
+        battery_sag: [0.0, 0.01],
+        ground_effect: 0.5,
     };
 
     /// A dispersion file (TOML: each key a `[low, high]` range, the defaults for what it does
@@ -111,8 +117,14 @@ impl Dispersion {
                 ));
             }
         }
+        let share = self.ground_effect;
+        if !(0.0..=1.0).contains(&share) {
+            return Err(format!(
+                "ground_effect: {share} is not a share of the trials from 0 to 1"
+            ));
+        }
         for end in [0, 1] {
-            let plant = self.at(|[lo, hi]| if end == 0 { lo } else { hi });
+            let plant = self.at(end == 1, |[lo, hi]| if end == 0 { lo } else { hi });
             let text = plant_toml(&plant);
             let probe = format!("{}\n[plant]\n{text}", CASES[0].1);
             scenario_file::parse(&probe, std::path::Path::new("dispersion"))
@@ -121,7 +133,7 @@ impl Dispersion {
         Ok(())
     }
 
-    fn ranges(&self) -> [(&'static str, [f32; 2]); 10] {
+    fn ranges(&self) -> [(&'static str, [f32; 2]); 11] {
         [
             ("rotor_efficiency_spread", self.rotor_efficiency_spread),
             ("motor_time_constant", self.motor_time_constant),
@@ -133,11 +145,13 @@ impl Dispersion {
             ("gust", self.gust),
             ("imu_vibration", self.imu_vibration),
             ("gyro_vibration", self.gyro_vibration),
+            ("battery_sag", self.battery_sag),
         ]
     }
 
-    /// The departures with each value `pick(range)` (both wind components alike).
-    fn at(&self, mut pick: impl FnMut([f32; 2]) -> f32) -> PlantDepartures {
+    /// The departures with each value `pick(range)` (both wind components alike) and ground
+    /// effect on or off.
+    fn at(&self, ground_effect: bool, mut pick: impl FnMut([f32; 2]) -> f32) -> PlantDepartures {
         let wind = pick(self.wind);
         PlantDepartures {
             rotor_efficiency_spread: pick(self.rotor_efficiency_spread),
@@ -150,12 +164,15 @@ impl Dispersion {
             gust: pick(self.gust),
             imu_vibration: pick(self.imu_vibration),
             gyro_vibration: pick(self.gyro_vibration),
+            battery_sag: pick(self.battery_sag),
+            ground_effect,
         }
     }
 
     /// A plant drawn from the dispersion with `rng`.
     pub fn draw(&self, rng: &mut ChaCha8Rng) -> PlantDepartures {
-        self.at(|[lo, hi]| {
+        let ground_effect = rng.random::<f32>() < self.ground_effect;
+        self.at(ground_effect, |[lo, hi]| {
             if hi > lo {
                 rng.random_range(lo..=hi)
             } else {
@@ -174,7 +191,7 @@ impl Default for Dispersion {
 /// `plant` as the keys of a `[plant]` section.
 fn plant_toml(p: &PlantDepartures) -> String {
     format!(
-        "rotor_efficiency_spread = {}\nmotor_time_constant = {}\ninertia_scale = {}\nrobot_mass_scale = {}\nmocap_latency = {}\nmocap_dropout = {}\nwind = [{}, {}]\ngust = {}\nimu_vibration = {}\ngyro_vibration = {}\n",
+        "rotor_efficiency_spread = {}\nmotor_time_constant = {}\ninertia_scale = {}\nrobot_mass_scale = {}\nmocap_latency = {}\nmocap_dropout = {}\nwind = [{}, {}]\ngust = {}\nimu_vibration = {}\ngyro_vibration = {}\nbattery_sag = {}\nground_effect = {}\n",
         p.rotor_efficiency_spread,
         p.motor_time_constant,
         p.inertia_scale,
@@ -185,7 +202,9 @@ fn plant_toml(p: &PlantDepartures) -> String {
         p.wind[1],
         p.gust,
         p.imu_vibration,
-        p.gyro_vibration
+        p.gyro_vibration,
+        p.battery_sag,
+        p.ground_effect
     )
 }
 
@@ -442,6 +461,27 @@ mod tests {
         let d = Dispersion::DEFAULT;
         let p = a.0.plant;
         assert!((d.inertia_scale[0]..=d.inertia_scale[1]).contains(&p.inertia_scale));
+        assert!((d.battery_sag[0]..=d.battery_sag[1]).contains(&p.battery_sag));
+    }
+
+    #[test]
+    fn ground_effect_is_on_in_its_share_of_the_trials() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let share = |d: Dispersion, rng: &mut ChaCha8Rng| {
+            (0..400).filter(|_| d.draw(rng).ground_effect).count()
+        };
+        let never = Dispersion {
+            ground_effect: 0.0,
+            ..Dispersion::DEFAULT
+        };
+        let always = Dispersion {
+            ground_effect: 1.0,
+            ..Dispersion::DEFAULT
+        };
+        assert_eq!(share(never, &mut rng), 0);
+        assert_eq!(share(always, &mut rng), 400);
+        let half = share(Dispersion::DEFAULT, &mut rng);
+        assert!((160..240).contains(&half), "{half} of 400");
     }
 
     #[test]
@@ -477,6 +517,13 @@ mod tests {
         let mut d = Dispersion::DEFAULT;
         d.inertia_scale = [0.5, 50.0];
         assert!(d.check().expect_err("refused").contains("inertia_scale"));
+        let mut d = Dispersion::DEFAULT;
+        d.battery_sag = [0.0, 0.5];
+        let said = d.check().expect_err("refused");
+        assert!(said.contains("battery_sag"), "{said}");
+        let mut d = Dispersion::DEFAULT;
+        d.ground_effect = 1.5;
+        assert!(d.check().expect_err("refused").contains("ground_effect"));
         assert_eq!(Dispersion::DEFAULT.check(), Ok(()));
         let e = toml::from_str::<Dispersion>("wind_speed = [0.0, 1.0]").expect_err("refused");
         assert!(e.message().contains("wind_speed"));

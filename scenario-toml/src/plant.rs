@@ -29,6 +29,11 @@ pub struct PlantDepartures {
     pub imu_vibration: f32,
     /// The same on the raw gyro, rad/s RMS per axis.
     pub gyro_vibration: f32,
+    /// Whether each rotor's thrust rises near the ground (Cheeseman and Bennett's model).
+    pub ground_effect: bool,
+    /// The pack's internal resistance, Ohm: its voltage falls with the rotors' current and
+    /// each rotor's thrust for its command with the voltage squared.
+    pub battery_sag: f32,
 }
 
 impl PlantDepartures {
@@ -44,6 +49,8 @@ impl PlantDepartures {
         gust: 0.0,
         imu_vibration: 0.0,
         gyro_vibration: 0.0,
+        ground_effect: false,
+        battery_sag: 0.0,
     };
 }
 
@@ -67,6 +74,8 @@ pub(crate) struct PlantToml {
     gyro_vibration: Option<f64>,
     wind: Option<Vec<f64>>,
     gust: Option<f64>,
+    ground_effect: Option<bool>,
+    battery_sag: Option<f64>,
 }
 
 /// Largest mean wind per axis, m/s (a strong breeze: no payload of this kind flies in more).
@@ -75,7 +84,7 @@ const MAX_WIND: f64 = 15.0;
 const MAX_GUST: f64 = 5.0;
 
 /// Each key's name, range and what it is (units in the range's words).
-const RANGES: [(&str, f64, f64, &str); 8] = [
+const RANGES: [(&str, f64, f64, &str); 9] = [
     ("rotor_efficiency_spread", 0.0, 0.5, ""),
     ("motor_time_constant", 0.005, 0.5, " s"),
     ("inertia_scale", 0.1, 10.0, ""),
@@ -84,6 +93,8 @@ const RANGES: [(&str, f64, f64, &str); 8] = [
     ("mocap_dropout", 0.0, 0.9, ""),
     ("imu_vibration", 0.0, 60.0, " m/s^2"),
     ("gyro_vibration", 0.0, 3.0, " rad/s"),
+    // A fresh 4S pack of this size has some 0.01 to 0.02 Ohm; worn or cold, several times that.
+    ("battery_sag", 0.0, 0.2, " Ohm"),
 ];
 
 impl PlantToml {
@@ -99,6 +110,7 @@ impl PlantToml {
             self.mocap_dropout,
             self.imu_vibration,
             self.gyro_vibration,
+            self.battery_sag,
         ];
         let defaults = [
             m.rotor_efficiency_spread,
@@ -109,6 +121,7 @@ impl PlantToml {
             m.mocap_dropout,
             m.imu_vibration,
             m.gyro_vibration,
+            m.battery_sag,
         ];
         let mut v = [0.0f32; RANGES.len()];
         for (i, ((name, lo, hi, unit), value)) in RANGES.iter().zip(given).enumerate() {
@@ -153,6 +166,8 @@ impl PlantToml {
             gust,
             imu_vibration: v[6],
             gyro_vibration: v[7],
+            ground_effect: self.ground_effect.unwrap_or(m.ground_effect),
+            battery_sag: v[8],
         })
     }
 }
@@ -196,6 +211,36 @@ mod tests {
         assert!(
             said.contains("plant.mocap_dropout: 1 is outside 0 to 0.9"),
             "{said}"
+        );
+    }
+
+    #[test]
+    fn ground_effect_and_the_packs_sag_are_read_and_a_sag_out_of_range_is_named() {
+        let given: PlantToml =
+            toml::from_str("ground_effect = true\nbattery_sag = 0.03").expect("parses");
+        let d = given.departures().expect("in range");
+        assert!(d.ground_effect);
+        assert_eq!(d.battery_sag, 0.03);
+        assert_eq!(d.gust, 0.0);
+        let bad: PlantToml = toml::from_str("battery_sag = 0.5").expect("parses");
+        let said = bad.departures().expect_err("refused");
+        assert!(
+            said.contains("plant.battery_sag: 0.5 is outside 0 to 0.2 Ohm"),
+            "{said}"
+        );
+        let negative: PlantToml = toml::from_str("battery_sag = -0.01").expect("parses");
+        assert!(
+            negative
+                .departures()
+                .expect_err("refused")
+                .contains("plant.battery_sag")
+        );
+        let Err(not_a_bool) = toml::from_str::<PlantToml>("ground_effect = 1") else {
+            panic!("a number for ground_effect is refused");
+        };
+        assert!(
+            not_a_bool.to_string().contains("ground_effect"),
+            "{not_a_bool}"
         );
     }
 }

@@ -151,6 +151,8 @@ fn the_firmware_flies_a_plant_that_departs_from_the_model_as_the_host_does() {
         gust: 0.5,
         imu_vibration: 10.0,
         gyro_vibration: 0.3,
+        ground_effect: true,
+        battery_sag: 0.01,
     };
     let setup = MissionSetup {
         plant: loaded.plant,

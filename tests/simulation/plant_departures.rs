@@ -7,8 +7,11 @@
 use crate::common::{host_sim, scenario_path};
 use host_sim::harness::{self, FlightSetup, FormationChoice};
 use host_sim::mission_run::{self, MissionOutcome, MissionSetup};
+use host_sim::plant::PLATE_THICKNESS;
+use host_sim::plant::ground_effect::{self, ROTOR_ABOVE_PLATE, ROTOR_RADIUS};
 use host_sim::scenario_file::{self, PlantDepartures};
 use shared::control::allocation::MixerKind;
+use shared::mission::AbortReason;
 
 /// The paper's six cases (docs/commands.md#campaign).
 const PAPER_CASES: [&str; 6] = [
@@ -87,6 +90,20 @@ fn the_models_values_fly_the_model_and_each_departure_changes_the_flight() {
             },
         ),
         ("gust", PlantDepartures { gust: 1.0, ..m }),
+        (
+            "ground_effect",
+            PlantDepartures {
+                ground_effect: true,
+                ..m
+            },
+        ),
+        (
+            "battery_sag",
+            PlantDepartures {
+                battery_sag: 0.02,
+                ..m
+            },
+        ),
     ];
     for (key, plant) in departures {
         let o = mission(plant);
@@ -122,6 +139,8 @@ fn every_departure_at_once_still_delivers_the_papers_case() {
         gust: 0.5,
         imu_vibration: 10.0,
         gyro_vibration: 0.3,
+        ground_effect: true,
+        battery_sag: 0.01,
     });
     assert!(o.delivered, "{} m", o.final_position_error_m);
     assert!(o.final_position_error_m < 0.1);
@@ -207,9 +226,11 @@ fn the_section_in_a_file_reaches_mission_and_fly_and_a_section_of_model_values_c
         "max_tilt_deg",
     ];
     let pick = |v: &serde_json::Value| keys.map(|k| v[k].clone());
+    let loads = write("loads.toml", "ground_effect = true\nbattery_sag = 0.01\n");
     let plain_m = json(&["mission", "--scenario", &plain, "--json"]);
     let model_m = json(&["mission", "--scenario", &model, "--json"]);
     let heavy_m = json(&["mission", "--scenario", &heavy, "--json"]);
+    let loads_m = json(&["mission", "--scenario", &loads, "--json"]);
     assert_eq!(
         pick(&plain_m),
         pick(&model_m),
@@ -217,6 +238,13 @@ fn the_section_in_a_file_reaches_mission_and_fly_and_a_section_of_model_values_c
     );
     assert_ne!(pick(&plain_m), pick(&heavy_m), "mission reads [plant]");
     assert_eq!(heavy_m["delivered"], true);
+    assert_ne!(pick(&plain_m), pick(&loads_m), "mission reads the loads");
+    assert_eq!(loads_m["delivered"], true);
+    let volts = |v: &serde_json::Value| v["min_battery_volts"].as_f64().expect("volts");
+    assert!(
+        volts(&loads_m) < volts(&plain_m),
+        "the pack's sag is in the voltage read"
+    );
     let fly = |path: &str| {
         json(&[
             "fly",
@@ -237,6 +265,11 @@ fn the_section_in_a_file_reaches_mission_and_fly_and_a_section_of_model_values_c
     let (plain_f, model_f, heavy_f) = (fly(&plain), fly(&model), fly(&heavy));
     assert_eq!(pick_f(&plain_f), pick_f(&model_f));
     assert_ne!(pick_f(&plain_f), pick_f(&heavy_f), "fly reads [plant]");
+    assert_ne!(
+        pick_f(&plain_f),
+        pick_f(&fly(&loads)),
+        "fly reads the loads"
+    );
     // A value out of range is refused naming the key, as every scenario key is.
     let bad = write("bad.toml", "inertia_scale = 50.0\n");
     let out = host_sim(&["validate", "--scenario", &bad]);
@@ -244,6 +277,14 @@ fn the_section_in_a_file_reaches_mission_and_fly_and_a_section_of_model_values_c
     let said = String::from_utf8_lossy(&out.stderr);
     assert!(
         said.contains("plant.inertia_scale: 50 is outside 0.1 to 10"),
+        "{said}"
+    );
+    let bad = write("bad-sag.toml", "battery_sag = 0.5\n");
+    let out = host_sim(&["validate", "--scenario", &bad]);
+    assert_eq!(out.status.code(), Some(1));
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("plant.battery_sag: 0.5 is outside 0 to 0.2 Ohm"),
         "{said}"
     );
     let _ = std::fs::remove_dir_all(&dir);
@@ -280,5 +321,93 @@ fn fly_takes_the_departures_too() {
             .zip(&lagging.samples)
             .any(|(a, b)| a.position != b.position),
         "the lag changes the flight"
+    );
+}
+
+/// Ground effect raises each rotor's thrust by some 9 % with the payload resting (its rotors
+/// 0.11 m up): each pair lifts the payload on less command than over the model's plant, so the
+/// lift readings, and the mass believed from them, come out low. The flight still delivers:
+/// the controller's integrators make up the weight the mixer's model misses.
+#[test]
+fn ground_effect_lowers_the_lift_readings_and_the_mission_still_delivers() {
+    let model = mission(PlantDepartures::MODEL);
+    let near = mission(PlantDepartures {
+        ground_effect: true,
+        ..PlantDepartures::MODEL
+    });
+    assert!(
+        near.delivered,
+        "not delivered ({} m)",
+        near.final_position_error_m
+    );
+    assert!(!near.dropped);
+    let resting = ground_effect::gain(ROTOR_RADIUS, PLATE_THICKNESS + ROTOR_ABOVE_PLATE);
+    assert!(resting > 1.05, "the gain on the ground, {resting}");
+    assert_eq!(near.lifts.len(), model.lifts.len());
+    let mut ratios = Vec::new();
+    for (with, without) in near.lifts.iter().zip(&model.lifts) {
+        assert_eq!(with.0, without.0, "the same pairs lift");
+        let (Some(a), Some(b)) = (with.1, without.1) else {
+            panic!("every pair lifts: {with:?} {without:?}");
+        };
+        assert!(
+            a < b,
+            "pair {}: {a} N with ground effect, {b} N without",
+            with.0
+        );
+        ratios.push(a / b);
+    }
+    // The pairs' command at lift-off falls by about the gain: half its amount at least.
+    let mean = ratios.iter().sum::<f32>() / ratios.len() as f32;
+    assert!(mean < 1.0 - 0.5 * (resting - 1.0), "{ratios:?}");
+    let (Some(believed), Some(model_believed)) = (near.estimate, model.estimate) else {
+        panic!("both estimate the payload");
+    };
+    assert!(
+        believed[2] < model_believed[2],
+        "the mass believed is lower"
+    );
+}
+
+/// The pack's sag: a fresh pack's resistance (0.02 Ohm) lowers the voltage read by its R I and
+/// still delivers; 0.2 Ohm cannot feed the rotors the payload needs at all (its largest power,
+/// V0^2 / 4R = 320 W, is below the hover's ~560 W): the mission stops with a reason, it does
+/// not fly on.
+#[test]
+fn the_packs_sag_lowers_the_voltage_a_fresh_pack_delivers_and_a_dead_one_is_a_named_failure() {
+    let model = mission(PlantDepartures::MODEL);
+    let fresh = mission(PlantDepartures {
+        battery_sag: 0.02,
+        ..PlantDepartures::MODEL
+    });
+    assert!(
+        fresh.delivered,
+        "not delivered ({} m)",
+        fresh.final_position_error_m
+    );
+    assert!(
+        fresh.min_battery_volts < model.min_battery_volts - 0.3,
+        "{} V against the model's {} V",
+        fresh.min_battery_volts,
+        model.min_battery_volts
+    );
+    let dead = mission(PlantDepartures {
+        battery_sag: 0.2,
+        ..PlantDepartures::MODEL
+    });
+    assert!(!dead.delivered);
+    assert!(!dead.dropped);
+    assert!(!dead.flew, "it never leaves the ground");
+    assert!(
+        matches!(
+            dead.aborted,
+            Some(
+                AbortReason::BatteryLow { .. }
+                    | AbortReason::BatteryCritical { .. }
+                    | AbortReason::TakeoffFailed { .. }
+            )
+        ),
+        "{:?}",
+        dead.aborted
     );
 }

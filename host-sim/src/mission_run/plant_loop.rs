@@ -301,7 +301,8 @@ pub fn fly(
             record.gcs_lost_at = Some(t);
         }
         let gcs_heartbeat = !gcs_lost && record.ticks.is_multiple_of(u64::from(CONTROL_HZ));
-        // The pack: its open-circuit voltage, less a sag in proportion to the thrust.
+        // The pack: its open-circuit voltage, less the model pack's sag in proportion to the
+        // thrust and the plant's sag beyond it (`[plant]` battery_sag).
         let open_circuit = match setup.battery_drop {
             Some(drop) if drop.onset.begun(t, takeoff_at) => {
                 if record.battery_dropped_at.is_none() {
@@ -313,7 +314,9 @@ pub fn fly(
         };
         let full = robots.max_thrust * n as f32;
         let load = record.final_thrusts.iter().sum::<f32>() / full.max(f32::MIN_POSITIVE);
-        let battery_volts = (open_circuit - PACK_SAG_VOLTS * load.clamp(0.0, 1.0)).max(0.0);
+        let battery_volts =
+            (open_circuit - PACK_SAG_VOLTS * load.clamp(0.0, 1.0) - plant.battery_sag_volts())
+                .max(0.0);
         record.min_battery_volts = record.min_battery_volts.min(battery_volts);
         let out = autopilot.step(&Sensed {
             time_us: plant.time_us(),

@@ -125,12 +125,8 @@ pub struct BatteryDrop {
     pub onset: Onset,
 }
 
-/// The simulated pack's open-circuit voltage, V: a 4S lithium-polymer pack near full (the
-/// prototype's pack is not described; a 4S pack fits its 14.2 N rotors).
-pub const PACK_VOLTS: f32 = 16.0;
-/// The pack's sag with every rotor at full thrust, V (about 20 mOhm at 40 A); in proportion
-/// below that.
-pub const PACK_SAG_VOLTS: f32 = 0.8;
+/// The simulated pack: the plant's ([`crate::plant::battery`]).
+pub use crate::plant::battery::{PACK_SAG_VOLTS, PACK_VOLTS};
 
 /// A load that shifts in flight: the payload's true COM moves by `offset` over
 /// [`LOAD_SHIFT_TIME`], starting `after` seconds after take-off began (a mass sliding along

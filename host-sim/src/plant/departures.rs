@@ -1,6 +1,7 @@
 //! The scenario's `[plant]` departures applied to the physics plant
 //! (docs/formats.md#the-plant-section): each rotor's efficiency drawn from the run's seed, the
-//! motor lag, the payload's inertia and the robots' true mass. (Motion capture's latency and
+//! motor lag, the payload's inertia, the robots' true mass, the wind, ground effect and the
+//! pack's sag. (Motion capture's latency and
 //! dropout are the sensors': [`super::sensors::Sensors::with_mocap_departures`].)
 
 use rand::{RngExt, SeedableRng};
@@ -36,6 +37,8 @@ impl ApplyDepartures for PlantDepartures {
             gust: self.gust,
             seed,
         };
+        config.ground_effect = self.ground_effect;
+        config.pack_resistance = self.battery_sag;
     }
 }
 
@@ -56,9 +59,13 @@ mod tests {
         assert!(model.efficiency.is_empty());
         assert_eq!(model.robot_mass, 0.1);
         assert_eq!(model.inertia_scale, 1.0);
+        assert!(!model.ground_effect);
+        assert_eq!(model.pack_resistance, 0.0);
         let d = PlantDepartures {
             rotor_efficiency_spread: 0.08,
             robot_mass_scale: 1.3,
+            ground_effect: true,
+            battery_sag: 0.03,
             ..PlantDepartures::MODEL
         };
         let (mut a, mut b, mut c) = (config(), config(), config());
@@ -70,5 +77,7 @@ mod tests {
         assert_eq!(a.efficiency.len(), 8);
         assert!(a.efficiency.iter().all(|e| (0.92..=1.08).contains(e)));
         assert!((a.robot_mass - 0.13).abs() < 1e-6);
+        assert!(a.ground_effect);
+        assert_eq!(a.pack_resistance, 0.03);
     }
 }

@@ -18,10 +18,17 @@
 //! a lift's effect on the payload, as on the real rack. The robots can be moved along the rail
 //! ([`Plant::set_rotor_points`]).
 //!
+//! Two departures act on the rotors' thrust when the scenario asks for them: ground effect,
+//! each rotor's thrust raised by its rotor's height above the ground ([`ground_effect`]), and
+//! the pack's sag, each rotor's thrust for its command lowered by the voltage the rotors'
+//! current leaves ([`battery`]).
+//!
 //! Frames: rapier runs directly in the flight software's frames: world NED (gravity along +z,
 //! the ground's top face at z = 0) and body FRD, so nothing is converted.
 
+pub mod battery;
 pub mod departures;
+pub mod ground_effect;
 pub mod sensors;
 pub mod vibration;
 pub mod wind;
@@ -80,6 +87,11 @@ pub struct PlantConfig {
     pub inertia_scale: f32,
     /// The wind and its gusts ([`wind::Wind`]; calm: the model).
     pub wind: wind::WindConfig,
+    /// Whether each rotor's thrust rises near the ground ([`ground_effect`]; off: the model).
+    pub ground_effect: bool,
+    /// The pack's internal resistance beyond the model pack's, Ohm ([`battery`]; 0: the
+    /// model).
+    pub pack_resistance: f32,
 }
 
 /// The truth, as the sensors see it.
@@ -109,6 +121,8 @@ pub struct Plant {
     steps: u64,
     /// The air's motion over the payload.
     wind: wind::Wind,
+    /// The pack's sag beyond the model pack's in the last step, V.
+    sag_volts: f32,
 }
 
 /// Mass properties of payload and robots: the payload's mass at its true COM with the inertia
@@ -166,6 +180,8 @@ impl PlantConfig {
         motor_time_constant: MOTOR_TIME_CONSTANT,
         inertia_scale: 1.0,
         wind: wind::WindConfig::CALM,
+        ground_effect: false,
+        pack_resistance: 0.0,
     };
 }
 
@@ -227,6 +243,7 @@ impl Plant {
             play: vec![(0.0, 0.0); n],
             steps: 0,
             wind: wind::Wind::new(&config_wind),
+            sag_volts: 0.0,
         }
     }
 
@@ -278,6 +295,12 @@ impl Plant {
         &self.thrusts
     }
 
+    /// How far the pack's voltage fell in the last step beyond the model pack's own sag, V
+    /// (the `battery_sag` resistance times the rotors' current; 0 without it).
+    pub fn battery_sag_volts(&self) -> f32 {
+        self.sag_volts
+    }
+
     /// Total mass of payload and robots, kg.
     pub fn total_mass(&self) -> f32 {
         self.config.mass + self.config.robot_mass * self.config.rotor_points.len() as f32
@@ -324,7 +347,21 @@ impl Plant {
     /// One physics step of `PHYSICS_DT` with rotor commands `commands` (N, commanded units).
     pub fn step(&mut self, commands: &[f32]) {
         let alpha = (PHYSICS_DT / self.config.motor_time_constant.max(PHYSICS_DT)).min(1.0);
-        let scale = 1.0 / self.config.map_error;
+        let mut scale = 1.0 / self.config.map_error;
+        if self.config.pack_resistance > 0.0 {
+            // The pack's voltage for the rotors' draw now, and the thrust it leaves them.
+            let pack = battery::Pack {
+                resistance: self.config.pack_resistance,
+            };
+            let power: f32 = self
+                .thrusts
+                .iter()
+                .map(|&t| battery::electrical_power(t))
+                .sum();
+            let volts = pack.terminal_volts(power);
+            self.sag_volts = battery::PACK_VOLTS - volts;
+            scale *= battery::Pack::thrust_factor(volts);
+        }
         for (i, ((t, &c), &health)) in self
             .thrusts
             .iter_mut()
@@ -346,6 +383,7 @@ impl Plant {
         let rotation = pose.rotation;
         let mut yaw_torque = 0.0;
         let weight = self.config.robot_mass * GRAVITY;
+        let rotor_z = -(PLATE_THICKNESS + ground_effect::ROTOR_ABOVE_PLATE);
         for (i, (p, &t)) in self
             .config
             .rotor_points
@@ -354,14 +392,22 @@ impl Plant {
             .enumerate()
         {
             let at = pose * Vector::new(p.x, p.y, -0.5 * PLATE_THICKNESS);
+            // Near the ground the rotor makes more for the same power: its plane's height
+            // (NED: the ground's top face at z = 0).
+            let lift = if self.config.ground_effect {
+                let rotor = pose * Vector::new(p.x, p.y, rotor_z);
+                t * ground_effect::gain(ground_effect::ROTOR_RADIUS, -rotor.z)
+            } else {
+                t
+            };
             // The robot in its play: its own vertical motion relative to the payload.
             let (mut x, mut v) = self.play[i];
-            let net = t - weight;
+            let net = lift - weight;
             let engaged_up = x >= BACKLASH && net >= 0.0;
             let resting = x <= 0.0 && net <= 0.0;
             let transmitted = if engaged_up || resting {
                 v = 0.0;
-                t
+                lift
             } else {
                 v += net / self.config.robot_mass * PHYSICS_DT;
                 x = (x + v * PHYSICS_DT).clamp(0.0, BACKLASH);
