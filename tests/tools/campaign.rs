@@ -246,6 +246,39 @@ fn two_shards_merged_give_exactly_the_unsharded_campaigns_report() {
     args.push("--json");
     let merged = json(&args);
     assert_eq!(merged, whole, "the merged shards are the whole campaign");
+    // A trial's file flies again as the campaign flew it.
+    let first = &results[0];
+    let file = dir.join("trial-0.toml");
+    let text = campaign::trial_file(
+        &CampaignSetup {
+            trials: 6,
+            ..setup(5, true)
+        },
+        0,
+    )
+    .expect("trial 0's file");
+    std::fs::write(&file, text).expect("written");
+    let seed = first["mission_seed"].to_string();
+    let mut args = vec![
+        "mission",
+        "--scenario",
+        file.to_str().expect("a path"),
+        "--seed",
+        &seed,
+        "--json",
+    ];
+    if let Some(fault) = first["fault"].as_str() {
+        args.extend(["--inject", fault]);
+    }
+    let again = json(&args);
+    assert_eq!(again["aborted"], first["aborted"], "{again}");
+    if let Some(error) = first["final_error_m"].as_f64() {
+        let replayed = again["final_position_error_m"].as_f64().expect("an error");
+        assert!(
+            (replayed - error).abs() < 1e-6,
+            "{replayed} m, was {error} m"
+        );
+    }
     // The same shard twice is not the campaign.
     let twice = host_sim(&["campaign", "merge", &files[0], &files[0]]);
     assert_eq!(twice.status.code(), Some(1));

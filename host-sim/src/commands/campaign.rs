@@ -110,6 +110,21 @@ fn show(out: &CampaignOutput, json: bool) -> Result<Outcome> {
         for (why, n) in &r.aborted {
             say!("  aborted {n}x: {why}")?;
         }
+        if r.faulted > 0 {
+            say!(
+                "given a fault: {} trials (an abort there is no false alarm)",
+                r.faulted
+            )?;
+            for (kind, t) in &r.faults {
+                say!(
+                    "  {kind}: {} of {} found, {} dropped, {} missed",
+                    t.found,
+                    t.trials,
+                    t.dropped,
+                    t.missed
+                )?;
+            }
+        }
         let e = r.final_error_m;
         let m = |v: Option<f32>| v.map_or("none".to_string(), |v| format!("{v:.3} m"));
         say!(

@@ -6,8 +6,8 @@
 use anyhow::Result;
 use plotters::prelude::*;
 
-use super::canvas::{Area, Figure, Swatch, colour, draw_error, legend, span, tick, titled};
-use crate::campaign::TrialResult;
+use super::canvas::{Area, Figure, GREY, Swatch, colour, draw_error, legend, span, tick, titled};
+use crate::campaign::{DELIVERED_WITHIN, TrialResult};
 
 /// What came of a trial, as the figure colours it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -187,6 +187,16 @@ impl Figure for CampaignOutcomes<'_> {
                 .y_desc("final error, m")
                 .draw()
                 .map_err(draw_error)?;
+            // The delivery distance, dashed.
+            let within = DELIVERED_WITHIN.clamp(lo, hi);
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(x0 - pad, within), (x1 + pad, within)],
+                    6,
+                    4,
+                    GREY.stroke_width(1),
+                ))
+                .map_err(draw_error)?;
             for r in self.results {
                 let x = (parameter.value)(r);
                 if !x.is_finite() {
@@ -212,13 +222,17 @@ impl Figure for CampaignOutcomes<'_> {
         }
         // The legend in the last cell, with the counts.
         if let Some(cell) = cells.last() {
-            let entries: Vec<(String, Swatch)> = Outcome::ALL
+            let mut entries: Vec<(String, Swatch)> = Outcome::ALL
                 .iter()
                 .map(|&o| {
                     let n = self.results.iter().filter(|r| Outcome::of(r) == o).count();
                     (format!("{} ({n})", o.label()), o.swatch())
                 })
                 .collect();
+            entries.push((
+                format!("delivered within {DELIVERED_WITHIN} m"),
+                Swatch::Dashed(GREY),
+            ));
             legend(cell, 30, &entries)?;
         }
         Ok(())
