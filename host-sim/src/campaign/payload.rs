@@ -90,9 +90,12 @@ pub fn draw(name: &str, rng: &mut ChaCha8Rng) -> Result<RandomPayload> {
     let robots = rng.random_range(ROBOTS);
     let mut last = String::new();
     for attempt in 1..=MAX_ATTEMPTS {
-        let Some((toml, vertices)) = candidate(name, robots, rng) else {
-            last = "the drawn rail runs too close to the footprint".to_string();
-            continue;
+        let (toml, vertices) = match candidate(name, robots, rng) {
+            Ok(drawn) => drawn,
+            Err(why) => {
+                last = why.to_string();
+                continue;
+            }
         };
         let loaded = match scenario_file::parse(&toml, std::path::Path::new(name)) {
             Ok(l) => l,
@@ -162,9 +165,12 @@ fn numbers_toml(values: &[f32]) -> String {
     format!("[{}]", each.join(", "))
 }
 
-/// One draw for `robots` robots: the scenario file and its vertex count, or `None` when the
-/// rail runs too close to the footprint.
-fn candidate(name: &str, robots: usize, rng: &mut ChaCha8Rng) -> Option<(String, usize)> {
+/// One draw for `robots` robots: the scenario file and its vertex count, or why there is none.
+fn candidate(
+    name: &str,
+    robots: usize,
+    rng: &mut ChaCha8Rng,
+) -> Result<(String, usize), &'static str> {
     let n = rng.random_range(VERTICES);
     let step = std::f32::consts::TAU / n as f32;
     let turn: f32 = rng.random_range(0.0..std::f32::consts::TAU);
@@ -202,9 +208,11 @@ fn candidate(name: &str, robots: usize, rng: &mut ChaCha8Rng) -> Option<(String,
             .iter()
             .all(|&p| distance_to_outline(&rail, p) >= MIN_RAIL_CLEARANCE);
     if !clear {
-        return None;
+        return Err("the rail runs too close to the footprint");
     }
-    let length = Rail::new(&rail).ok()?.perimeter();
+    let length = Rail::new(&rail)
+        .map_err(|_| "the rail is not a simple polygon")?
+        .perimeter();
     let spacing = uniform(rng, CANDIDATE_SPACING);
     let count = ((length / spacing).floor() as usize).clamp(2, shared::scenario::MAX_CANDIDATES);
     let gap = length / count as f32;
@@ -241,7 +249,8 @@ fn candidate(name: &str, robots: usize, rng: &mut ChaCha8Rng) -> Option<(String,
                 mm(rng.random_range(grid_min[1]..=grid_max[1])),
             )
         })
-        .find(|&c| polygon_contains(&footprint, c))?;
+        .find(|&c| polygon_contains(&footprint, c))
+        .ok_or("no COM of the grid's box inside the footprint")?;
     let truth_mass = mm(rng.random_range(mass[0]..=mass[1]));
     let spin: Vec<&str> = (0..robots)
         .map(|j| if j % 2 == 0 { "1" } else { "-1" })
@@ -271,5 +280,5 @@ fn candidate(name: &str, robots: usize, rng: &mut ChaCha8Rng) -> Option<(String,
         com.x,
         com.y,
     );
-    Some((toml, n))
+    Ok((toml, n))
 }
