@@ -1,13 +1,17 @@
-//! A campaign (docs/commands.md#campaign): many missions, each on one of the paper's six
-//! cases with a plant drawn from a dispersion of the `[plant]` departures
-//! (docs/formats.md#the-plant-section), in parallel (rayon), reproducible by seed, and what
-//! came of them: delivered within [`DELIVERED_WITHIN`], dropped, aborted by reason (every abort
-//! of a healthy vehicle is a false alarm), the final error's median, 95th percentile and
-//! maximum.
+//! A campaign (docs/commands.md#campaign): many missions, each on a random payload
+//! ([`payload`]; or, with `--payloads paper`, one of the paper's six cases) with a plant drawn
+//! from a dispersion of the `[plant]` departures (docs/formats.md#the-plant-section) and,
+//! with `--faults`, maybe one injected fault ([`faults`]), in parallel (rayon), reproducible by
+//! seed, and what came of them: delivered within [`DELIVERED_WITHIN`], dropped, aborted by
+//! reason (every abort of a healthy vehicle is a false alarm), each fault found or missed, the
+//! final error's median, 95th percentile and maximum.
 //!
-//! Trial `i`'s payload and plant depend on the seed and `i` alone, so `--shard K/N` (the
+//! Trial `i`'s payload, plant and fault depend on the seed and `i` alone, so `--shard K/N` (the
 //! trials whose index is `K - 1` modulo `N`) runs a disjoint slice of the same set, and the
 //! shards' results merged ([`merge`]) give the report one run would have printed.
+
+pub mod faults;
+pub mod payload;
 
 use std::collections::BTreeMap;
 
@@ -17,6 +21,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::inject::{self, Injection};
 use crate::mission_run::{self, MissionSetup};
 use crate::scenario_file::{self, LoadedScenario, PlantDepartures};
 
@@ -188,6 +193,28 @@ impl Default for Dispersion {
     }
 }
 
+/// The drawn values of `plant` by name, as the trials' `plant` and the figure give them: the
+/// dispersion's keys, the wind as its speed, m/s.
+pub fn plant_values(p: &PlantDepartures) -> BTreeMap<String, f32> {
+    [
+        ("rotor_efficiency_spread", p.rotor_efficiency_spread),
+        ("motor_time_constant", p.motor_time_constant),
+        ("inertia_scale", p.inertia_scale),
+        ("robot_mass_scale", p.robot_mass_scale),
+        ("mocap_latency", p.mocap_latency),
+        ("mocap_dropout", p.mocap_dropout),
+        ("wind", p.wind[0].hypot(p.wind[1])),
+        ("gust", p.gust),
+        ("imu_vibration", p.imu_vibration),
+        ("gyro_vibration", p.gyro_vibration),
+        ("battery_sag", p.battery_sag),
+        ("ground_effect", f32::from(u8::from(p.ground_effect))),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
+}
+
 /// `plant` as the keys of a `[plant]` section.
 fn plant_toml(p: &PlantDepartures) -> String {
     format!(
@@ -208,6 +235,17 @@ fn plant_toml(p: &PlantDepartures) -> String {
     )
 }
 
+/// What the trials fly.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum PayloadSource {
+    /// A payload drawn for each trial ([`payload`]).
+    #[default]
+    Random,
+    /// The paper's six cases in turn (trial `i` flies case `i` modulo 6).
+    Paper,
+}
+
 /// What one campaign runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CampaignSetup {
@@ -217,6 +255,10 @@ pub struct CampaignSetup {
     pub seed: u64,
     /// The plants' dispersion.
     pub dispersion: Dispersion,
+    /// What the trials fly.
+    pub payloads: PayloadSource,
+    /// About half the trials get one fault ([`faults::draw`]).
+    pub faults: bool,
     /// This run's shard, `(k, n)`: the trials whose index is `k - 1` modulo `n` (`(1, 1)`: all).
     pub shard: (usize, usize),
 }
@@ -226,8 +268,22 @@ pub struct CampaignSetup {
 pub struct TrialResult {
     /// The trial's index in the campaign.
     pub trial: usize,
-    /// The paper case flown.
+    /// The payload flown: a paper case's name, or `random-<seed>-<trial>`.
     pub scenario: String,
+    /// Robots on its rail.
+    pub robots: usize,
+    /// Its footprint's vertices.
+    pub vertices: usize,
+    /// Its true mass, kg.
+    pub payload_mass_kg: f32,
+    /// The plant drawn ([`plant_values`]).
+    pub plant: BTreeMap<String, f32>,
+    /// The seed its mission flew with (`mission --seed`).
+    pub mission_seed: u64,
+    /// The fault injected, as `mission --inject` takes it.
+    pub fault: Option<String>,
+    /// Whether the vehicle stopped or landed for that fault's reason.
+    pub fault_found: Option<bool>,
     /// `delivered`, `not delivered`, `dropped` or `aborted`.
     pub outcome: String,
     /// Why it aborted, as the vehicle said it.
@@ -241,25 +297,90 @@ fn trial_rng(seed: u64, trial: usize) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(seed ^ (trial as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
 }
 
-/// The paper case and plant of trial `trial`, and the seed its mission flies with.
-fn trial_of(setup: &CampaignSetup, trial: usize) -> Result<(LoadedScenario, u64)> {
-    let (name, text) = CASES[trial % CASES.len()];
-    let mut loaded = scenario_file::parse(text, std::path::Path::new(name))?;
+/// Mixed into the seed of a trial's fault stream, so that the payloads and plants are the same
+/// with `--faults` and without.
+const FAULT_STREAM: u64 = 0xFA17_0000_0000_0001;
+
+/// One trial, drawn.
+#[derive(Clone, Debug)]
+pub struct Trial {
+    /// The payload, checked, with its plant.
+    pub loaded: LoadedScenario,
+    /// The payload's scenario file, without its `[plant]` section.
+    pub scenario_toml: String,
+    /// Its footprint's vertices.
+    pub vertices: usize,
+    /// The seed its mission flies with.
+    pub mission_seed: u64,
+    /// The fault injected, if one is.
+    pub fault: Option<Injection>,
+}
+
+/// Trial `trial` of `setup`: its payload, plant, mission seed and fault.
+pub fn trial_of(setup: &CampaignSetup, trial: usize) -> Result<Trial> {
     let mut rng = trial_rng(setup.seed, trial);
+    let (mut loaded, scenario_toml, vertices) = match setup.payloads {
+        PayloadSource::Paper => {
+            let (name, text) = CASES[trial % CASES.len()];
+            let loaded = scenario_file::parse(text, std::path::Path::new(name))?;
+            let vertices = loaded.scenario.payload.footprint.len();
+            (loaded, text.to_string(), vertices)
+        }
+        PayloadSource::Random => {
+            let name = format!("random-{}-{trial}", setup.seed);
+            let drawn = payload::draw(&name, &mut rng)
+                .with_context(|| format!("trial {trial}: drawing its payload"))?;
+            (drawn.loaded, drawn.toml, drawn.vertices)
+        }
+    };
     loaded.plant = setup.dispersion.draw(&mut rng);
     let mission_seed: u64 = rng.random();
-    Ok((loaded, mission_seed))
+    let fault = if setup.faults {
+        let mut rng = trial_rng(setup.seed ^ FAULT_STREAM, trial);
+        faults::draw(&mut rng, loaded.scenario.robots.count())
+    } else {
+        None
+    };
+    Ok(Trial {
+        loaded,
+        scenario_toml,
+        vertices,
+        mission_seed,
+        fault,
+    })
+}
+
+/// Trial `trial` as a scenario file `mission --scenario` flies as the campaign did: the
+/// payload, its `[plant]`, and the command line (seed, fault) in a comment at the top.
+pub fn trial_file(setup: &CampaignSetup, trial: usize) -> Result<String> {
+    let t = trial_of(setup, trial)?;
+    let inject = t.fault.map_or(String::new(), |f| format!(" --inject {f}"));
+    Ok(format!(
+        "# Campaign seed {}, trial {trial}: host-sim mission --scenario <this file> --seed {}{inject}\n{}\n[plant]\n{}",
+        setup.seed,
+        t.mission_seed,
+        t.scenario_toml.trim_end(),
+        plant_toml(&t.loaded.plant)
+    ))
 }
 
 /// Runs trial `trial`.
 pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
-    let (loaded, mission_seed) = trial_of(setup, trial)?;
+    let t = trial_of(setup, trial)?;
+    let loaded = t.loaded;
     let mission_setup = MissionSetup {
-        seed: mission_seed,
+        seed: t.mission_seed,
         plant: loaded.plant,
         ..MissionSetup::default()
     };
+    let mission_setup = match &t.fault {
+        Some(f) => inject::apply(std::slice::from_ref(f), mission_setup),
+        None => mission_setup,
+    };
     let (o, _) = mission_run::run(&loaded.scenario, &mission_setup, &mut |_, _, _| {})?;
+    let fault_found = t
+        .fault
+        .map(|f| !o.dropped && o.aborted.is_some_and(|r| faults::found(&f.fault, &r)));
     let outcome = if o.dropped {
         "dropped"
     } else if o.aborted.is_some() {
@@ -272,6 +393,13 @@ pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
     Ok(TrialResult {
         trial,
         scenario: loaded.name,
+        robots: loaded.scenario.robots.count(),
+        vertices: t.vertices,
+        payload_mass_kg: loaded.scenario.truth.map_or(f32::NAN, |tr| tr.mass),
+        plant: plant_values(&loaded.plant),
+        mission_seed: t.mission_seed,
+        fault: t.fault.map(|f| f.to_string()),
+        fault_found,
         outcome: outcome.to_string(),
         aborted: o.aborted.map(|r| r.to_string()),
         final_error_m: (!o.dropped).then_some(o.final_position_error_m),
@@ -312,6 +440,24 @@ pub struct ErrorSpread {
     pub max: Option<f32>,
 }
 
+/// What came of the trials given one kind of fault.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FaultTally {
+    /// Trials given it.
+    pub trials: usize,
+    /// Stopped or landed for its reason, not dropped.
+    pub found: usize,
+    /// Dropped.
+    pub dropped: usize,
+    /// Neither: flew on, or aborted for another reason.
+    pub missed: usize,
+}
+
+/// The kind of a fault as a trial records it (`rotor-out:3@4.5`: `rotor-out`).
+pub fn fault_kind(fault: &str) -> &str {
+    fault.split([':', '@']).next().unwrap_or(fault)
+}
+
 /// What a campaign found.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Report {
@@ -325,8 +471,12 @@ pub struct Report {
     pub dropped: usize,
     /// Aborted, by reason.
     pub aborted: BTreeMap<String, usize>,
-    /// Aborts of a healthy vehicle (no fault is injected: every abort).
+    /// Aborts of a healthy vehicle (one given no fault).
     pub false_alarms: usize,
+    /// Trials given a fault.
+    pub faulted: usize,
+    /// By kind of fault, what came of the trials given it.
+    pub faults: BTreeMap<String, FaultTally>,
     /// The final error of the missions that were not dropped.
     pub final_error_m: ErrorSpread,
 }
@@ -354,12 +504,30 @@ pub fn report(results: &[TrialResult]) -> Report {
         .filter(|e| e.is_finite())
         .collect();
     errors.sort_by(f32::total_cmp);
+    let mut faults: BTreeMap<String, FaultTally> = BTreeMap::new();
+    for r in results {
+        let Some(fault) = &r.fault else { continue };
+        let tally = faults.entry(fault_kind(fault).to_string()).or_default();
+        tally.trials += 1;
+        if r.outcome == "dropped" {
+            tally.dropped += 1;
+        } else if r.fault_found == Some(true) {
+            tally.found += 1;
+        } else {
+            tally.missed += 1;
+        }
+    }
     Report {
         trials: results.len(),
         delivered: count("delivered"),
         not_delivered: count("not delivered"),
         dropped: count("dropped"),
-        false_alarms: count("aborted"),
+        false_alarms: results
+            .iter()
+            .filter(|r| r.outcome == "aborted" && r.fault.is_none())
+            .count(),
+        faulted: results.iter().filter(|r| r.fault.is_some()).count(),
+        faults,
         aborted,
         final_error_m: ErrorSpread {
             p50: quantile(&errors, 0.5),
@@ -379,6 +547,10 @@ pub struct CampaignOutput {
     pub seed: u64,
     /// The dispersion.
     pub dispersion: Dispersion,
+    /// What the trials flew.
+    pub payloads: PayloadSource,
+    /// Whether faults were injected (`--faults`).
+    pub fault_injection: bool,
     /// The shard, `[k, n]`.
     pub shard: [usize; 2],
     /// What this run found.
@@ -400,10 +572,12 @@ pub fn merge(parts: &[CampaignOutput]) -> Result<CampaignOutput> {
         if p.seed != first.seed
             || p.campaign_trials != first.campaign_trials
             || p.dispersion != first.dispersion
+            || p.payloads != first.payloads
+            || p.fault_injection != first.fault_injection
             || p.shard[1] != n
         {
             bail!(
-                "shard {}/{} is of another campaign (its seed, trials, dispersion or shard count differ)",
+                "shard {}/{} is of another campaign (its seed, trials, dispersion, payloads, faults or shard count differ)",
                 p.shard[0],
                 p.shard[1]
             );
@@ -427,6 +601,8 @@ pub fn merge(parts: &[CampaignOutput]) -> Result<CampaignOutput> {
         campaign_trials: first.campaign_trials,
         seed: first.seed,
         dispersion: first.dispersion,
+        payloads: first.payloads,
+        fault_injection: first.fault_injection,
         shard: [1, 1],
         report: report(&results),
         results,
@@ -443,9 +619,12 @@ mod tests {
             trials: 10,
             seed: 4,
             dispersion: Dispersion::DEFAULT,
+            payloads: PayloadSource::Paper,
+            faults: false,
             shard: (1, 1),
         };
         let a = trial_of(&setup, 7).expect("a trial");
+        let a = (a.loaded, a.mission_seed);
         let b = trial_of(
             &CampaignSetup {
                 shard: (2, 3),
@@ -454,10 +633,11 @@ mod tests {
             7,
         )
         .expect("a trial");
+        let b = (b.loaded, b.mission_seed);
         assert_eq!((a.0.plant, a.1), (b.0.plant, b.1));
         assert_eq!(a.0.name, "rect-ex2", "trial 7: the second case of six");
         let c = trial_of(&setup, 8).expect("a trial");
-        assert_ne!(a.0.plant, c.0.plant);
+        assert_ne!(a.0.plant, c.loaded.plant);
         let d = Dispersion::DEFAULT;
         let p = a.0.plant;
         assert!((d.inertia_scale[0]..=d.inertia_scale[1]).contains(&p.inertia_scale));
@@ -489,6 +669,13 @@ mod tests {
         let r = |trial, outcome: &str, e| TrialResult {
             trial,
             scenario: "x".into(),
+            robots: 8,
+            vertices: 4,
+            payload_mass_kg: 3.0,
+            plant: BTreeMap::new(),
+            mission_seed: 1,
+            fault: None,
+            fault_found: None,
             outcome: outcome.into(),
             aborted: (outcome == "aborted").then(|| "position lost".into()),
             final_error_m: e,

@@ -2,12 +2,14 @@
 //! the paper's Fig. 8): height over time for several flights against their
 //! reference, and roll and pitch over time, as PNG files. The submodules draw the others, as PNG
 //! and SVG through [`canvas`]: [`estimate_summary`] (Fig. 7) and [`estimate_steps`] (Fig. 6)
-//! for `estimate`, [`formation`] for `formation`, and [`mission_summary`] for `mission`.
+//! for `estimate`, [`formation`] for `formation`, [`mission_summary`] for `mission`, and
+//! [`campaign_outcomes`] for `campaign`.
 //!
 //! Text is drawn with the system's sans-serif font (plotters' `ttf` feature, through
 //! fontconfig). Where no font can be found the figure is skipped with a message; the CSV files
 //! carry the same data.
 
+pub mod campaign_outcomes;
 pub mod canvas;
 pub mod estimate_steps;
 pub mod estimate_summary;

@@ -1,15 +1,18 @@
-//! `host-sim campaign`: many missions on the paper's cases, each plant drawn from a
-//! dispersion of the `[plant]` departures, in parallel; `campaign merge` joins the shards'
-//! JSON (docs/commands.md#campaign).
+//! `host-sim campaign`: many missions on random payloads (or the paper's cases), each plant
+//! drawn from a dispersion of the `[plant]` departures, optionally a fault, in parallel;
+//! `--output` draws the outcomes over what was drawn and keeps each trial not delivered as a
+//! scenario file; `campaign merge` joins the shards' JSON (docs/commands.md#campaign).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow};
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::campaign::{self, CampaignOutput, CampaignSetup, Dispersion};
+use crate::campaign::{self, CampaignOutput, CampaignSetup, Dispersion, PayloadSource};
 use crate::cli::Outcome;
+use crate::figures::campaign_outcomes::CampaignOutcomes;
+use crate::figures::canvas;
 use crate::report::print_json;
 use crate::say;
 
@@ -29,6 +32,18 @@ pub struct CampaignArgs {
     /// the others).
     #[arg(long, value_name = "FILE")]
     dispersion: Option<PathBuf>,
+    /// What the trials fly: a payload drawn for each (`random`) or the paper's six cases in
+    /// turn (`paper`).
+    #[arg(long, value_enum, default_value = "random")]
+    payloads: PayloadSource,
+    /// Give about half the trials one fault each (a rotor, the IMU, motion capture, the
+    /// ground link, the battery or a stepper), and report each kind found or missed.
+    #[arg(long)]
+    faults: bool,
+    /// Write the figure of outcomes over the drawn parameters (`campaign-outcomes.png`,
+    /// `.svg`) and each trial not delivered as a scenario file (`trial-<i>.toml`) here.
+    #[arg(long, value_name = "DIR")]
+    output: Option<PathBuf>,
     /// Threads (default: one per core).
     #[arg(long, value_name = "J")]
     jobs: Option<usize>,
@@ -95,6 +110,21 @@ fn show(out: &CampaignOutput, json: bool) -> Result<Outcome> {
         for (why, n) in &r.aborted {
             say!("  aborted {n}x: {why}")?;
         }
+        if r.faulted > 0 {
+            say!(
+                "given a fault: {} trials (an abort there is no false alarm)",
+                r.faulted
+            )?;
+            for (kind, t) in &r.faults {
+                say!(
+                    "  {kind}: {} of {} found, {} dropped, {} missed",
+                    t.found,
+                    t.trials,
+                    t.dropped,
+                    t.missed
+                )?;
+            }
+        }
         let e = r.final_error_m;
         let m = |v: Option<f32>| v.map_or("none".to_string(), |v| format!("{v:.3} m"));
         say!(
@@ -114,6 +144,39 @@ fn show(out: &CampaignOutput, json: bool) -> Result<Outcome> {
     } else {
         Outcome::Done
     })
+}
+
+/// Writes the figure of outcomes over the drawn parameters and each trial not delivered as a
+/// scenario file into `dir`; says which files (unless `quiet`: the JSON goes alone on stdout).
+fn write_output(
+    dir: &Path,
+    setup: &CampaignSetup,
+    results: &[campaign::TrialResult],
+    quiet: bool,
+) -> Result<()> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create the output folder {}", dir.display()))?;
+    let figure = CampaignOutcomes {
+        results,
+        title: format!(
+            "campaign seed {}: {} trials, final error over what was drawn",
+            setup.seed,
+            results.len()
+        ),
+    };
+    let mut written = canvas::write(dir, "campaign-outcomes", &figure);
+    for r in results.iter().filter(|r| r.outcome != "delivered") {
+        let path = dir.join(format!("trial-{}.toml", r.trial));
+        let text = campaign::trial_file(setup, r.trial)?;
+        std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
+        written.push(path);
+    }
+    if !quiet {
+        for path in written {
+            say!("wrote {}", path.display())?;
+        }
+    }
+    Ok(())
 }
 
 /// Runs the command.
@@ -138,6 +201,8 @@ pub fn run(args: &CampaignArgs) -> Result<Outcome> {
         trials: args.trials,
         seed: args.seed,
         dispersion,
+        payloads: args.payloads,
+        faults: args.faults,
         shard: args.shard.unwrap_or((1, 1)),
     };
     let mut pool = rayon::ThreadPoolBuilder::new();
@@ -160,10 +225,15 @@ pub fn run(args: &CampaignArgs) -> Result<Outcome> {
     };
     let results = pool.install(|| campaign::run(&setup, &|| bar.inc(1)))?;
     bar.finish_and_clear();
+    if let Some(dir) = &args.output {
+        write_output(dir, &setup, &results, args.json)?;
+    }
     let out = CampaignOutput {
         campaign_trials: setup.trials,
         seed: setup.seed,
         dispersion,
+        payloads: setup.payloads,
+        fault_injection: setup.faults,
         shard: [k, n],
         report: campaign::report(&results),
         results,
