@@ -1,5 +1,5 @@
 //! Second-order IIR filters (biquads) for the IMU's sample-rate stream: the anti-alias
-//! low-pass and the rotors' notches ([`crate::imu`], docs/models.md#imu). The coefficients
+//! low-pass and the rotors' notches ([`crate::imu`], docs/models.md#imu-front-end). The coefficients
 //! follow R. Bristow-Johnson's "Audio EQ Cookbook" (bilinear transform, prewarped), the same
 //! forms PX4's `LowPassFilter2p` and `NotchFilter` use. A filter's coefficients are kept apart
 //! from its state so that one set serves several axes.

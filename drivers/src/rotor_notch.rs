@@ -1,4 +1,4 @@
-//! Notches that follow the rotors (docs/models.md#imu): each rotor's rotation frequency and
+//! Notches that follow the rotors (docs/models.md#imu-front-end): each rotor's rotation frequency and
 //! its blade-pass frequency (two blades: twice the rotation) are taken out of the IMU's
 //! sample-rate stream, each rotor's from its own ESC's RPM. A frame's vibration sits at exactly
 //! those frequencies; a low-pass alone either leaves it (a 130 Hz rotor through the board's

@@ -469,7 +469,7 @@ pub struct Report {
     pub not_delivered: usize,
     /// Dropped.
     pub dropped: usize,
-    /// Aborted, by reason.
+    /// Aborted, by the kind of reason ([`abort_kind`]; each trial keeps its whole reason).
     pub aborted: BTreeMap<String, usize>,
     /// Aborts of a healthy vehicle (one given no fault).
     pub false_alarms: usize,
@@ -490,12 +490,33 @@ fn quantile(sorted: &[f32], q: f32) -> Option<f32> {
     Some(sorted[rank.clamp(1, sorted.len()) - 1])
 }
 
+/// The kind of an abort, for counting: what the vehicle said before its first colon (the
+/// particulars after it, a COM or a height, differ trial to trial), each number in it as `#`
+/// (`rotor 2 stopped in flight` and `rotor 11 ...` are one kind).
+pub fn abort_kind(said: &str) -> String {
+    let head = said.split(':').next().unwrap_or(said).trim();
+    let mut kind = String::with_capacity(head.len());
+    for c in head.chars() {
+        if c.is_ascii_digit() {
+            if !kind.ends_with('#') {
+                kind.push('#');
+            }
+        } else {
+            kind.push(c);
+        }
+    }
+    kind
+}
+
 /// The report of `results` (in any order).
 pub fn report(results: &[TrialResult]) -> Report {
     let mut aborted = BTreeMap::new();
     let count = |what: &str| results.iter().filter(|r| r.outcome == what).count();
     for r in results.iter().filter(|r| r.outcome == "aborted") {
-        let why = r.aborted.clone().unwrap_or_else(|| "unknown".to_string());
+        let why = r
+            .aborted
+            .as_deref()
+            .map_or_else(|| "unknown".to_string(), abort_kind);
         *aborted.entry(why).or_insert(0) += 1;
     }
     let mut errors: Vec<f32> = results
@@ -690,6 +711,14 @@ mod tests {
             (22, 20, 1, 1)
         );
         assert_eq!(rep.aborted.get("position lost"), Some(&1));
+        assert_eq!(
+            abort_kind("rotor 11 stopped in flight: flying on the other rotors"),
+            "rotor # stopped in flight"
+        );
+        assert_eq!(
+            abort_kind("take-off failed: the payload did not leave the ground (0.005 m)"),
+            "take-off failed"
+        );
         // 21 finite errors: 0.00..0.19 and 0.5.
         // The 11th of 21: trial 10's 0.10 m.
         assert_eq!(rep.final_error_m.p50, Some(10.0 * 0.01));

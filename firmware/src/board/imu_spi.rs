@@ -5,7 +5,8 @@
 //!
 //! Start-up: soft reset, `WHO_AM_I`, the start-up writes each read back. Then, at the control
 //! priority: on each data-ready interrupt (two FIFO records, 1 ms at 2 kHz) the FIFO is read
-//! in one DMA burst and filtered; every 2.5 ms the latest filtered sample goes to the control
+//! in one DMA burst, filtered and notched at each rotor's rotation and blade-pass frequencies
+//! from the ESCs' RPM ([`drivers::rotor_notch`]); every 2.5 ms the latest filtered sample goes to the control
 //! step (until a HIL plant drives it instead). A stalled, saturated or wrong IMU goes to the
 //! ground as an error, once a second while it lasts, and to the mission ([`FAULTED`]), which
 //! stops on the ground and lands in flight; the step goes on with the last sample meanwhile.
@@ -25,7 +26,7 @@ use link::hil::ImuSample;
 
 use crate::app::autonomy::Severity;
 use crate::app::comms::{SensorSample, report};
-use crate::app::{IN_HIL, OUTBOX, SENSOR};
+use crate::app::{ESC_RPM, IN_HIL, OUTBOX, SENSOR};
 
 /// Whether the IMU is faulted now (stalled, saturated): the control step tells the mission.
 pub static FAULTED: AtomicBool = AtomicBool::new(false);
@@ -127,6 +128,12 @@ pub async fn imu(mut bus: ImuBus) {
         match select(bus.drdy.wait_for_rising_edge(), ticker.next()).await {
             Either::First(()) => bus.drain(&mut front).await,
             Either::Second(()) => {
+                // The notches follow the rotors' speeds of the last control step that had
+                // them (bidirectional DShot); without telemetry nothing is notched.
+                match ESC_RPM.lock(|r| r.get()) {
+                    Some(rpm) => front.follow_rotors(&rpm),
+                    None => front.follow_rotors(&[]),
+                }
                 // Whatever the interrupt left (it re-fires each sample above the watermark,
                 // so a missed edge only delays a read to here).
                 bus.drain(&mut front).await;
