@@ -34,8 +34,8 @@
 //! - What an 8-bit CRC cannot do: a corrupted frame whose CRC checks by chance (1 in 256 of the
 //!   corrupted frames that still start with a sync byte and a plausible length) is
 //!   indistinguishable from a real one, here as in every CRSF receiver. The property test
-//!   measured 14 to 28 such frames in 10,000 corrupted streams of up to seven frames and up
-//!   to four faults each (bytes inserted or lost inside a frame, several flipped bits).
+//!   measured 16 to 39 such frames in 10,000 corrupted streams (20 runs) of up to seven frames
+//!   and up to four faults each (bytes inserted or lost inside a frame, several flipped bits).
 //!
 //! Written by hand rather than with a crate: `crsf` 2.0.1, its crates.io release, takes 64
 //! bytes off its buffer for every frame whatever the frame's length, so of three frames pushed
