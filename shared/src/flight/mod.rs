@@ -11,11 +11,13 @@
 //! - [`adapt`]: the formation re-solved and the robots moved in flight when the load shifts.
 //! - [`route`]: a ground station's mission items in the local frame, checked.
 //! - [`rotor_monitor`]: rotors that stop or fade in flight, found from the vehicle's response
-//!   and the ESCs' RPM; [`rotor_isolation`]: which one or two rotors a change is.
+//!   and the ESCs' RPM; [`rotor_isolation`]: which one or two rotors a change is;
+//!   [`rotor_findings`]: the ESCs' word and the rotors found stopped.
 
 pub mod adapt;
 pub mod manual;
 pub mod model;
+pub mod rotor_findings;
 pub mod rotor_isolation;
 pub mod rotor_monitor;
 pub mod route;

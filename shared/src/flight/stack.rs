@@ -28,6 +28,8 @@
 //! Operator commands: [`FlightCommand::LandNow`] lands where the vehicle is (or stops the
 //! rotors if it never left the ground); [`FlightCommand::Kill`] stops the rotors at once.
 
+use super::rotor_findings::MAX_ROTORS_OUT;
+pub use super::rotor_findings::{EscTelemetry, RotorFinding, RotorOut};
 use crate::control::allocation::{Mixer, Saturation, Wrench};
 use crate::control::controller::{ControlInputs, FlightController};
 use crate::control::land_detector::{Contact, LandDetector};
@@ -117,49 +119,6 @@ pub enum LandingCause {
         robot: u8,
     },
 }
-
-/// What the ESCs tell of their rotors this tick.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct EscTelemetry<'a> {
-    /// Each rotor's RPM (NaN where a rotor has no reading), or `None` without telemetry.
-    pub rpm: Option<&'a [f32]>,
-    /// Rotors whose ESC reports them stopped while commanded to turn, bit `i` for rotor `i`.
-    pub stopped: u16,
-}
-
-/// A rotor found stopped in flight.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RotorOut {
-    /// The robot whose rotor stopped, from 0.
-    pub robot: u8,
-    /// When it was found, s since the flight began ([`FlightStack::clock`]).
-    pub at: f32,
-    /// Its ESC reported it (rather than the monitor finding it).
-    pub reported: bool,
-}
-
-/// What one tick found of the rotors: the rotors newly found stopped, and whether the rotors
-/// left hold a level hover.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RotorFinding {
-    /// The first rotor newly found.
-    pub first: RotorOut,
-    /// Every rotor newly found this tick, bit `i` for robot `i`.
-    pub newly: u16,
-    /// Every rotor flown without now (these and earlier ones).
-    pub out: u16,
-    /// Rotors left turning.
-    pub left: u8,
-    /// The mixer of the rotors left allocates the hover (the vehicle's weight, no torque)
-    /// within every rotor's range. When it cannot, the allocation keeps the payload level
-    /// and gives up collective thrust (docs/failures.md#rotors-that-stop-in-flight): the
-    /// vehicle comes down faster than planned.
-    pub holdable: bool,
-}
-
-/// Rotors found stopped that a flight records (the first two: a third is flown without as
-/// well, but not recorded).
-const MAX_ROTORS_OUT: usize = 2;
 
 /// Why the rotors stopped: the flight is over.
 #[derive(Clone, Copy, Debug, PartialEq)]
