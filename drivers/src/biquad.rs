@@ -138,24 +138,26 @@ impl Biquad {
     }
 }
 
+/// The steady peak output of a filter for a unit sine at `freq` Hz, sampled at 2 kHz (for
+/// the filters' tests).
+#[cfg(test)]
+pub(crate) fn gain(c: BiquadCoefficients, freq: f32) -> f32 {
+    let mut f = Biquad::new(c);
+    let mut peak = 0.0f32;
+    for n in 0..8000 {
+        let y = f.apply(shared::math::sin(
+            2.0 * core::f32::consts::PI * freq * n as f32 / 2000.0,
+        ));
+        if n > 6000 {
+            peak = peak.max(y.abs());
+        }
+    }
+    peak
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The steady peak output for a unit sine at `freq` Hz, sampled at 2 kHz.
-    fn gain(c: BiquadCoefficients, freq: f32) -> f32 {
-        let mut f = Biquad::new(c);
-        let mut peak = 0.0f32;
-        for n in 0..8000 {
-            let y = f.apply(shared::math::sin(
-                2.0 * core::f32::consts::PI * freq * n as f32 / 2000.0,
-            ));
-            if n > 6000 {
-                peak = peak.max(y.abs());
-            }
-        }
-        peak
-    }
 
     #[test]
     fn a_notch_removes_its_centre_and_passes_what_is_a_bandwidth_away() {

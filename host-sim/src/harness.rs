@@ -192,14 +192,7 @@ pub fn fly_formation(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightO
     });
     setup.plant.apply(plant.config_mut(), setup.seed);
     plant.refresh();
-    let mut sensors = Sensors::new(setup.seed)
-        .with_mocap_departures(setup.plant.mocap_latency, setup.plant.mocap_dropout)
-        .with_vibration(
-            setup.plant.imu_vibration,
-            setup.plant.gyro_vibration,
-            &plant,
-            setup.seed,
-        );
+    let mut sensors = Sensors::departed(setup.seed, &setup.plant, &plant);
 
     // The flight software, as the mission builds it after the formation decision.
     let model = FlightModel::build(

@@ -164,14 +164,7 @@ pub fn fly(
     // The plant's departures from the model (`[plant]`, docs/formats.md#the-plant-section).
     setup.plant.apply(plant.config_mut(), setup.seed);
     plant.refresh();
-    let mut sensors = Sensors::new(setup.seed)
-        .with_mocap_departures(setup.plant.mocap_latency, setup.plant.mocap_dropout)
-        .with_vibration(
-            setup.plant.imu_vibration,
-            setup.plant.gyro_vibration,
-            &plant,
-            setup.seed,
-        );
+    let mut sensors = Sensors::departed(setup.seed, &setup.plant, &plant);
     if let Some(bias) = setup.gyro_bias {
         sensors = sensors.with_gyro_bias(bias);
     }

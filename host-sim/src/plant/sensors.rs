@@ -20,6 +20,7 @@ use shared::control::vector::{Quat, Vec3};
 use shared::scenario::GRAVITY;
 
 use drivers::imu::ImuFault;
+use scenario_toml::PlantDepartures;
 
 use super::vibration::{VibratingImu, Vibration};
 use crate::plant::{Plant, TrueState};
@@ -120,6 +121,19 @@ impl Sensors {
             raw: None,
             imu_fault: None,
         }
+    }
+
+    /// Sensors for `plant` as the scenario's `[plant]` `departures` make them (motion
+    /// capture's latency and dropout, the frame's vibration), noise from `seed`.
+    pub fn departed(seed: u64, departures: &PlantDepartures, plant: &Plant) -> Self {
+        Self::new(seed)
+            .with_mocap_departures(departures.mocap_latency, departures.mocap_dropout)
+            .with_vibration(
+                departures.imu_vibration,
+                departures.gyro_vibration,
+                plant,
+                seed,
+            )
     }
 
     /// The IMU's samples made raw at 2 kHz with the frame's `accel_rms` (m/s^2) and `gyro_rms`
