@@ -16,6 +16,8 @@ pymavlink is missing.
 """
 
 import asyncio
+import collections
+import logging
 import os
 import sys
 
@@ -26,9 +28,33 @@ import ground_station as gs  # noqa: E402  (exits 2 without pymavlink)
 import mavsdk_mission  # noqa: E402  (exits 2 without MAVSDK-Python)
 
 
+class LastLines(logging.Handler):
+    """The last lines mavsdk_server printed (MAVSDK-Python hands them to the logger
+    "mavsdk_server"), to say what it last did when a call to it fails."""
+
+    def __init__(self, count=40):
+        super().__init__(logging.DEBUG)
+        self.lines = collections.deque(maxlen=count)
+
+    def emit(self, record):
+        self.lines.append(record.getMessage())
+
+
 def main():
+    server_log = LastLines()
+    logger = logging.getLogger("mavsdk_server")
+    logger.setLevel(logging.DEBUG)
+    logger.addHandler(server_log)
+    logger.propagate = False
+
     def checks(plant):
-        seen = asyncio.run(mavsdk_mission.fly(f"udpin://127.0.0.1:{plant.port}", hold_s=1.0))
+        try:
+            seen = asyncio.run(mavsdk_mission.fly(f"udpin://127.0.0.1:{plant.port}",
+                                                  hold_s=1.0))
+        except Exception:
+            print("mavsdk_server's last lines:\n  " + "\n  ".join(server_log.lines),
+                  file=sys.stderr)
+            raise
         print(f"delivered {gs.delivered(plant):.3f} m from the target; "
               f"moved {seen['moved_while_held_m']:.3f} m while held")
 

@@ -363,6 +363,9 @@ fn the_uart_and_the_ethernet_link_fly_the_same_steps() {
     );
 }
 
+/// A ground station on the bridge: it sees the vehicle, a request of it comes back answered,
+/// no HIL traffic leaks to it, and the vehicle's heartbeat comes once a second of the
+/// vehicle's time.
 #[test]
 fn a_ground_station_sees_and_commands_the_vehicle_through_the_bridge() {
     let Some(elf) =
@@ -380,15 +383,19 @@ fn a_ground_station_sees_and_commands_the_vehicle_through_the_bridge() {
         .set_read_timeout(Some(Duration::from_millis(200)))
         .expect("timeout");
     let addr = ground.local_addr().expect("address");
-    // What it saw: every message id, and whether an AUTOPILOT_VERSION came after its request.
+    // What it saw: every message id, the vehicle's heartbeats, and whether an
+    // AUTOPILOT_VERSION came after its request; it listens until the run is over.
+    let over = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let listening = over.clone();
     let station = std::thread::spawn(move || {
         let mut parser = Parser::new(link::vehicle::crc_extra);
         let mut seen = Vec::new();
+        let mut beats = 0;
         let mut asked = false;
         let mut answered = false;
         let mut buf = [0u8; 2048];
         let end = Instant::now() + Duration::from_secs(60);
-        while Instant::now() < end && !(answered && seen.contains(&HEARTBEAT_DATA::ID)) {
+        while Instant::now() < end && !listening.load(std::sync::atomic::Ordering::Relaxed) {
             let Ok((n, vehicle)) = ground.recv_from(&mut buf) else {
                 continue;
             };
@@ -396,6 +403,9 @@ fn a_ground_station_sees_and_commands_the_vehicle_through_the_bridge() {
                 if let Some((f, _)) = parser.push(b) {
                     seen.push(f.message_id());
                     answered |= asked && f.message_id() == AUTOPILOT_VERSION_DATA::ID;
+                    if f.message_id() == HEARTBEAT_DATA::ID && f.component_id() == 1 {
+                        beats += 1;
+                    }
                 }
             }
             if !asked {
@@ -411,19 +421,30 @@ fn a_ground_station_sees_and_commands_the_vehicle_through_the_bridge() {
                 let _ = ground.send_to(f.bytes(), vehicle);
             }
         }
-        (seen, answered)
+        (seen, beats, answered)
     });
     let (_qemu, link) = Qemu::start(&elf, QemuLink::Ethernet).expect("QEMU starts");
+    let simulated_s = 6.0;
     let setup = HilSetup {
-        duration_s: Some(2.5),
+        duration_s: Some(simulated_s),
         gcs: Some(addr),
         ..HilSetup::default()
     };
     run(&rect_ex1(), link, &setup, print_text()).expect("hil with a ground station");
-    let (seen, answered) = station.join().expect("ground station");
+    // Datagrams still on their way when the run ended are read before the station stops.
+    std::thread::sleep(Duration::from_millis(300));
+    over.store(true, std::sync::atomic::Ordering::Relaxed);
+    let (seen, beats, answered) = station.join().expect("ground station");
     assert!(
         seen.contains(&HEARTBEAT_DATA::ID),
         "no heartbeat reached the ground station"
+    );
+    // One a second of the vehicle's time (the plant's), whatever the emulator's clock: a
+    // heartbeat timed by QEMU's clock alone came once in 4 to 6 s of it, and MAVSDK took the
+    // vehicle for gone.
+    assert!(
+        beats >= simulated_s as usize,
+        "{beats} heartbeats in {simulated_s} s of the vehicle's time"
     );
     assert!(
         answered,

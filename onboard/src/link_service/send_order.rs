@@ -3,6 +3,13 @@
 //! bytes the replies, the telemetry streams due, the bulk transfers and the parameter lists,
 //! in that order. A ground station that asks faster than the link carries fills its own
 //! queues, never the vehicle's step or heartbeat.
+//!
+//! The heartbeat's second is the board's and the vehicle's ([`HeartbeatClock`]): on a flight
+//! controller they are one clock, but in lockstep hardware-in-the-loop the vehicle's time is
+//! the plant's (the control steps' time) while the board's is the emulator's, which runs
+//! behind both it and the wall. A heartbeat timed by the board alone then came once every 4 to
+//! 6 s of the vehicle's time, and MAVSDK (3 s without one) took the vehicle for gone and back
+//! again in the middle of a mission. PX4 in lockstep keeps its 1 Hz in the simulator's time.
 
 /// What waits to be sent, as the send task sees it before each group of frames.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -80,9 +87,128 @@ pub fn wake_at(
     }
 }
 
+/// When the heartbeat is due: a second after the last one by the board's clock, or by the
+/// vehicle's time (the control steps' time, us), whichever comes first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HeartbeatClock {
+    /// The board's time of the next heartbeat, us.
+    next_board_us: u64,
+    /// The latest control step's time, us, once a step came.
+    vehicle_us: Option<u64>,
+    /// The vehicle's time of the next heartbeat, us.
+    next_vehicle_us: u64,
+}
+
+impl HeartbeatClock {
+    /// The heartbeat's period, us (MAVLink's 1 Hz).
+    pub const PERIOD_US: u64 = 1_000_000;
+
+    /// A clock whose first heartbeat is due at once.
+    pub const fn new() -> Self {
+        Self {
+            next_board_us: 0,
+            vehicle_us: None,
+            next_vehicle_us: 0,
+        }
+    }
+
+    /// A control step of the vehicle's time `time_us` was sent. A time that goes back (a
+    /// plant started anew) starts the vehicle's second again from it.
+    pub fn step_time(&mut self, time_us: u64) {
+        match self.vehicle_us {
+            Some(before) if time_us >= before => {}
+            _ => self.next_vehicle_us = time_us.saturating_add(Self::PERIOD_US),
+        }
+        self.vehicle_us = Some(time_us);
+    }
+
+    /// Whether the heartbeat is due at the board's time `board_us`.
+    pub fn due(&self, board_us: u64) -> bool {
+        board_us >= self.next_board_us || self.vehicle_us.is_some_and(|t| t >= self.next_vehicle_us)
+    }
+
+    /// The heartbeat was sent at the board's time `board_us`.
+    pub fn sent(&mut self, board_us: u64) {
+        self.next_board_us = board_us.saturating_add(Self::PERIOD_US);
+        if let Some(t) = self.vehicle_us {
+            self.next_vehicle_us = t.saturating_add(Self::PERIOD_US);
+        }
+    }
+
+    /// The board's time by which the next heartbeat is due, us (the vehicle's time moves on
+    /// only with a step, which wakes the send task anyway).
+    pub fn next_board_us(&self) -> u64 {
+        self.next_board_us
+    }
+}
+
+impl Default for HeartbeatClock {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    const SECOND: u64 = HeartbeatClock::PERIOD_US;
+
+    #[test]
+    fn on_one_clock_the_heartbeat_comes_once_a_second() {
+        let mut c = HeartbeatClock::new();
+        assert!(c.due(0));
+        c.sent(0);
+        let mut beats = 0;
+        for ms in 1..=10_000u64 {
+            let t = ms * 1000;
+            c.step_time(t);
+            if c.due(t) {
+                c.sent(t);
+                beats += 1;
+            }
+        }
+        assert_eq!(beats, 10);
+    }
+
+    #[test]
+    fn a_board_clock_behind_the_vehicles_time_still_beats_each_vehicle_second() {
+        // The emulator's clock at a fifth of the plant's time: 60 s of flight.
+        let mut c = HeartbeatClock::new();
+        c.step_time(0);
+        c.sent(0);
+        let mut beats = 0;
+        for step in 1..=24_000u64 {
+            let vehicle = step * 2_500;
+            let board = vehicle / 5;
+            c.step_time(vehicle);
+            if c.due(board) {
+                c.sent(board);
+                beats += 1;
+            }
+        }
+        assert_eq!(beats, 60);
+        assert_eq!(c.next_board_us(), 12_000_000 + SECOND);
+    }
+
+    #[test]
+    fn without_steps_the_boards_clock_alone_times_it() {
+        let mut c = HeartbeatClock::new();
+        c.sent(5 * SECOND);
+        assert!(!c.due(6 * SECOND - 1));
+        assert!(c.due(6 * SECOND));
+    }
+
+    #[test]
+    fn a_vehicle_time_that_starts_again_restarts_its_second() {
+        let mut c = HeartbeatClock::new();
+        c.step_time(100 * SECOND);
+        c.sent(0);
+        c.step_time(SECOND / 2);
+        assert!(!c.due(1));
+        c.step_time(SECOND + SECOND / 2);
+        assert!(c.due(1));
+    }
 
     const ALL: Waiting = Waiting {
         step: true,

@@ -8,7 +8,7 @@
 use core::sync::atomic::Ordering;
 
 use embassy_futures::select::{select3, select4};
-use embassy_time::{Duration, Instant, Timer};
+use embassy_time::{Instant, Timer};
 use embedded_io_async::Write;
 use link::MessageData;
 use link::bandwidth::LinkBudget;
@@ -23,7 +23,7 @@ use link::param::value_message;
 use link::status::{MissionState, Text, chunks, heartbeat, named_float, named_int};
 use link::telemetry::{Home, RouteStatus, Stream, VehicleSnapshot, gps_global_origin};
 use link::vehicle::crc_extra;
-use onboard::link_service::send_order::{Source, Waiting, next_source, wake_at};
+use onboard::link_service::send_order::{HeartbeatClock, Source, Waiting, next_source, wake_at};
 use onboard::link_service::{Bulk, Outbound, StepMessages, mav_result, mav_severity};
 use shared::control::thrust_map::ThrustMap;
 use shared::mission::params::COUNT as PARAM_COUNT;
@@ -476,14 +476,14 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
     out.identity().await;
     let _ = out.tx.flush().await;
     let mut state = MissionState::Idle;
-    let mut next_beat = Instant::now();
+    let mut beat = HeartbeatClock::new();
     loop {
         let now = Instant::now();
         let telemetry_due = telemetry(|t| t.next_due());
         let may_wait_goes = out.budget.allows(now.as_micros());
         let waiting = Waiting {
             step: !STEP_OUT.is_empty(),
-            heartbeat_due: now >= next_beat,
+            heartbeat_due: beat.due(now.as_micros()),
             budget_allows: may_wait_goes,
             reply: !OUTBOX.is_empty(),
             telemetry_due: telemetry_due.is_some_and(|due| due <= now.as_micros()),
@@ -507,6 +507,7 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
             // one (the touchdown) the plant may stop listening.
             Next::Step(step) => {
                 out.charged = step.actuators.is_none();
+                beat.step_time(step.time_us);
                 out.mission_status(false).await;
                 out.step(step, &mut state).await;
                 out.charged = true;
@@ -519,7 +520,7 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
                 out.encode(&timesync(|t| t.request(now_ns)));
                 out.flush().await;
                 out.drops().await;
-                next_beat = Instant::now() + Duration::from_secs(1);
+                beat.sent(Instant::now().as_micros());
             }
             Next::Reply(message) => {
                 out.mission_status(false).await;
@@ -530,7 +531,7 @@ pub async fn send(tx: <Selected as Board>::LinkTx) {
             Next::ListValue(index) => out.param_value(*index).await,
             Next::Wait => {
                 let wake = Instant::from_micros(wake_at(
-                    next_beat.as_micros(),
+                    beat.next_board_us(),
                     may_wait_goes,
                     out.budget.ready_at(),
                     telemetry_due,
