@@ -121,7 +121,7 @@ pub struct Recorder {
     /// The last `vehicle_status` written: armed, navigation state, phase.
     status: Option<(bool, u8, u8)>,
     /// The last `fault` written: its fields after the timestamp.
-    fault: Option<(u8, u8, bool, bool, bool, u8)>,
+    fault: Option<(u16, u16, bool, bool, bool, u8)>,
     /// The pair chosen for the lift under way and its information.
     pair: Option<(u8, f32)>,
     /// A lift read whose estimate has not come back yet.

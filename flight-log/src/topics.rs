@@ -139,7 +139,7 @@ impl Topic {
                  float duration_s"
             }
             Self::Fault => {
-                "fault:uint64_t timestamp;uint8_t rotors_out;uint8_t stalled_robots;bool imu;\
+                "fault:uint64_t timestamp;uint16_t rotors_out;uint16_t stalled_robots;bool imu;\
                  bool imu_dropped;bool gcs_link;uint8_t battery_warning"
             }
             Self::VehicleAttitudeSetpoint => {
@@ -309,9 +309,9 @@ pub enum Record {
         /// Time, us.
         timestamp: u64,
         /// Rotors the drivers report stopped (bit j: robot j).
-        rotors_out: u8,
+        rotors_out: u16,
         /// Robots whose steppers stalled (bit j).
-        stalled_robots: u8,
+        stalled_robots: u16,
         /// The IMU driver reports a fault.
         imu: bool,
         /// The mission flies without the IMU.
@@ -551,8 +551,8 @@ impl Record {
                 battery_warning,
                 ..
             } => p
-                .u8(rotors_out)
-                .u8(stalled_robots)
+                .u16(rotors_out)
+                .u16(stalled_robots)
                 .u8(u8::from(imu))
                 .u8(u8::from(imu_dropped))
                 .u8(u8::from(gcs_link))

@@ -42,7 +42,7 @@ impl Vehicle {
         }
         HardwareFaults {
             imu: self.options.imu_fault,
-            stalled_robots: self.options.stalled_robots,
+            stalled_robots: u16::from(self.options.stalled_robots),
             rotors_out: 0,
         }
     }

@@ -236,50 +236,53 @@ fn losing_motion_capture_in_flight_lands_in_place_instead_of_falling() {
     );
 }
 
-/// Robot 2's stepper stalls halfway to its place in the formation (`stepper-stall:2`): the mission
-/// must not fly with a robot off its planned place, so it stops on the ground with the robot named,
-/// no take-off, rotors stopped, the robot where it stalled.
+/// A robot's stepper stalls halfway to its place in the formation (`stepper-stall:2` on
+/// rect-ex1; `stepper-stall:12`, the last of sixteen bits the drivers report, on rect-12): the
+/// mission must not fly with a robot off its planned place, so it stops on the ground with the
+/// robot named, no take-off, rotors stopped, the robot where it stalled.
 #[test]
 fn a_stepper_stalled_during_the_rearrangement_stops_the_mission_on_the_ground() {
-    let s = load("rect-ex1");
-    let robot = 1; // "robot 2" to people
-    let setup = MissionSetup {
-        stepper_stall: Some(robot),
-        ..MissionSetup::default()
-    };
-    let (outcome, autopilot) = mission_run::run(&s, &setup, &mut |_, _, _| {}).expect("runs");
-    assert_eq!(
-        outcome.aborted,
-        Some(AbortReason::RobotStalled { robot: 1 }),
-        "{:?}",
-        autopilot.reasons
-    );
-    assert!(!outcome.flew, "never left the ground");
-    assert!(
-        !outcome.phases.iter().any(|(n, _)| n == "takeoff"),
-        "no take-off: {:?}",
-        outcome.phases
-    );
-    assert!(
-        outcome.final_thrusts.iter().all(|&t| t == 0.0),
-        "rotors stopped: {:?}",
-        outcome.final_thrusts
-    );
-    assert!(
-        outcome.phases.iter().any(|(n, _)| n == "rearrange"),
-        "stalled while rearranging: {:?}",
-        outcome.phases
-    );
-    // Where it stopped: short of its place in the formation (how far along is the unit
-    // test's: `mission_run`'s `a_stalled_stepper_stops_halfway`).
-    let rail = &s.payload.rail;
-    let place = outcome.positions.as_ref().expect("a formation was chosen")[robot];
-    let stopped = outcome.final_rail[robot];
-    let gap = rail.forward_gap(stopped, place);
-    assert!(
-        gap.min(rail.perimeter() - gap) > 0.05,
-        "robot 2 stopped at {stopped:.3} m, its place {place:.3} m"
-    );
+    for (name, robot) in [("rect-ex1", 1), ("rect-12", 11)] {
+        let s = load(name);
+        let setup = MissionSetup {
+            stepper_stall: Some(robot),
+            ..MissionSetup::default()
+        };
+        let (outcome, autopilot) = mission_run::run(&s, &setup, &mut |_, _, _| {}).expect("runs");
+        assert_eq!(
+            outcome.aborted,
+            Some(AbortReason::RobotStalled { robot: robot as u8 }),
+            "{name}: {:?}",
+            autopilot.reasons
+        );
+        assert!(!outcome.flew, "{name}: never left the ground");
+        assert!(
+            !outcome.phases.iter().any(|(n, _)| n == "takeoff"),
+            "{name}: no take-off: {:?}",
+            outcome.phases
+        );
+        assert!(
+            outcome.final_thrusts.iter().all(|&t| t == 0.0),
+            "{name}: rotors stopped: {:?}",
+            outcome.final_thrusts
+        );
+        assert!(
+            outcome.phases.iter().any(|(n, _)| n == "rearrange"),
+            "{name}: stalled while rearranging: {:?}",
+            outcome.phases
+        );
+        // Where it stopped: short of its place in the formation (how far along is the unit
+        // test's: `mission_run`'s `a_stalled_stepper_stops_halfway`).
+        let rail = &s.payload.rail;
+        let place = outcome.positions.as_ref().expect("a formation was chosen")[robot];
+        let stopped = outcome.final_rail[robot];
+        let gap = rail.forward_gap(stopped, place);
+        assert!(
+            gap.min(rail.perimeter() - gap) > 0.05,
+            "{name}: robot {} stopped at {stopped:.3} m, its place {place:.3} m",
+            robot + 1
+        );
+    }
 }
 
 /// A payload the robots cannot lift (the grid allows at most 4 kg; eight rotors make 113.6 N):

@@ -116,9 +116,6 @@ fn faults_are_the_simulators_injections_on_about_half_the_trials() {
             host_sim::inject::check_robots(&[f], &t.loaded).is_ok(),
             "{text} on {robots} robots"
         );
-        if let host_sim::inject::Fault::StepperStall(robot) = f.fault {
-            assert!(robot < faults::STALLABLE_ROBOTS, "{text}");
-        }
         kinds.insert(faults::kind(&f.fault));
     }
     assert_eq!(kinds, faults::KINDS.into_iter().collect::<BTreeSet<_>>());

@@ -16,7 +16,7 @@
 //! it lands).
 
 use core::cell::Cell;
-use core::sync::atomic::{AtomicU8, Ordering};
+use core::sync::atomic::{AtomicU16, Ordering};
 
 use drivers::stepper::{AxisConfig, RailAxis, StallMonitor};
 use drivers::tmc2209::{self, reg};
@@ -54,7 +54,7 @@ struct RailTargets {
 
 /// Robots whose steppers stalled, bit `j` for robot `j` (the control step reads it; cleared
 /// when the drivers are configured again).
-pub static STALLED: AtomicU8 = AtomicU8::new(0);
+pub static STALLED: AtomicU16 = AtomicU16::new(0);
 
 static TARGETS: Mutex<CriticalSectionRawMutex, Cell<Option<RailTargets>>> =
     Mutex::new(Cell::new(None));
@@ -196,7 +196,7 @@ pub async fn steppers(mut bus: StepperBus) {
                 };
                 axes[node] = None;
                 stalled[node] = false;
-                STALLED.fetch_and(!(1u8 << (bus.first_robot + node)), Ordering::Relaxed);
+                STALLED.fetch_and(!(1u16 << (bus.first_robot + node)), Ordering::Relaxed);
                 stalls[node] =
                     StallMonitor::new(settings.stall_threshold, STALL_READINGS, STALL_MIN_SPEED);
             }
@@ -228,7 +228,7 @@ pub async fn steppers(mut bus: StepperBus) {
                 && stalls[node].update(sg, vactual)
             {
                 stalled[node] = true;
-                STALLED.fetch_or(1u8 << robot, Ordering::Relaxed);
+                STALLED.fetch_or(1u16 << robot, Ordering::Relaxed);
                 axis.stop();
                 bus.write(node as u8, reg::VACTUAL, 0).await;
                 let _ = OUTBOX.try_send(report(

@@ -19,12 +19,6 @@ pub const IMU_NOISE: [f32; 2] = [20.0, 1000.0];
 /// The pack's voltage after a drop, V: below `BAT_CRIT_V` (13.2 V), the vehicle lands in place.
 pub const BATTERY_VOLTS: [f32; 2] = [10.0, 13.0];
 
-/// Robots whose stepper can be stalled: the drivers' stall report
-/// (`shared::mission::HardwareFaults::stalled_robots`) holds a bit for each of the first
-/// eight; the plant loop overflows it for robot 9 and above (`mission --inject stepper-stall:9`
-/// panics in a debug build), so the campaign stalls only these until it holds sixteen.
-pub const STALLABLE_ROBOTS: usize = 8;
-
 /// The kinds drawn, each as `--inject` names it.
 pub const KINDS: [&str; 7] = [
     "rotor-out",
@@ -67,7 +61,7 @@ pub fn draw(rng: &mut ChaCha8Rng, robots: usize) -> Option<Injection> {
         "battery" => Fault::Battery(
             (rng.random_range(BATTERY_VOLTS[0]..=BATTERY_VOLTS[1]) * 10.0).round() / 10.0,
         ),
-        _ => Fault::StepperStall(rng.random_range(0..robots.clamp(1, STALLABLE_ROBOTS))),
+        _ => Fault::StepperStall(robot),
     };
     let after = if matches!(fault, Fault::StepperStall(_)) {
         0.0

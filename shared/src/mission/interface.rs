@@ -204,13 +204,13 @@ pub struct CommandReply {
 pub struct HardwareFaults {
     /// The IMU is stalled, saturated or implausible (its samples are not to be trusted).
     pub imu: bool,
-    /// Robots whose steppers stalled, bit `j` for robot `j`.
-    pub stalled_robots: u8,
+    /// Robots whose steppers stalled, bit `j` for robot `j` (up to sixteen).
+    pub stalled_robots: u16,
     /// Robots whose ESC reports its rotor stopped while commanded to turn, bit `j` for robot
     /// `j` (no board reads ESC telemetry yet: 0). Heeded in flight only, where the flight
     /// flies on without the rotor and lands ([`AbortReason::RotorOut`]); not part of
     /// [`Self::reason`].
-    pub rotors_out: u8,
+    pub rotors_out: u16,
 }
 
 impl HardwareFaults {
@@ -226,10 +226,10 @@ impl HardwareFaults {
         if self.imu {
             return Some(AbortReason::ImuFault);
         }
-        let mask = if robots >= 8 {
-            u8::MAX
+        let mask = if robots >= 16 {
+            u16::MAX
         } else {
-            (1u8 << robots) - 1
+            (1u16 << robots) - 1
         };
         let stalled = self.stalled_robots & mask;
         (stalled != 0).then(|| AbortReason::RobotStalled {

@@ -654,6 +654,12 @@ fn fault_reasons_concern_the_missions_robots() {
         rotors_out: 0,
     };
     assert_eq!(stalled(0b1000_0000).reason(4), None);
+    // Sixteen robots, sixteen bits.
+    assert_eq!(stalled(1 << 12).reason(12), None);
+    assert_eq!(
+        stalled(1 << 15).reason(16),
+        Some(AbortReason::RobotStalled { robot: 15 })
+    );
     assert_eq!(
         stalled(0b1000_0100).reason(8),
         Some(AbortReason::RobotStalled { robot: 2 })

@@ -119,7 +119,7 @@ impl Mission {
     ) -> Option<Notice> {
         let flight = self.flight.as_mut()?;
         let n = self.scenario.robots.count();
-        let reported = u16::from(input.faults.rotors_out);
+        let reported = input.faults.rotors_out;
         // A frozen or noisy IMU makes a residual no rotor caused: once it is found, only the
         // ESCs' word counts.
         let imu_trusted =
