@@ -33,7 +33,7 @@ pub struct EscGate {
 
 impl EscGate {
     /// Outputs whose timers run `protocol`.
-    pub fn new(protocol: EscProtocol) -> Self {
+    pub const fn new(protocol: EscProtocol) -> Self {
         Self { protocol }
     }
 

@@ -5,6 +5,7 @@
 //!
 //! | module | device |
 //! |---|---|
+//! | [`dronecan`] | CAN ESCs over DroneCAN: RawCommand, Status, NodeStatus, frames, bus load |
 //! | [`dshot`] | ESC frames, DShot600 (the DShot protocol's frame and its 4-bit checksum) |
 //! | [`dshot_telemetry`] | bidirectional DShot's answer: each ESC's RPM from its line's edges |
 //! | [`esc_gate`] | what the ESC outputs send: armed commands, stops, protocol changes |
@@ -33,6 +34,7 @@ extern crate std;
 pub mod battery;
 pub mod biquad;
 pub mod crsf;
+pub mod dronecan;
 pub mod dshot;
 pub mod dshot_telemetry;
 pub mod esc_gate;

@@ -11,6 +11,9 @@ pub enum EscProtocol {
     Pwm,
     /// OneShot125: 125-250 us pulses, one per control step.
     OneShot125,
+    /// DroneCAN ESCs on the CAN bus (see [`crate::dronecan::esc_bus`]): the outputs' timers
+    /// send nothing, their lines held low.
+    DroneCan,
 }
 
 /// A protocol number that names no protocol.
@@ -21,28 +24,30 @@ impl core::fmt::Display for UnknownProtocol {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         write!(
             f,
-            "ESC protocol {} is unknown (0 DShot600, 1 PWM, 2 OneShot125)",
+            "ESC protocol {} is unknown (0 DShot600, 1 PWM, 2 OneShot125, 3 DroneCAN)",
             self.0
         )
     }
 }
 
 impl EscProtocol {
-    /// The protocol a parameter value names: 0 DShot600, 1 PWM, 2 OneShot125.
+    /// The protocol a parameter value names: 0 DShot600, 1 PWM, 2 OneShot125, 3 DroneCAN.
     pub fn from_param(value: i32) -> Result<Self, UnknownProtocol> {
         match value {
             0 => Ok(Self::Dshot600),
             1 => Ok(Self::Pwm),
             2 => Ok(Self::OneShot125),
+            3 => Ok(Self::DroneCan),
             other => Err(UnknownProtocol(other)),
         }
     }
 
     /// The pulse width (ns) for a command fraction in `[0, 1]`: the stop width at or below
-    /// zero, for a non-finite fraction, and always for DShot (which sends frames instead).
+    /// zero, for a non-finite fraction, and always 0 (no pulse: the line held low) for DShot and
+    /// DroneCAN, which send frames instead.
     pub fn pulse_ns(self, fraction: f32) -> u32 {
         let (stop, span) = match self {
-            Self::Dshot600 => return 0,
+            Self::Dshot600 | Self::DroneCan => return 0,
             Self::Pwm => (1_000_000, 1_000_000),
             Self::OneShot125 => (125_000, 125_000),
         };
@@ -55,7 +60,7 @@ impl EscProtocol {
     /// Pulses per second the outputs run at, for a control step of `tick_hz`.
     pub fn update_hz(self, tick_hz: u32) -> u32 {
         match self {
-            Self::Dshot600 | Self::OneShot125 => tick_hz,
+            Self::Dshot600 | Self::OneShot125 | Self::DroneCan => tick_hz,
             Self::Pwm => tick_hz.min(400),
         }
     }
@@ -90,6 +95,7 @@ mod tests {
         assert_eq!(EscProtocol::from_param(0), Ok(EscProtocol::Dshot600));
         assert_eq!(EscProtocol::from_param(1), Ok(EscProtocol::Pwm));
         assert_eq!(EscProtocol::from_param(2), Ok(EscProtocol::OneShot125));
+        assert_eq!(EscProtocol::from_param(3), Ok(EscProtocol::DroneCan));
         let err = EscProtocol::from_param(7).unwrap_err();
         assert_eq!(err, UnknownProtocol(7));
         assert!(std::format!("{err}").starts_with("ESC protocol 7"));
@@ -104,6 +110,7 @@ mod tests {
         assert_eq!(EscProtocol::OneShot125.pulse_ns(-1.0), 125_000);
         assert_eq!(EscProtocol::OneShot125.pulse_ns(1.0), 250_000);
         assert_eq!(EscProtocol::Dshot600.pulse_ns(1.0), 0);
+        assert_eq!(EscProtocol::DroneCan.pulse_ns(1.0), 0);
         assert_eq!(EscProtocol::Pwm.update_hz(400), 400);
         assert_eq!(EscProtocol::Pwm.update_hz(1000), 400);
     }

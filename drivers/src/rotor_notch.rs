@@ -9,9 +9,16 @@
 //!
 //! A notch is on while its frequency is at least [`MIN_NOTCH_HZ`] (PX4's
 //! `IMU_GYRO_DNF_MIN` is 25 Hz) and below 0.45 of the sample rate; its width is half its
-//! frequency (ArduPilot's default), at least [`MIN_BANDWIDTH_HZ`]: a narrower notch rings
-//! longer after a knock (a payload set down after a lift). Rotors turning at the same speed
-//! share one notch per harmonic. A notch that
+//! frequency (ArduPilot's default) for up to [`FULL_WIDTH_ROTORS`] rotors, at least
+//! [`MIN_BANDWIDTH_HZ`]: a narrower notch leaves more of a line whose rotor changes speed
+//! fast (a few rotors carrying a light payload) and rings longer after a knock (a payload set
+//! down after a lift). The notches lie in series in the rate loop, and below its centre each
+//! lags the signal by about (f / f0) / Q: at the 5 to 6 Hz where the rate loop crosses over,
+//! 28 notches half their frequency wide (fourteen robots) lag it by about 32 degrees against
+//! 15 to 20 for eight, and a payload of thirteen or more robots oscillated in roll until its
+//! rotors saturated. So with more rotors each notch is narrower by `FULL_WIDTH_ROTORS / n`,
+//! and the bank lags the loop as eight rotors' does. Rotors turning at the same speed share
+//! one notch per harmonic. A notch that
 //! comes on starts settled at the latest sample (or the first, if it comes on before any), so
 //! switching it adds no transient; the front end notches after its low-pass, so that sample is
 //! a smooth one.
@@ -24,9 +31,22 @@ pub const HARMONICS: usize = 2;
 pub const MIN_NOTCH_HZ: f32 = 25.0;
 /// Narrowest notch, Hz.
 pub const MIN_BANDWIDTH_HZ: f32 = 10.0;
+/// Rotors up to which a notch is half its frequency wide; beyond, narrower in proportion.
+pub const FULL_WIDTH_ROTORS: usize = 8;
 /// Change of a rotor's frequency, Hz, below which its notches keep their coefficients (RPM
 /// telemetry jitters; recomputing costs a sine and a cosine).
 const RETUNE_HZ: f32 = 0.5;
+
+/// Each notch's width as a share of the full (half its frequency) with `rotors` notched:
+/// one up to [`FULL_WIDTH_ROTORS`], then in proportion, so the bank's lag at the rate loop's
+/// crossover stays that of eight rotors.
+pub fn width_share(rotors: usize) -> f32 {
+    if rotors <= FULL_WIDTH_ROTORS {
+        1.0
+    } else {
+        FULL_WIDTH_ROTORS as f32 / rotors as f32
+    }
+}
 
 /// One notch over the six channels (gyro x y z, accelerometer x y z).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,6 +72,9 @@ pub struct RotorNotches<const ROTORS: usize> {
     notches: [[Notch; HARMONICS]; ROTORS],
     /// The latest sample, once there is one.
     latest: Option<[f32; 6]>,
+    /// The most rotors whose speed was heard at once (the notches' width follows it; a
+    /// rotor stopped reports 0 and still counts, a slot with no ESC is NaN and does not).
+    rotors_heard: usize,
 }
 
 impl<const ROTORS: usize> RotorNotches<ROTORS> {
@@ -61,13 +84,18 @@ impl<const ROTORS: usize> RotorNotches<ROTORS> {
             sample_hz,
             notches: [[Notch::OFF; HARMONICS]; ROTORS],
             latest: None,
+            rotors_heard: 0,
         }
     }
 
     /// Follows the rotors' speeds (RPM, one per rotor, in the ESCs' order; rotors past
     /// `ROTORS` are not notched, a missing or non-finite speed turns its rotor's notches off).
+    /// The notches' width follows the most rotors heard at once ([`width_share`]).
     pub fn follow(&mut self, rpm: &[f32]) {
         let nyquist_margin = 0.45 * self.sample_hz;
+        let heard = rpm.iter().take(ROTORS).filter(|r| r.is_finite()).count();
+        self.rotors_heard = self.rotors_heard.max(heard);
+        let share = width_share(self.rotors_heard);
         for k in 0..ROTORS {
             let turns_hz = rpm.get(k).copied().filter(|r| r.is_finite()).unwrap_or(0.0) / 60.0;
             for h in 0..HARMONICS {
@@ -87,7 +115,7 @@ impl<const ROTORS: usize> RotorNotches<ROTORS> {
                     continue;
                 }
                 let was_off = notch.centre_hz == 0.0;
-                let width = (0.5 * f).max(MIN_BANDWIDTH_HZ);
+                let width = (0.5 * f * share).max(MIN_BANDWIDTH_HZ);
                 notch.coefficients = BiquadCoefficients::notch(f, width, self.sample_hz);
                 notch.centre_hz = f;
                 if let (true, Some(latest)) = (was_off, &self.latest) {
@@ -163,6 +191,46 @@ mod tests {
         let notched = residual(true, rpm, 4000);
         assert!(raw > 1.3, "four unit sines: RMS {raw}");
         assert!(notched < 0.02 * raw, "{notched} of {raw}");
+    }
+
+    /// Phase lag, degrees, of a 5.5 Hz signal (where the rate loop crosses over) through the
+    /// notches of `rotors` rotors near `rpm`, each 0.5 % faster than the one before.
+    fn lag_at_crossover<const N: usize>(rotors: usize, rpm: f32) -> f32 {
+        // As the flight controller passes them: every slot, NaN where no ESC is.
+        let mut speeds = [f32::NAN; N];
+        for (k, s) in speeds.iter_mut().take(rotors).enumerate() {
+            *s = rpm * (1.0 + 0.005 * k as f32);
+        }
+        let mut notches = RotorNotches::<N>::new(2000.0);
+        notches.follow(&speeds);
+        assert_eq!(notches.active(), 2 * rotors);
+        let (f, n) = (5.5, 8000);
+        let (mut in_phase, mut quadrature) = (0.0, 0.0);
+        for k in 0..n {
+            let w = 2.0 * PI * f * k as f32 / 2000.0;
+            let y = notches.apply([shared::math::sin(w), 0.0, 0.0, 0.0, 0.0, 0.0])[0];
+            if k >= n / 2 {
+                in_phase += y * shared::math::sin(w);
+                quadrature += y * shared::math::cos(w);
+            }
+        }
+        -shared::math::atan2(quadrature, in_phase).to_degrees()
+    }
+
+    #[test]
+    fn sixteen_rotors_notches_lag_the_rate_loop_no_more_than_eight_rotors_do() {
+        // Eight rotors carrying a paper payload (about 6.5 N each, 7,400 RPM) and sixteen
+        // carrying a long one (about 4 N each, 5,800 RPM).
+        let eight = lag_at_crossover::<16>(8, 7_400.0);
+        let sixteen = lag_at_crossover::<16>(16, 5_800.0);
+        assert!(eight > 10.0 && eight < 20.0, "eight rotors lag {eight} deg");
+        // Half their frequency wide, sixteen rotors' notches would lag it by about 37 deg.
+        assert!(
+            sixteen < 1.3 * eight,
+            "sixteen {sixteen} deg, eight {eight} deg"
+        );
+        assert_eq!(width_share(4), 1.0);
+        assert_eq!(width_share(16), 0.5);
     }
 
     #[test]

@@ -84,10 +84,10 @@ pub struct StallMonitor {
 impl StallMonitor {
     /// A monitor with `SGTHRS` `threshold`, `needed` low readings in a row, and StallGuard
     /// trusted above `min_microsteps_per_s`.
-    pub fn new(threshold: u8, needed: u8, min_microsteps_per_s: f32) -> Self {
+    pub const fn new(threshold: u8, needed: u8, min_microsteps_per_s: f32) -> Self {
         Self {
             threshold,
-            needed: needed.max(1),
+            needed: if needed < 1 { 1 } else { needed },
             min_microsteps_per_s,
             run: 0,
         }

@@ -94,6 +94,8 @@ pub struct Vehicle {
     pub(crate) job_result: Option<(u32, JobResult)>,
     /// The phase as the vehicle last reported it (`phase: NAME: reason`).
     pub(crate) phase: String,
+    /// [`Self::steps`] when the phase was last reported.
+    pub(crate) phase_since: u64,
     /// The send side.
     pub(crate) encoder: Encoder,
     pub(crate) frame: Frame,
@@ -159,6 +161,7 @@ impl Vehicle {
             ground_signing: Signing::new(),
             sent: 0,
             steps: 0,
+            phase_since: 0,
             phases: Vec::new(),
         };
         v.send_outbound(&Outbound::Identity);

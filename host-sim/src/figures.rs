@@ -3,7 +3,7 @@
 //! reference, and roll and pitch over time, as PNG files. The submodules draw the others, as PNG
 //! and SVG through [`canvas`]: [`estimate_summary`] (Fig. 7) and [`estimate_steps`] (Fig. 6)
 //! for `estimate`, [`formation`] for `formation`, [`mission_summary`] for `mission`, and
-//! [`campaign_outcomes`] for `campaign`.
+//! [`campaign_outcomes`] for `campaign`; [`summary_layout`] places the mission summary's text.
 //!
 //! Text is drawn with the system's sans-serif font (plotters' `ttf` feature, through
 //! fontconfig). Where no font can be found the figure is skipped with a message; the CSV files
@@ -15,6 +15,7 @@ pub mod estimate_steps;
 pub mod estimate_summary;
 pub mod formation;
 pub mod mission_summary;
+pub mod summary_layout;
 
 use std::path::{Path, PathBuf};
 

@@ -137,6 +137,41 @@ fn marks(outcome: &MissionOutcome) -> Vec<Mark> {
     marks
 }
 
+/// Where a panel's legend begins, pixels from its top.
+const LEGEND_TOP: i32 = 40;
+/// Distance between two legend entries, pixels.
+const LEGEND_PITCH: i32 = 20;
+/// Width and least height of the page, pixels (three panels of 386 under the title's 40).
+const PAGE: (u32, u32) = (1100, 1200);
+/// Room for the page's title, pixels.
+const TITLE: u32 = 40;
+
+/// The legend of a panel of `series` with `marks`: each series, then each kind of mark once
+/// (a mission that adapts twice marks "shift measured" twice, with one colour).
+fn legend_entries<'a>(series: &'a [Curve], marks: &'a [Mark]) -> Vec<(&'a str, RGBColor, bool)> {
+    let mut entries: Vec<(&str, RGBColor, bool)> = series
+        .iter()
+        .map(|(label, c, _)| (label.as_str(), *c, false))
+        .collect();
+    for (_, label, c) in marks {
+        if !entries
+            .iter()
+            .any(|(l, _, dashed)| *dashed && *l == label.as_str())
+        {
+            entries.push((label.as_str(), *c, true));
+        }
+    }
+    entries
+}
+
+/// The page's size for panels whose longest legend has `entries`: tall enough that each
+/// panel holds it.
+fn page_size(entries: usize) -> (u32, u32) {
+    let legend = LEGEND_TOP + LEGEND_PITCH * entries.saturating_sub(1) as i32 + 12;
+    let panel = ((PAGE.1 - TITLE) / 3).max(legend.max(0) as u32);
+    (PAGE.0, PAGE.1.max(TITLE + 3 * panel))
+}
+
 /// One panel: each series `(label, points)` against time, with the marks; the legend in a
 /// column of its own right of the plot, so it covers no curve.
 fn panel(
@@ -186,12 +221,8 @@ fn panel(
             .draw_series(LineSeries::new(points.iter().copied(), c.stroke_width(2)))
             .map_err(draw_error)?;
     }
-    let entries = series
-        .iter()
-        .map(|(label, c, _)| (label.as_str(), *c, false))
-        .chain(marks.iter().map(|(_, label, c)| (label.as_str(), *c, true)));
-    for (k, (label, c, dashed)) in entries.enumerate() {
-        let y = 40 + 20 * k as i32;
+    for (k, (label, c, dashed)) in legend_entries(series, marks).into_iter().enumerate() {
+        let y = LEGEND_TOP + LEGEND_PITCH * k as i32;
         let line = if dashed {
             PathElement::new(vec![(4, y), (10, y), (14, y), (20, y)], c.stroke_width(2))
         } else {
@@ -238,10 +269,11 @@ fn draw(path: &Path, name: &str, outcome: &MissionOutcome) -> Result<()> {
     };
     let t = (first.t, last.t.max(first.t + 1.0));
     let n = first.rail.len();
-    let root = BitMapBackend::new(path, (1100, 1200)).into_drawing_area();
-    root.fill(&WHITE).map_err(draw_error)?;
-    let (title, body) = root.split_vertically(40);
     let marks = marks(outcome);
+    let size = page_size(n + legend_entries(&[], &marks).len());
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(draw_error)?;
+    let (title, body) = root.split_vertically(TITLE);
     let what = if marks.is_empty() {
         "the flight"
     } else {
@@ -306,4 +338,41 @@ fn draw(path: &Path, name: &str, outcome: &MissionOutcome) -> Result<()> {
     )?;
     root.present().map_err(draw_error)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_robot_and_each_kind_of_mark_fits_in_a_flight_panel() {
+        let marks: Vec<Mark> = vec![
+            (60.0, "load shift".to_string(), RED),
+            (61.0, "shift measured".to_string(), colour(1)),
+            (62.0, "rebalanced".to_string(), colour(2)),
+            (70.0, "shift measured".to_string(), colour(1)),
+            (71.0, "rebalanced".to_string(), colour(2)),
+        ];
+        for robots in [4, 8, 12, 16] {
+            let series: Vec<Curve> = (0..robots)
+                .map(|j| (format!("robot {}", j + 1), colour(j), Vec::new()))
+                .collect();
+            let entries = legend_entries(&series, &marks);
+            let labels: Vec<&str> = entries.iter().map(|e| e.0).collect();
+            for j in 1..=robots {
+                let name = format!("robot {j}");
+                assert_eq!(labels.iter().filter(|l| **l == name).count(), 1, "{name}");
+            }
+            assert_eq!(entries.len(), robots + 3, "{labels:?}");
+            let (_, height) = page_size(entries.len());
+            let panel = (height - TITLE) / 3;
+            let bottom = LEGEND_TOP + LEGEND_PITCH * (entries.len() as i32 - 1) + 12;
+            assert!(
+                bottom <= panel as i32,
+                "{robots} robots: {bottom} px in {panel}"
+            );
+        }
+        // Eight robots and no marks: the page as it was.
+        assert_eq!(page_size(8), PAGE);
+    }
 }

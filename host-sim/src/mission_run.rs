@@ -27,8 +27,8 @@ mod setup;
 pub use in_process::{DELIVERY_RADIUS, InProcess, MissionOutcome, run};
 pub use plant_loop::{Adaptation, FlightSample, PlantRecord, SERIES_EVERY, fly, model_lift};
 pub use setup::{
-    BatteryDrop, ImuFaultKind, ImuInjection, LOAD_SHIFT_TIME, LoadShift, MissionSetup, Onset,
-    PACK_SAG_VOLTS, PACK_VOLTS, RotorStop,
+    BatteryDrop, EscLink, ImuFaultKind, ImuInjection, LOAD_SHIFT_TIME, LoadShift, MissionSetup,
+    Onset, PACK_SAG_VOLTS, PACK_VOLTS, RotorStop,
 };
 
 /// Longest mission simulated, s.

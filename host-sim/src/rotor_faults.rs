@@ -12,7 +12,7 @@ use anyhow::{Result, anyhow};
 use shared::geometry::Vec2;
 use shared::scenario::{GRAVITY, Scenario};
 
-use crate::mission_run::{self, MissionOutcome, MissionSetup, RotorStop};
+use crate::mission_run::{self, EscLink, MissionOutcome, MissionSetup, RotorStop};
 
 /// Largest share of a rotor's maximum thrust a static hover may use.
 pub const HOVER_CEILING: f32 = 0.85;
@@ -129,16 +129,44 @@ fn formation(scenario: &Scenario, positions: &[f32]) -> Result<(Vec<Vec2>, Vec2,
     Ok((points, moment * (1.0 / total), total))
 }
 
-/// Flies `scenario` (seed 1) with `stops`, the ESCs' RPM or not.
+/// Where the rotor monitor reads each rotor's RPM from, if anywhere.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RpmSource {
+    /// Nowhere: the vehicle's response alone.
+    None,
+    /// Bidirectional DShot, every control step.
+    Dshot,
+    /// DroneCAN ESCs' Status, 50 Hz each.
+    DroneCan,
+}
+
+impl From<bool> for RpmSource {
+    /// `true`: bidirectional DShot's RPM; `false`: none.
+    fn from(esc_telemetry: bool) -> Self {
+        if esc_telemetry {
+            Self::Dshot
+        } else {
+            Self::None
+        }
+    }
+}
+
+/// Flies `scenario` (seed 1) with `stops`, the ESCs' RPM from `rpm`.
 pub fn fly(
     scenario: &Scenario,
     stops: &[RotorStop],
-    esc_telemetry: bool,
+    rpm: impl Into<RpmSource>,
 ) -> Result<MissionOutcome> {
+    let rpm = rpm.into();
     let setup = MissionSetup {
         seed: 1,
         rotors_out: stops.to_vec(),
-        esc_telemetry,
+        esc_telemetry: rpm == RpmSource::Dshot,
+        esc: if rpm == RpmSource::DroneCan {
+            EscLink::Dronecan
+        } else {
+            EscLink::Dshot
+        },
         ..MissionSetup::default()
     };
     Ok(mission_run::run(scenario, &setup, &mut |_, _, _| {})?.0)
@@ -146,13 +174,18 @@ pub fn fly(
 
 /// Rotors `a` and `b` (from 1) of `scenario` stopped at once [`PAIR_STOP_AFTER`] s after
 /// take-off began.
-pub fn pair(scenario: &Scenario, a: usize, b: usize, esc_telemetry: bool) -> Result<PairCase> {
+pub fn pair(
+    scenario: &Scenario,
+    a: usize,
+    b: usize,
+    rpm: impl Into<RpmSource>,
+) -> Result<PairCase> {
     let stop = |robot: usize| RotorStop {
         robot: robot - 1,
         after: PAIR_STOP_AFTER,
         fade: 0.0,
     };
-    let outcome = fly(scenario, &[stop(a), stop(b)], esc_telemetry)?;
+    let outcome = fly(scenario, &[stop(a), stop(b)], rpm)?;
     let positions = outcome
         .positions
         .clone()
@@ -218,7 +251,7 @@ pub fn fade(
     scenario: &Scenario,
     robot: usize,
     seconds: f32,
-    esc_telemetry: bool,
+    rpm: impl Into<RpmSource>,
 ) -> Result<FadeCase> {
     let stop = RotorStop {
         robot: robot - 1,
@@ -227,7 +260,7 @@ pub fn fade(
     };
     Ok(FadeCase {
         robot,
-        outcome: fly(scenario, &[stop], esc_telemetry)?,
+        outcome: fly(scenario, &[stop], rpm)?,
     })
 }
 

@@ -1,7 +1,8 @@
 //! The ESCs' telemetry over MAVLink (docs/firmware.md#esc-telemetry): each rotor's RPM in,
 //! from the HIL plant as `ESC_STATUS` (the plant's stand-in for bidirectional DShot), and the
 //! ESCs' state out to the ground station as `ESC_STATUS` and `ESC_INFO`, four ESCs a message
-//! in motor order, as PX4 sends them (QGroundControl's ESC status page, MAVSDK's telemetry).
+//! in motor order, as PX4 sends them (QGroundControl's ESC status page, MAVSDK's telemetry):
+//! with DroneCAN ESCs also what their `Status` measures ([`EscElectrical`]).
 
 use crate::hil::MAX_ROBOTS;
 use crate::msg::{ESC_INFO_DATA, ESC_STATUS_DATA, EscConnectionType};
@@ -19,6 +20,35 @@ pub const FAILURE_ROTOR_OUT: u16 = 64;
 pub const NO_TEMPERATURE: i16 = i16::MAX;
 
 const GROUPS: usize = MAX_ROBOTS / ESCS_PER_MESSAGE;
+
+/// What four ESCs of one message measure beside their RPM (DroneCAN's `Status`): NaN for a
+/// value not measured or not heard of.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EscElectrical {
+    /// Each one's supply voltage, V.
+    pub voltage: [f32; ESCS_PER_MESSAGE],
+    /// Each one's current, A.
+    pub current: [f32; ESCS_PER_MESSAGE],
+    /// Each one's temperature, degrees Celsius.
+    pub temperature_c: [f32; ESCS_PER_MESSAGE],
+    /// Each one's error count since it started.
+    pub errors: [u32; ESCS_PER_MESSAGE],
+}
+
+impl EscElectrical {
+    /// Nothing measured.
+    pub const NONE: Self = Self {
+        voltage: [f32::NAN; ESCS_PER_MESSAGE],
+        current: [f32::NAN; ESCS_PER_MESSAGE],
+        temperature_c: [f32::NAN; ESCS_PER_MESSAGE],
+        errors: [0; ESCS_PER_MESSAGE],
+    };
+}
+
+/// A measured value for a message's float field: 0 when not measured, as PX4 sends it.
+fn measured(v: f32) -> f32 {
+    if v.is_finite() { v } else { 0.0 }
+}
 
 /// What is wrong with a received `ESC_STATUS`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -148,11 +178,12 @@ pub fn reporting(vehicle: &VehicleSnapshot, rpm: &[f32; MAX_ROBOTS]) -> bool {
 }
 
 /// `ESC_STATUS` of the ESCs from `4 * message` on, `rpm` each robot's (NaN: no answer): each
-/// one's RPM (0 for one that did not answer, as PX4 sends it), voltage and current not
-/// measured (0).
+/// one's RPM (0 for one that did not answer, as PX4 sends it), and its voltage and current
+/// from `electrical` (0 where not measured, and without it).
 pub fn esc_status(
     vehicle: &VehicleSnapshot,
     esc_rpm: &[f32; MAX_ROBOTS],
+    electrical: Option<&EscElectrical>,
     message: usize,
 ) -> ESC_STATUS_DATA {
     let first = first_esc(message);
@@ -161,21 +192,25 @@ pub fn esc_status(
         // NaN as 0; `as` saturates the rest.
         *out = if r.is_finite() { r as i32 } else { 0 };
     }
+    let e = electrical.unwrap_or(&EscElectrical::NONE);
     ESC_STATUS_DATA {
         time_usec: vehicle.time_us,
         rpm,
+        voltage: e.voltage.map(measured),
+        current: e.current.map(measured),
         index: first as u8,
-        ..Default::default()
     }
 }
 
 /// `ESC_INFO` of the ESCs from `4 * message` on, its `counter`-th, `rpm` each robot's (NaN:
 /// no answer): how many ESCs there are, which answer (`info`, a bit per ESC of the first eight as
-/// PX4 has it), and the rotors flown without ([`FAILURE_ROTOR_OUT`]); no temperatures, no
-/// error counts.
+/// PX4 has it), and the rotors flown without ([`FAILURE_ROTOR_OUT`]). With `electrical` (CAN
+/// ESCs) each one's temperature and error count, and the connection CAN; without, DShot, no
+/// temperatures and no error counts.
 pub fn esc_info(
     vehicle: &VehicleSnapshot,
     rpm: &[f32; MAX_ROBOTS],
+    electrical: Option<&EscElectrical>,
     message: usize,
     counter: u16,
 ) -> ESC_INFO_DATA {
@@ -193,16 +228,35 @@ pub fn esc_info(
             *flags = FAILURE_ROTOR_OUT;
         }
     }
+    let (connection_type, temperature, error_count) = match electrical {
+        // cdegC, INT16_MAX where not measured.
+        Some(e) => (
+            EscConnectionType::ESC_CONNECTION_TYPE_CAN,
+            e.temperature_c.map(|c| {
+                if c.is_finite() {
+                    shared::math::clamp(shared::math::round(c * 100.0), -32_768.0, 32_766.0) as i16
+                } else {
+                    NO_TEMPERATURE
+                }
+            }),
+            e.errors,
+        ),
+        None => (
+            EscConnectionType::ESC_CONNECTION_TYPE_DSHOT,
+            [NO_TEMPERATURE; ESCS_PER_MESSAGE],
+            [0; ESCS_PER_MESSAGE],
+        ),
+    };
     ESC_INFO_DATA {
         time_usec: vehicle.time_us,
         counter,
         count: robots as u8,
-        connection_type: EscConnectionType::ESC_CONNECTION_TYPE_DSHOT,
+        connection_type,
         info: online,
         failure_flags,
-        temperature: [NO_TEMPERATURE; ESCS_PER_MESSAGE],
+        error_count,
+        temperature,
         index: first as u8,
-        ..Default::default()
     }
 }
 
@@ -264,16 +318,44 @@ mod tests {
         vehicle.rotors_out = 1 << 5;
         assert!(reporting(&vehicle, &rpm));
         assert_eq!(messages(vehicle.robots), 2);
-        let first = esc_status(&vehicle, &rpm, 0);
+        let first = esc_status(&vehicle, &rpm, None, 0);
         assert_eq!(first.index, 0);
         assert_eq!(first.rpm, [5000, 5100, 0, 5300]);
-        let second = esc_status(&vehicle, &rpm, 1);
+        assert_eq!((first.voltage, first.current), ([0.0; 4], [0.0; 4]));
+        let second = esc_status(&vehicle, &rpm, None, 1);
         assert_eq!(second.index, 4);
         assert_eq!(second.rpm, [i32::MAX, 0, 0, 0]);
-        let info = esc_info(&vehicle, &rpm, 1, 7);
+        let info = esc_info(&vehicle, &rpm, None, 1, 7);
         assert_eq!((info.index, info.count, info.counter), (4, 6, 7));
         assert_eq!(info.info, 0b11_1011);
         assert_eq!(info.failure_flags, [0, FAILURE_ROTOR_OUT, 0, 0]);
         assert_eq!(info.temperature, [NO_TEMPERATURE; 4]);
+        assert_eq!(
+            info.connection_type,
+            EscConnectionType::ESC_CONNECTION_TYPE_DSHOT
+        );
+    }
+
+    #[test]
+    fn can_escs_add_what_their_status_measures_and_not_what_they_did_not_say() {
+        let mut vehicle = VehicleSnapshot::START;
+        vehicle.robots = 4;
+        let rpm = [4_000.0; MAX_ROBOTS];
+        let electrical = EscElectrical {
+            voltage: [15.8, 15.7, f32::NAN, 15.6],
+            current: [3.5, 3.25, f32::NAN, f32::INFINITY],
+            temperature_c: [36.85, 40.0, f32::NAN, 1_000.0],
+            errors: [0, 2, 0, 7],
+        };
+        let status = esc_status(&vehicle, &rpm, Some(&electrical), 0);
+        assert_eq!(status.voltage, [15.8, 15.7, 0.0, 15.6]);
+        assert_eq!(status.current, [3.5, 3.25, 0.0, 0.0]);
+        let info = esc_info(&vehicle, &rpm, Some(&electrical), 0, 0);
+        assert_eq!(
+            info.connection_type,
+            EscConnectionType::ESC_CONNECTION_TYPE_CAN
+        );
+        assert_eq!(info.temperature, [3_685, 4_000, NO_TEMPERATURE, 32_766]);
+        assert_eq!(info.error_count, [0, 2, 0, 7]);
     }
 }

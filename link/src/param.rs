@@ -362,7 +362,7 @@ mod tests {
         };
         // A board that drives 12 rotors with DShot600 but 8 with PWM, under a 12-robot payload.
         let board = BoardDrives {
-            rotors: [12, 8, 12],
+            rotors: [12, 8, 12, 12],
             steppers: 12,
         };
         s.drive_robots(12, board);

@@ -143,7 +143,11 @@ fn state(mission: &Mission) -> MissionState {
 
 /// Whether the rotors may be armed in `phase`: the lifts, arming and the flight.
 fn arming_phase(phase: Phase) -> bool {
-    matches!(phase, Phase::Lifting | Phase::Arming | Phase::Flying(_))
+    // Relaxing: the rotors set the payload down after a lift (its first second).
+    matches!(
+        phase,
+        Phase::Lifting | Phase::Relaxing | Phase::Arming | Phase::Flying(_)
+    )
 }
 
 /// What a case saw, for the coverage checks.

@@ -113,6 +113,12 @@ impl LiftoffDetector {
         self.state
     }
 
+    /// The body's down axis (world frame) at rest before the ramp, the reference of the tilt;
+    /// zero while settling.
+    pub fn resting_axis(&self) -> Vec3 {
+        self.reference_axis
+    }
+
     /// Thrust to command on each robot of the pair now, N.
     pub fn pair_thrust(&self) -> f32 {
         self.thrust

@@ -78,6 +78,40 @@ pub const RECT_ROTORS: [Vec2; 8] = [
 /// Alternating spin signs of eight robots.
 pub const ALTERNATING_SPIN: [i8; 8] = [1, -1, 1, -1, 1, -1, 1, -1];
 
+/// Not a paper case: a 3.2 m x 0.3 m rectangle, the longest payload sixteen robots carry
+/// (tests/scenarios/rect-16.toml's outline), for the benchmarks of a control step with every
+/// robot the software takes.
+pub const LONG_RECT: [Vec2; 4] = [
+    Vec2::new(-1.6, -0.15),
+    Vec2::new(1.6, -0.15),
+    Vec2::new(1.6, 0.15),
+    Vec2::new(-1.6, 0.15),
+];
+
+/// Sixteen rotor points on [`LONG_RECT`]'s rail (m), eight along each long side, balanced
+/// about a COM near (0.1, 0.0).
+pub const LONG_RECT_ROTORS: [Vec2; 16] = [
+    Vec2::new(-1.6, -0.27),
+    Vec2::new(-1.1, -0.27),
+    Vec2::new(-0.6, -0.27),
+    Vec2::new(-0.1, -0.27),
+    Vec2::new(0.4, -0.27),
+    Vec2::new(0.9, -0.27),
+    Vec2::new(1.4, -0.27),
+    Vec2::new(1.72, -0.05),
+    Vec2::new(1.5, 0.27),
+    Vec2::new(1.0, 0.27),
+    Vec2::new(0.5, 0.27),
+    Vec2::new(0.0, 0.27),
+    Vec2::new(-0.5, 0.27),
+    Vec2::new(-1.0, 0.27),
+    Vec2::new(-1.5, 0.27),
+    Vec2::new(-1.72, 0.05),
+];
+
+/// Alternating spin signs of sixteen robots.
+pub const ALTERNATING_SPIN_16: [i8; 16] = [1, -1, 1, -1, 1, -1, 1, -1, 1, -1, 1, -1, 1, -1, 1, -1];
+
 /// `rect-sim1` as input.
 pub fn rect_sim1() -> ScenarioInput<'static> {
     ScenarioInput {
@@ -131,19 +165,31 @@ pub fn l_sim1() -> ScenarioInput<'static> {
 /// stack is airborne from its first step: the state the 400 Hz benchmarks step from. `None`
 /// if the mixer cannot be built (never, for these rotors).
 pub fn hovering_flight(mixer: MixerKind) -> Option<(Navigator, FlightStack)> {
+    hovering_flight_on(mixer, &RECT, &RECT_ROTORS, &ALTERNATING_SPIN, 3.5)
+}
+
+/// [`hovering_flight`] of any payload `outline` of `mass` kg (COM (0.12, 0.01)) on rotors at
+/// `points` spinning `spin`: [`LONG_RECT`] on [`LONG_RECT_ROTORS`] is the sixteen-robot case.
+pub fn hovering_flight_on(
+    mixer: MixerKind,
+    outline: &[Vec2],
+    points: &[Vec2],
+    spin: &[i8],
+    mass: f32,
+) -> Option<(Navigator, FlightStack)> {
     let com = Vec2::new(0.12, 0.01);
     let layout = RotorLayout {
-        points: &RECT_ROTORS,
-        spin: &ALTERNATING_SPIN,
+        points,
+        spin,
         com,
         torque_per_thrust: 0.016,
         max_thrust: 14.2,
     };
     let model = FlightModel {
         mixer: Mixer::build(mixer, &layout).ok()?,
-        vehicle: VehicleModel::from_payload(&RECT, com, 3.5, &RECT_ROTORS, 0.1, 14.2),
+        vehicle: VehicleModel::from_payload(outline, com, mass, points, 0.1, 14.2),
         com,
-        reach: reach_of(&RECT_ROTORS),
+        reach: reach_of(points),
     };
     let above = Vec3::new(0.0, 0.0, -0.5);
     let mut navigator = Navigator::new();

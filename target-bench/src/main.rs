@@ -232,10 +232,42 @@ fn main() -> ! {
     if mixer.is_err() {
         finish(false)
     }
-    // The tick the firmware runs: navigator (attitude filter, position observer) and flight
-    // stack (plan, nets, cascade, allocation), hovering. Two regimes: level hover (the usual
-    // case) and an IMU that disagrees with the setpoint so the allocation saturates every
-    // step (the worst case: desaturation runs).
+    // The tick the firmware runs, on eight rotors and on sixteen (every robot the software
+    // takes; the worst step's budget holds for both).
+    let eight = (&paper::RECT[..], &points[..], &spin[..], 3.5);
+    let sixteen = (
+        &paper::LONG_RECT[..],
+        &paper::LONG_RECT_ROTORS[..],
+        &paper::ALTERNATING_SPIN_16[..],
+        6.0,
+    );
+    for (outline, rotors, spins, mass) in [eight, sixteen] {
+        tick_figures(&mut timer, outline, rotors, spins, mass);
+    }
+    rotor_monitor_ticks(&mut timer, &mixer, layout.com, &paper::RECT, &points, 3.5);
+    let long_layout = RotorLayout {
+        points: &paper::LONG_RECT_ROTORS,
+        spin: &paper::ALTERNATING_SPIN_16,
+        ..layout
+    };
+    let long_mixer = Mixer::build(MixerKind::Allocation, &long_layout);
+    rotor_monitor_ticks(
+        &mut timer,
+        &long_mixer,
+        layout.com,
+        &paper::LONG_RECT,
+        &paper::LONG_RECT_ROTORS,
+        6.0,
+    );
+    flight_log_step(&mut timer, &rect);
+    finish(true)
+}
+
+/// The 400 Hz tick the firmware runs, hovering on `points`: navigator (attitude filter,
+/// position observer) and flight stack (plan, nets, cascade, allocation). Two regimes: level
+/// hover (the usual case) and an IMU that disagrees with the setpoint so the allocation
+/// saturates every step (the worst case: desaturation runs).
+fn tick_figures(timer: &mut Timer, outline: &[Vec2], points: &[Vec2], spin: &[i8], mass: f32) {
     const STEPS: u32 = 400;
     let mut results = [(0u64, 0u32, 0u32); 2];
     for (regime, (gyro, accel)) in [
@@ -246,7 +278,7 @@ fn main() -> ! {
     .enumerate()
     {
         let Some((mut navigator, mut flight)) =
-            shared::paper::hovering_flight(MixerKind::Allocation)
+            paper::hovering_flight_on(MixerKind::Allocation, outline, points, spin, mass)
         else {
             finish(false)
         };
@@ -275,7 +307,10 @@ fn main() -> ! {
         }
         results[regime].2 = saturated;
     }
-    hprintln!("400 Hz tick (navigator, flight stack), 8 rotors:");
+    hprintln!(
+        "400 Hz tick (navigator, flight stack), {} rotors:",
+        points.len()
+    );
     for ((label, goal), (total, worst, saturated)) in
         [("level hover", 5_000), ("saturating", 10_000)]
             .iter()
@@ -285,9 +320,6 @@ fn main() -> ! {
         report("    mean", (total / u64::from(STEPS)) as u32);
         report_against("    worst", worst, *goal);
     }
-    rotor_monitor_ticks(&mut timer, &mixer, layout.com);
-    flight_log_step(&mut timer, &rect);
-    finish(true)
 }
 
 /// The rotor monitor's share of a control step (it runs after the flight stack's step), on
@@ -298,23 +330,35 @@ fn rotor_monitor_ticks(
     timer: &mut Timer,
     mixer: &Result<Mixer, shared::control::allocation::AllocationError>,
     com: Vec2,
+    outline: &[Vec2],
+    points: &[Vec2],
+    mass: f32,
 ) {
     use shared::flight::rotor_monitor::{MonitorInput, RotorMonitor, RotorMonitorConfig};
     let Ok(mixer) = mixer else { finish(false) };
-    let vehicle =
-        VehicleModel::from_payload(&paper::RECT, com, 3.5, &paper::RECT_ROTORS, 0.1, 14.2);
+    let vehicle = VehicleModel::from_payload(outline, com, mass, points, 0.1, 14.2);
     let config = RotorMonitorConfig::DEFAULT;
     let n = mixer.count();
     let dt = 0.0025;
     let hover = vehicle.mass * GRAVITY / n as f32;
-    let thrusts = [hover; 8];
-    hprintln!("rotor monitor (after the flight stack's step), 8 rotors:");
+    let thrusts = [hover; shared::scenario::MAX_ROBOTS];
+    hprintln!(
+        "rotor monitor (after the flight stack's step), {} rotors:",
+        n
+    );
     // One judgement of a change against the rotors' columns: one rotor's loss, then two
     // rotors' (the pairs searched when the collective shows two rotors' loss).
     {
         use shared::flight::rotor_isolation::{Columns, Judging, explain};
         let expected = [hover; shared::scenario::MAX_ROBOTS];
-        let columns = Columns::new(n, mixer.columns_raw(), 1.0, &expected, 0xff, 1.0);
+        let columns = Columns::new(
+            n,
+            mixer.columns_raw(),
+            1.0,
+            &expected,
+            ((1u32 << n) - 1) as u16,
+            1.0,
+        );
         let loss = |rotors: &[usize]| {
             let mut d = [0.0f32; 3];
             for &j in rotors {
@@ -376,6 +420,7 @@ fn rotor_monitor_ticks(
                     com,
                     thrusts: &thrusts[..n],
                     rpm: None,
+                    rpm_per_message: false,
                     rate,
                     accel,
                     flying: true,

@@ -46,6 +46,8 @@ pub struct World {
     pub tilt: f32,
     /// Its rate, rad/s.
     pub tilt_rate: f32,
+    /// A roll rate the test drives whatever the rotors do (a payload rolling over), rad/s.
+    pub forced_tilt_rate: Option<f32>,
     /// The rotors make `1 / map_error` of what is commanded.
     pub map_error: f32,
     /// Motion capture sees the payload.
@@ -75,6 +77,7 @@ impl World {
             climb: 0.0,
             tilt: 0.0,
             tilt_rate: 0.0,
+            forced_tilt_rate: None,
             map_error: 1.0,
             mocap: true,
             ceiling: f32::INFINITY,
@@ -154,6 +157,9 @@ impl World {
             self.tilt_rate = if excess > 0.0 { 0.02 * excess } else { 0.0 };
         } else {
             self.tilt_rate = -self.tilt / 0.2;
+        }
+        if let Some(rate) = self.forced_tilt_rate {
+            self.tilt_rate = rate;
         }
         self.tilt += self.tilt_rate * dt;
         // Vertical flight: a point mass on the ground.

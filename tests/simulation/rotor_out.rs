@@ -258,6 +258,39 @@ fn two_rotors_at_once_with_rpm() {
     }
 }
 
+/// Longest time from two rotors stopping to the monitor naming them from their DroneCAN
+/// ESCs' Status, s (the requirement: 20 ms).
+const DRONECAN_DETECTION_BOUND_S: f32 = 0.02;
+
+/// DroneCAN ESCs (`--esc dronecan`): two rotors at once named from their ESCs' Status, which
+/// come at 50 Hz from each ESC (sixteen ESCs and the 400 Hz commands then fill 56 % of the
+/// 1 Mbit/s bus), within [`DRONECAN_DETECTION_BOUND_S`]: the wait for the next Status (up
+/// to 20 ms) after the rotor has slowed, the first low Status confirming (it is CRC-checked
+/// and the ESC's own measurement; DShot's 4-bit answers take 10 ms of them). All 28 pairs of
+/// rect-ex1: 2 to 17 ms, median 12 ms. The bus's load, counted frame by frame, at most 60 %.
+#[test]
+fn two_rotors_at_once_named_from_dronecan_escs_status() {
+    for (name, a, b) in [("rect-ex1", 1, 6), ("rect-ex1", 2, 5), ("L-sim1", 6, 8)] {
+        let case = format!("{name}, rotors {a} and {b} at once, DroneCAN ESCs");
+        let c =
+            rotor_faults::pair(&load(name), a, b, rotor_faults::RpmSource::DroneCan).expect("runs");
+        assert!(!c.outcome.dropped, "{case}: dropped");
+        let mut named = c.named();
+        named.sort_unstable();
+        assert_eq!(named, vec![a, b], "{case}: both named, no other");
+        let detection = c.detection_s().expect("named");
+        assert!(
+            detection < DRONECAN_DETECTION_BOUND_S,
+            "{case}: named after {detection} s"
+        );
+        let (frames, share) = c.outcome.can_bus_load.expect("a CAN bus");
+        assert!(
+            (2_000.0..3_000.0).contains(&frames) && share <= 0.6,
+            "{case}: {frames} frames/s, {share} of the bus"
+        );
+    }
+}
+
 /// Largest tilt before a fading rotor is named, degrees (measured at most 1.6).
 const FADE_TILT_DEG: f32 = 20.0;
 

@@ -407,10 +407,33 @@ fn validate_for_a_board_refuses_more_robots_than_it_drives_naming_both() {
     );
     assert!(
         err.contains(
-            "12 robots; this board drives 8 rotors (ESC_PROTOCOL DShot600) and 8 steppers"
+            "12 robots; this board drives 8 rotors (ESC_PROTOCOL DShot600) and 16 steppers"
         ),
         "{err}"
     );
+    // On DroneCAN ESCs the Pixhawk drives sixteen; on PWM still eight.
+    let args = [
+        "validate",
+        "--scenario",
+        path_str(&twelve),
+        "--board",
+        "pixhawk6c",
+        "--esc-protocol",
+        "3",
+    ];
+    let (code, stdout, stderr) = run(&args);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        stdout.contains("pixhawk6c drives them: 16 rotors (ESC_PROTOCOL DroneCAN), 16 steppers"),
+        "{stdout}"
+    );
+    let pwm = [&args[..6], &["1"]].concat();
+    let err = assert_refused(&pwm, "ESC_PROTOCOL PWM");
+    assert!(err.contains("this board drives 8 rotors"), "{err}");
+    let unknown = [&args[..6], &["4"]].concat();
+    let (code, _, stderr) = run(&unknown);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("no ESC_PROTOCOL"), "{stderr}");
     // QEMU's board and no board take it, as does the Pixhawk every paper case.
     for board in [&["--board", "qemu"][..], &[]] {
         let args = [&["validate", "--scenario", path_str(&twelve)][..], board].concat();

@@ -149,13 +149,17 @@ fn relative_links(markdown: &str) -> Vec<(String, Option<String>)> {
 /// with an anchor, has that heading; a message when not.
 fn check(root: &Path, file: &Path, anchor: Option<&str>) -> Option<String> {
     let path = root.join(file);
-    let Ok(text) = fs::read_to_string(&path) else {
+    if !path.exists() {
         return Some(format!("{} does not exist", file.display()));
-    };
+    }
+    // Only a Markdown file's headings are read (a figure is not text).
     let anchor = anchor.filter(|a| !a.is_empty())?;
     if file.extension().and_then(|e| e.to_str()) != Some("md") {
         return None;
     }
+    let Ok(text) = fs::read_to_string(&path) else {
+        return Some(format!("{} cannot be read as text", file.display()));
+    };
     let known = anchors(&text);
     (!known.contains(anchor)).then(|| {
         format!(

@@ -5,7 +5,8 @@
 //! DShot600 (the default): each timer runs at the bit rate and a DMA burst on its update event
 //! writes the next bit's compare values of all its channels (frames from
 //! [`drivers::dshot`]). PWM and OneShot125 ([`drivers::pulse`]): the timers run at 400 Hz and
-//! each control step sets the pulse widths. The protocol (parameter `ESC_PROTOCOL`) changes
+//! each control step sets the pulse widths. DroneCAN (the ESCs on CAN1, [`super::can_escs`]):
+//! the timers run at 400 Hz with no pulse, every line held low. The protocol (parameter `ESC_PROTOCOL`) changes
 //! only while disarmed.
 //!
 //! Bidirectional DShot (parameter `DSHOT_BIDIR_EN`, with DShot600): the channels turn active
@@ -196,7 +197,8 @@ fn set_rate<T: GeneralInstance4Channel>(
 ) {
     match protocol {
         EscProtocol::Dshot600 => pwm.set_frequency(Hertz(dshot::DSHOT600_BIT_HZ)),
-        EscProtocol::Pwm | EscProtocol::OneShot125 => {
+        // With DroneCAN the outputs run at 400 Hz with no pulse: their lines held low.
+        EscProtocol::Pwm | EscProtocol::OneShot125 | EscProtocol::DroneCan => {
             pwm.set_frequency(Hertz(pulse::EscProtocol::Pwm.update_hz(400)));
             for c in channels(chans) {
                 pwm.channel(c).enable();
@@ -529,7 +531,7 @@ pub async fn escs(mut t: EscTimers) {
                 };
                 RPM.lock(|cell| cell.set(rpm));
             }
-            EscProtocol::Pwm | EscProtocol::OneShot125 => {
+            EscProtocol::Pwm | EscProtocol::OneShot125 | EscProtocol::DroneCan => {
                 RPM.lock(|cell| cell.set(None));
                 set_pulses(&mut t.tim1, protocol, TIM1_CHANNELS, &fractions[0..4]);
                 set_pulses(&mut t.tim4, protocol, TIM4_CHANNELS, &fractions[4..6]);

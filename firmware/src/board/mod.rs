@@ -26,6 +26,8 @@ pub mod pixhawk6c;
 pub use pixhawk6c::Pixhawk6c as Selected;
 
 #[cfg(feature = "pixhawk6c")]
+pub mod can_escs;
+#[cfg(feature = "pixhawk6c")]
 pub mod escs;
 #[cfg(feature = "pixhawk6c")]
 pub mod fram;
@@ -124,6 +126,14 @@ pub trait Board: 'static {
     /// for an ESC that did not answer), or `None` when the board reads no ESC telemetry (no
     /// bidirectional DShot, or it is switched off).
     fn esc_rpm() -> Option<shared::mission::EscRpm> {
+        None
+    }
+
+    /// What the four ESCs of `ESC_STATUS` message `message` (robots `4 message + 1` on)
+    /// measure beside their RPM, from CAN ESCs' `Status`; `None` when the board reads no such
+    /// telemetry (DShot, PWM, HIL).
+    fn esc_electrical(message: usize) -> Option<link::esc::EscElectrical> {
+        let _ = message;
         None
     }
 }

@@ -31,8 +31,10 @@
 //! - Flight logs: the microSD card on SDMMC2, 4 bits (CK PD6, CMD PD7, D0-D3 PB14, PB15,
 //!   PB3, PB4; `board.h`), kernel clock PLL1Q 240 MHz, 24 MHz on the bus; no card-detect
 //!   line (`board_config.h` has none). See [`super::sdcard`].
-//! - Steppers: TMC2209s on TELEM2 (UART5, TX PC12) and TELEM3 (USART2, TX PD5), half duplex,
-//!   see [`super::steppers`] and docs/hardware.md#the-pixhawk-6cs-wiring.
+//! - DroneCAN ESCs: CAN1, FDCAN1 on PD0 (RX) and PD1 (TX) (`board.h`), see [`super::can_escs`].
+//! - Steppers: TMC2209s on TELEM2 (UART5, TX PC12), TELEM3 (USART2, TX PD5), GPS1 (USART1,
+//!   TX PB6) and the debug port (USART3, TX PD8), half duplex, see [`super::steppers`] and
+//!   docs/hardware.md#the-pixhawk-6cs-wiring.
 
 use defmt_rtt as _;
 use drivers::pulse::EscProtocol;
@@ -112,6 +114,7 @@ impl Outputs {
             Err(e) => refuse(format_args!("{e}")),
         }
         super::escs::set_telemetry(settings.dshot_bidirectional, settings.motor_poles);
+        super::can_escs::set_node_id(settings.can_node_id);
     }
 }
 
@@ -124,11 +127,13 @@ impl ActuatorOutputs for Outputs {
         }
         self.watchdog.pet();
         self.follow_parameters(armed);
-        let mut commands = [0.0f32; super::escs::OUTPUTS];
+        let mut commands = [0.0f32; shared::scenario::MAX_ROBOTS];
         for (command, &t) in commands.iter_mut().zip(thrust) {
             *command = self.thrust_map.command(t);
         }
-        super::escs::command(self.protocol, &commands, armed);
+        let robots = thrust.len().min(commands.len());
+        super::escs::command(self.protocol, &commands[..robots], armed);
+        super::can_escs::command(self.protocol, &commands[..robots], armed);
         super::steppers::command(rail);
     }
 }
@@ -198,13 +203,25 @@ impl Board for Pixhawk6c {
         HardwareFaults {
             imu: super::imu_spi::FAULTED.load(core::sync::atomic::Ordering::Relaxed),
             stalled_robots: super::steppers::STALLED.load(core::sync::atomic::Ordering::Relaxed),
-            // The ESCs' word is their RPM ([`Self::esc_rpm`]); the rotor monitor judges it.
-            rotors_out: 0,
+            // DShot ESCs' word is their RPM ([`Self::esc_rpm`]), which the rotor monitor
+            // judges; a DroneCAN ESC gone silent, or saying it failed, is its rotor's failure.
+            rotors_out: super::can_escs::failed(),
         }
     }
 
-    /// The answers to the latest bidirectional DShot frame (`DSHOT_BIDIR_EN` with DShot600).
+    /// The DroneCAN ESCs' voltage, current, temperature and error count from their Status.
+    fn esc_electrical(message: usize) -> Option<link::esc::EscElectrical> {
+        super::can_escs::electrical(message)
+    }
+
+    /// The DroneCAN ESCs' latest Status, or the answers to the latest bidirectional DShot
+    /// frame (`DSHOT_BIDIR_EN` with DShot600).
     fn esc_rpm() -> Option<shared::mission::EscRpm> {
+        if let Some(rpm) = super::can_escs::rpm() {
+            return Some(core::array::from_fn(|i| {
+                rpm.get(i).copied().unwrap_or(f32::NAN)
+            }));
+        }
         let rpm = super::escs::take_rpm()?;
         Some(core::array::from_fn(|i| {
             rpm.get(i).copied().unwrap_or(f32::NAN)
@@ -243,6 +260,9 @@ pub fn clock_config() -> Config {
     rcc.mux.adcsel = embassy_stm32::rcc::mux::Adcsel::PER;
     // The microSD card's kernel clock: PLL1Q, 240 MHz (PX4's too).
     rcc.mux.sdmmcsel = embassy_stm32::rcc::mux::Sdmmcsel::PLL1_Q;
+    // CAN1's kernel clock: the 16 MHz crystal, 16 time quanta a bit at 1 Mbit/s (the reset
+    // value, named so a change of the PLLs leaves it alone).
+    rcc.mux.fdcansel = embassy_stm32::rcc::mux::Fdcansel::HSE;
     config
 }
 
@@ -305,8 +325,12 @@ bind_interrupts!(
     UART8 => usart::InterruptHandler<peripherals::UART8>;
     UART5 => usart::InterruptHandler<peripherals::UART5>;
     USART2 => usart::InterruptHandler<peripherals::USART2>;
+    USART1 => usart::BufferedInterruptHandler<peripherals::USART1>;
+    USART3 => usart::BufferedInterruptHandler<peripherals::USART3>;
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     SDMMC2 => embassy_stm32::sdmmc::InterruptHandler<peripherals::SDMMC2>;
+    FDCAN1_IT0 => embassy_stm32::can::IT0InterruptHandler<peripherals::FDCAN1>;
+    FDCAN1_IT1 => embassy_stm32::can::IT1InterruptHandler<peripherals::FDCAN1>;
 });
 
 /// SPI clock of the IMU: 10 MHz (the ICM-42688-P takes up to 24 MHz).
@@ -325,7 +349,11 @@ pub struct ControlTasks {
     usb_device: Option<super::usb_link::UsbDeviceTask>,
     imu: super::imu_spi::ImuBus,
     escs: super::escs::EscTimers,
-    steppers: [Option<super::steppers::StepperBus>; 2],
+    can: (
+        embassy_stm32::can::CanTx<'static>,
+        embassy_stm32::can::CanRx<'static>,
+    ),
+    steppers: [Option<super::steppers::StepperBus>; super::steppers::BUSES],
     reset: ResetReason,
 }
 
@@ -341,6 +369,10 @@ static USB_EP_OUT_BUFFER: StaticCell<[u8; 256]> = StaticCell::new();
 /// The stepper buses' receive rings.
 static STEPPER_RX: [ConstStaticCell<[u8; 64]>; 2] =
     [ConstStaticCell::new([0; 64]), ConstStaticCell::new([0; 64])];
+/// The interrupt-driven stepper buses' (GPS1, the debug port) send and receive buffers: a
+/// request is at most 8 bytes, its echo and reply 16.
+static STEPPER_BUFFERS: ConstStaticCell<[([u8; 16], [u8; 32]); 2]> =
+    ConstStaticCell::new([([0; 16], [0; 32]); 2]);
 /// TELEM1's receive ring: 5.5 ms at 921,600 baud, 14 ms of a HIL plant's traffic (400 Hz
 /// `HIL_SENSOR` and 100 Hz motion capture); the receive task drains it far more often.
 static LINK_RX_BUFFER: StaticCell<[u8; 512]> = StaticCell::new();
@@ -514,6 +546,7 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
             ]
         },
     };
+    let can = super::can_escs::open(p.FDCAN1, p.PD0, p.PD1);
     // Steppers: TMC2209s on TELEM2 (UART5) and TELEM3 (USART2), TX through 1 kOhm and RX on
     // the drivers' single wire.
     let mut stepper_config = usart::Config::default();
@@ -542,11 +575,39 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
                name| {
         let (tx, rx) = uart.split();
         super::steppers::StepperBus {
-            tx,
-            rx: rx.into_ring_buffered(ring),
+            port: super::steppers::StepperPort::Dma {
+                tx,
+                rx: rx.into_ring_buffered(ring),
+            },
             first_robot,
             name,
         }
+    };
+    // Robots 9-16 on GPS1 (USART1) and the debug port (USART3), by interrupt: DMA1's eight
+    // streams are taken, and DMA2's two left would serve one bus.
+    let [(gps1_tx, gps1_rx), (debug_tx, debug_rx)] = STEPPER_BUFFERS.take();
+    let gps1 = BufferedUart::new(
+        p.USART1,
+        p.PA10,
+        p.PB6,
+        gps1_tx,
+        gps1_rx,
+        Irqs,
+        stepper_config,
+    );
+    let debug = BufferedUart::new(
+        p.USART3,
+        p.PD9,
+        p.PD8,
+        debug_tx,
+        debug_rx,
+        Irqs,
+        stepper_config,
+    );
+    let buffered = |uart: BufferedUart<'static>, first_robot, name| super::steppers::StepperBus {
+        port: super::steppers::StepperPort::Buffered(uart),
+        first_robot,
+        name,
     };
     let steppers = [
         telem2
@@ -555,6 +616,8 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
         telem3
             .ok()
             .map(|uart| bus(uart, STEPPER_RX[1].take(), 4, "TELEM3")),
+        gps1.ok().map(|uart| buffered(uart, 8, "GPS1")),
+        debug.ok().map(|uart| buffered(uart, 12, "the debug port")),
     ];
     // The RC receiver on GPS2 (UART8, RX PE0), receive only; opened for CRSF, reconfigured by
     // the receiver task for the protocol the parameters ask for.
@@ -618,6 +681,7 @@ pub fn init() -> (Parts<Pixhawk6c>, BoardParts) {
             usb_device,
             imu,
             escs,
+            can,
             steppers,
             reset,
         },
@@ -632,6 +696,7 @@ pub fn spawn_control_tasks(spawner: SendSpawner, link_spawner: SendSpawner, task
         usb_device,
         imu,
         escs,
+        can: (can_tx, can_rx),
         steppers,
         reset,
     } = tasks;
@@ -658,16 +723,28 @@ pub fn spawn_control_tasks(spawner: SendSpawner, link_spawner: SendSpawner, task
         Ok(token) => spawner.spawn(token),
         Err(e) => defmt::error!("ESC task not spawned: {}", e),
     }
-    for bus in steppers {
-        match bus.map(super::steppers::steppers) {
-            Some(Ok(token)) => spawner.spawn(token),
-            Some(Err(e)) => defmt::error!("stepper task not spawned: {}", e),
-            None => {
-                let _ = crate::app::OUTBOX.try_send(crate::app::comms::report(
-                    crate::app::autonomy::Severity::Critical,
-                    format_args!("a stepper bus UART refused its configuration"),
-                ));
-            }
+    match super::can_escs::send(can_tx) {
+        Ok(token) => spawner.spawn(token),
+        Err(e) => defmt::error!("CAN send task not spawned: {}", e),
+    }
+    match super::can_escs::receive(can_rx) {
+        Ok(token) => spawner.spawn(token),
+        Err(e) => defmt::error!("CAN receive task not spawned: {}", e),
+    }
+    // Two tasks, each two buses: TELEM2 and GPS1 (robots 1-4, 9-12), TELEM3 and the debug
+    // port (robots 5-8, 13-16).
+    let [telem2, telem3, gps1, debug] = steppers;
+    let pairs = [[telem2, gps1], [telem3, debug]];
+    if pairs.iter().flatten().any(Option::is_none) {
+        let _ = crate::app::OUTBOX.try_send(crate::app::comms::report(
+            crate::app::autonomy::Severity::Critical,
+            format_args!("a stepper bus UART refused its configuration"),
+        ));
+    }
+    for pair in pairs {
+        match super::steppers::steppers(pair) {
+            Ok(token) => spawner.spawn(token),
+            Err(e) => defmt::error!("stepper task not spawned: {}", e),
         }
     }
 }

@@ -1,6 +1,9 @@
-//! The robots' steppers on the Pixhawk 6C: TMC2209 drivers on two single-wire UART
-//! buses, TELEM2 (UART5, TX PC12, RX PD2) for robots 1-4 and TELEM3 (USART2, TX PD5, RX PA3)
-//! for robots 5-8, node addresses 0-3 on each (MS1/MS2), at [`BAUD`]. The wiring is the
+//! The robots' steppers on the Pixhawk 6C: TMC2209 drivers on four single-wire UART buses,
+//! TELEM2 (UART5, TX PC12, RX PD2) for robots 1-4, TELEM3 (USART2, TX PD5, RX PA3) for robots
+//! 5-8, GPS1 (USART1, TX PB6, RX PA10) for robots 9-12 and the debug port (USART3, TX PD8,
+//! RX PD9) for robots 13-16, node addresses 0-3 on each (MS1/MS2), at [`BAUD`]. The first two
+//! move their bytes by DMA; the DMA streams left over are too few for the other two, which
+//! move theirs by interrupt ([`StepperPort`]). The wiring is the
 //! datasheet's for a standard UART: TX through 1 kOhm and RX directly to the drivers' PDN_UART
 //! line (docs/hardware.md#the-pixhawk-6cs-wiring), so every request comes back as an echo before the
 //! reply; the echo is checked. The driver core is [`drivers::tmc2209`] and
@@ -21,12 +24,13 @@ use core::sync::atomic::{AtomicU16, Ordering};
 use drivers::stepper::{AxisConfig, RailAxis, StallMonitor};
 use drivers::tmc2209::{self, reg};
 use embassy_stm32::mode::Async;
-use embassy_stm32::usart::{RingBufferedUartRx, UartTx};
+use embassy_stm32::usart::{BufferedUart, RingBufferedUartRx, UartTx};
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_time::{Duration, Ticker, with_timeout};
 use embedded_io_async::Read;
 use shared::mission::HardwareConfig;
+use shared::rail::stepper::DriveConfig;
 
 use crate::app::autonomy::Severity;
 use crate::app::comms::report;
@@ -38,6 +42,10 @@ pub const BAUD: u32 = 115_200;
 pub const UPDATE_HZ: u64 = 50;
 /// Drivers per bus.
 const NODES: usize = 4;
+/// Buses, and the robots they drive.
+pub const BUSES: usize = 4;
+/// Robots the buses drive.
+const ROBOTS: usize = NODES * BUSES;
 /// Longest wait for a reply (8 bytes take 0.7 ms at 115,200 baud).
 const REPLY_TIMEOUT: Duration = Duration::from_millis(3);
 /// Low `SG_RESULT` readings in a row that make a stall (0.1 s).
@@ -45,10 +53,31 @@ const STALL_READINGS: u8 = 5;
 /// StallGuard is trusted above this speed, microsteps/s.
 const STALL_MIN_SPEED: f32 = 400.0;
 
+/// The drivers' settings: the part of the hardware parameters the steppers take (a change of
+/// any other parameter leaves the drivers alone).
+#[derive(Clone, Copy, PartialEq)]
+struct StepperSettings {
+    drive: DriveConfig,
+    stepper_current: f32,
+    stepper_r_sense: f32,
+    stall_threshold: u8,
+}
+
+impl StepperSettings {
+    fn of(hw: &HardwareConfig) -> Self {
+        Self {
+            drive: hw.drive,
+            stepper_current: hw.stepper_current,
+            stepper_r_sense: hw.stepper_r_sense,
+            stall_threshold: hw.stall_threshold,
+        }
+    }
+}
+
 /// Where the control step wants the robots, m of arc, and how many there are.
 #[derive(Clone, Copy)]
 struct RailTargets {
-    positions: [f32; 8],
+    positions: [f32; ROBOTS],
     robots: usize,
 }
 
@@ -61,20 +90,57 @@ static TARGETS: Mutex<CriticalSectionRawMutex, Cell<Option<RailTargets>>> =
 
 /// Hands one control step's rail positions (m, one per robot) to the steppers.
 pub fn command(rail: &[f32]) {
-    let mut positions = [0.0; 8];
+    let mut positions = [0.0; ROBOTS];
     for (p, &r) in positions.iter_mut().zip(rail) {
         *p = r;
     }
-    let robots = rail.len().min(8);
+    let robots = rail.len().min(ROBOTS);
     TARGETS.lock(|t| t.set(Some(RailTargets { positions, robots })));
+}
+
+/// How a bus's UART moves its bytes.
+pub enum StepperPort {
+    /// By DMA: sending, and receiving into a ring (the echo arrives while sending).
+    Dma {
+        /// The sending half.
+        tx: UartTx<'static, Async>,
+        /// The receiving half, on a DMA ring.
+        rx: RingBufferedUartRx<'static>,
+    },
+    /// By interrupt, through the driver's buffers.
+    Buffered(BufferedUart<'static>),
+}
+
+impl StepperPort {
+    /// Drops whatever was received and not read.
+    fn drain(&mut self) {
+        match self {
+            Self::Dma { rx, .. } => while embedded_hal_nb::serial::Read::read(rx).is_ok() {},
+            Self::Buffered(uart) => while embedded_hal_nb::serial::Read::read(uart).is_ok() {},
+        }
+    }
+
+    async fn send(&mut self, bytes: &[u8]) -> Result<(), ()> {
+        match self {
+            Self::Dma { tx, .. } => tx.write(bytes).await.map_err(|_| ()),
+            Self::Buffered(uart) => embedded_io_async::Write::write_all(uart, bytes)
+                .await
+                .map_err(|_| ()),
+        }
+    }
+
+    async fn read_exact(&mut self, buf: &mut [u8]) -> Result<(), ()> {
+        match self {
+            Self::Dma { rx, .. } => rx.read_exact(buf).await.map_err(|_| ()),
+            Self::Buffered(uart) => uart.read_exact(buf).await.map_err(|_| ()),
+        }
+    }
 }
 
 /// One stepper bus: its UART and the robot its node 0 drives.
 pub struct StepperBus {
-    /// The UART's sending half.
-    pub tx: UartTx<'static, Async>,
-    /// The UART's receiving half, on a DMA ring (the echo arrives while sending).
-    pub rx: RingBufferedUartRx<'static>,
+    /// The UART.
+    pub port: StepperPort,
     /// Robot (0-based) of node 0; nodes 1-3 drive the next three.
     pub first_robot: usize,
     /// The bus's name for reports (`TELEM2`).
@@ -85,17 +151,18 @@ impl StepperBus {
     /// Sends `request`, reads its echo and then `reply` (if any); the bus is resynchronised
     /// (stale bytes dropped) first.
     async fn exchange(&mut self, request: &[u8], reply: &mut [u8]) -> Result<(), &'static str> {
-        while embedded_hal_nb::serial::Read::read(&mut self.rx).is_ok() {}
-        self.tx.write(request).await.map_err(|_| "UART error")?;
+        self.port.drain();
+        self.port.send(request).await.map_err(|_| "UART error")?;
         let mut echo = [0u8; 8];
         let echo = &mut echo[..request.len().min(8)];
+        let port = &mut self.port;
         let received = async {
-            self.rx.read_exact(echo).await?;
-            self.rx.read_exact(reply).await
+            port.read_exact(echo).await?;
+            port.read_exact(reply).await
         };
         match with_timeout(REPLY_TIMEOUT, received).await {
             Err(_) => Err("no answer"),
-            Ok(Err(_)) => Err("UART error"),
+            Ok(Err(())) => Err("UART error"),
             Ok(Ok(())) if echo != &request[..echo.len()] => {
                 Err("echo garbled: check the 1 kOhm TX resistor")
             }
@@ -119,7 +186,7 @@ impl StepperBus {
     }
 
     /// Configures driver `node`; why not, if it cannot be.
-    async fn configure(&mut self, node: u8, hw: &HardwareConfig) -> Result<(), &'static str> {
+    async fn configure(&mut self, node: u8, hw: &StepperSettings) -> Result<(), &'static str> {
         let version = (self.read(node, reg::IOIN).await? >> 24) as u8;
         if version != tmc2209::VERSION {
             return Err("not a TMC2209");
@@ -154,7 +221,7 @@ impl StepperBus {
     }
 }
 
-fn axis_config(hw: &HardwareConfig) -> AxisConfig {
+fn axis_config(hw: &StepperSettings) -> AxisConfig {
     let limits = MISSION_CONFIG.lock(|c| c.get().rail_limits);
     AxisConfig {
         drive: hw.drive,
@@ -163,71 +230,75 @@ fn axis_config(hw: &HardwareConfig) -> AxisConfig {
     }
 }
 
-/// Runs one stepper bus forever.
-#[embassy_executor::task(pool_size = 2)]
-pub async fn steppers(mut bus: StepperBus) {
-    let mut ticker = Ticker::every(Duration::from_micros(1_000_000 / UPDATE_HZ));
-    let dt = 1.0 / UPDATE_HZ as f32;
-    let mut hw: Option<HardwareConfig> = None;
-    let mut ready = [false; NODES];
-    let mut axes: [Option<RailAxis>; NODES] = [None; NODES];
-    let mut stalls = [StallMonitor::new(0, STALL_READINGS, STALL_MIN_SPEED); NODES];
-    let mut stalled = [false; NODES];
-    loop {
-        ticker.next().await;
-        let armed = crate::app::ARMED.load(core::sync::atomic::Ordering::Relaxed);
-        let settings = MISSION_CONFIG.lock(|c| c.get().hardware);
-        if !armed && hw != Some(settings) {
-            hw = Some(settings);
-            for node in 0..NODES {
-                let robot = bus.first_robot + node + 1;
-                ready[node] = match bus.configure(node as u8, &settings).await {
-                    Ok(()) => true,
-                    Err(why) => {
-                        let _ = OUTBOX.try_send(report(
-                            Severity::Warning,
-                            format_args!(
-                                "stepper of robot {robot} ({} node {node}): {why}",
-                                bus.name
-                            ),
-                        ));
-                        false
-                    }
-                };
-                axes[node] = None;
-                stalled[node] = false;
-                STALLED.fetch_and(!(1u16 << (bus.first_robot + node)), Ordering::Relaxed);
-                stalls[node] =
-                    StallMonitor::new(settings.stall_threshold, STALL_READINGS, STALL_MIN_SPEED);
-            }
+/// What the task keeps of one bus's drivers.
+struct BusDrivers {
+    ready: [bool; NODES],
+    axes: [Option<RailAxis>; NODES],
+    stalls: [StallMonitor; NODES],
+    stalled: [bool; NODES],
+}
+
+impl BusDrivers {
+    const NONE: Self = Self {
+        ready: [false; NODES],
+        axes: [None; NODES],
+        stalls: [StallMonitor::new(0, STALL_READINGS, STALL_MIN_SPEED); NODES],
+        stalled: [false; NODES],
+    };
+
+    /// Configures every driver on `bus` with `settings`, reporting those that fail.
+    async fn configure(&mut self, bus: &mut StepperBus, settings: &StepperSettings) {
+        for node in 0..NODES {
+            let robot = bus.first_robot + node + 1;
+            self.ready[node] = match bus.configure(node as u8, settings).await {
+                Ok(()) => true,
+                Err(why) => {
+                    let _ = OUTBOX.try_send(report(
+                        Severity::Warning,
+                        format_args!("stepper of robot {robot} ({} node {node}): {why}", bus.name),
+                    ));
+                    false
+                }
+            };
+            self.axes[node] = None;
+            self.stalled[node] = false;
+            STALLED.fetch_and(!(1u16 << (bus.first_robot + node)), Ordering::Relaxed);
+            self.stalls[node] =
+                StallMonitor::new(settings.stall_threshold, STALL_READINGS, STALL_MIN_SPEED);
         }
-        let Some(settings) = hw else { continue };
-        let Some(targets) = TARGETS.lock(|t| t.get()) else {
-            continue;
-        };
+    }
+
+    /// Moves each robot on `bus` one update towards `targets`, watching for stalls.
+    async fn update(
+        &mut self,
+        bus: &mut StepperBus,
+        settings: &StepperSettings,
+        targets: &RailTargets,
+        dt: f32,
+    ) {
         for node in 0..NODES {
             let robot = bus.first_robot + node;
-            if !ready[node] || robot >= targets.robots {
+            if !self.ready[node] || robot >= targets.robots {
                 continue;
             }
             let target = targets.positions[robot];
             // The arc length starts at the first position commanded (the robots' start).
             let axis =
-                axes[node].get_or_insert_with(|| RailAxis::new(axis_config(&settings), target));
-            let vactual = if stalled[node] {
+                self.axes[node].get_or_insert_with(|| RailAxis::new(axis_config(settings), target));
+            let vactual = if self.stalled[node] {
                 0
             } else {
                 axis.update(target, dt)
             };
             bus.write(node as u8, reg::VACTUAL, tmc2209::vactual_register(vactual))
                 .await;
-            if settings.stall_threshold == 0 || stalled[node] {
+            if settings.stall_threshold == 0 || self.stalled[node] {
                 continue;
             }
             if let Ok(sg) = bus.read(node as u8, reg::SG_RESULT).await
-                && stalls[node].update(sg, vactual)
+                && self.stalls[node].update(sg, vactual)
             {
-                stalled[node] = true;
+                self.stalled[node] = true;
                 STALLED.fetch_or(1u16 << robot, Ordering::Relaxed);
                 axis.stop();
                 bus.write(node as u8, reg::VACTUAL, 0).await;
@@ -238,6 +309,39 @@ pub async fn steppers(mut bus: StepperBus) {
                         robot + 1
                     ),
                 ));
+            }
+        }
+    }
+}
+
+/// Runs two stepper buses forever, one after the other in each update: four drivers take
+/// about 7 ms of a bus at [`BAUD`] (a write and a read each), so two fit the 20 ms of an
+/// update, and the two tasks' memory is half of four's.
+#[embassy_executor::task(pool_size = 2)]
+pub async fn steppers(mut buses: [Option<StepperBus>; 2]) {
+    let mut ticker = Ticker::every(Duration::from_micros(1_000_000 / UPDATE_HZ));
+    let dt = 1.0 / UPDATE_HZ as f32;
+    let mut hw: Option<StepperSettings> = None;
+    let mut drivers = [BusDrivers::NONE, BusDrivers::NONE];
+    loop {
+        ticker.next().await;
+        let armed = crate::app::ARMED.load(core::sync::atomic::Ordering::Relaxed);
+        let settings = StepperSettings::of(&MISSION_CONFIG.lock(|c| c.get().hardware));
+        if !armed && hw != Some(settings) {
+            hw = Some(settings);
+            for (bus, d) in buses.iter_mut().zip(&mut drivers) {
+                if let Some(bus) = bus {
+                    d.configure(bus, &settings).await;
+                }
+            }
+        }
+        let Some(settings) = hw else { continue };
+        let Some(targets) = TARGETS.lock(|t| t.get()) else {
+            continue;
+        };
+        for (bus, d) in buses.iter_mut().zip(&mut drivers) {
+            if let Some(bus) = bus {
+                d.update(bus, &settings, &targets, dt).await;
             }
         }
     }

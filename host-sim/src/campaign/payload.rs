@@ -23,7 +23,11 @@
 //!   and inside the footprint.
 //!
 //! The robots, the stopping rule and the flight are the paper's (rect-sim1: 0.1 kg robots of
-//! 14.2 N, 0.25 m apart, lifting in pairs; `eps_th` 0.8; the target 2 m away, 0.5 m high).
+//! 14.2 N, 0.25 m apart; `eps_th` 0.8; the target 2 m away, 0.5 m high). They lift in
+//! groups of [`lifting_group`]: pairs up to ten robots, as in the paper, and threes
+//! beyond, so a group's spare thrust lifts half the heaviest payload of the grid, as a team
+//! would choose for a long payload (two robots could not lift any edge of an 8 kg payload
+//! carried by sixteen: every lift read "could not lift" until the estimate gave up).
 //! A draw that a check refuses (or that the mission's planner cannot load) is drawn again from
 //! the same stream, at most [`MAX_ATTEMPTS`] times: the campaign never counts a payload that
 //! could not exist as a vehicle's failure.
@@ -165,6 +169,20 @@ fn numbers_toml(values: &[f32]) -> String {
     format!("[{}]", each.join(", "))
 }
 
+/// Each robot's mass, kg (the paper's).
+const ROBOT_MASS: f32 = 0.1;
+/// Each robot's largest thrust, N (the paper's).
+const ROBOT_MAX_THRUST: f32 = 14.2;
+
+/// Robots lifting together for a payload of the grid's heaviest mass for `robots` robots:
+/// the fewest, at least two, whose thrust beyond their own weight lifts half its weight (the
+/// paper's pairs lift two thirds of its heaviest, 4 kg for eight).
+pub fn lifting_group(robots: usize) -> usize {
+    let spare = ROBOT_MAX_THRUST - ROBOT_MASS * shared::scenario::GRAVITY;
+    let half = 0.5 * robots as f32 * PAYLOAD_MASS_PER_ROBOT[1] * shared::scenario::GRAVITY;
+    ((half / spare).ceil() as usize).max(2)
+}
+
 /// One draw for `robots` robots: the scenario file and its vertex count, or why there is none.
 fn candidate(
     name: &str,
@@ -263,8 +281,8 @@ fn candidate(
         "# A random payload (host-sim campaign): {n} vertices, {robots} robots.\n\
          name = \"{name}\"\n\n\
          [payload]\nfootprint = {}\nrail = {}\ncandidates = {}\n\n\
-         [robots]\ncount = {robots}\nmass = 0.1\nmax_thrust = 14.2\ntorque_per_thrust = 0.016\n\
-         spin = {}\nmin_spacing = 0.25\npair_size = 2\n\n\
+         [robots]\ncount = {robots}\nmass = {ROBOT_MASS}\nmax_thrust = {ROBOT_MAX_THRUST}\ntorque_per_thrust = 0.016\n\
+         spin = {}\nmin_spacing = 0.25\npair_size = {}\n\n\
          [estimation]\ngrid_min = {}\ngrid_max = {}\nresolution = {}\nthreshold = 0.8\n\
          noise_sigma = 1.0\nmax_measurements = 20\n\n\
          [formation]\nbalance_eps = 0.0001\n\n\
@@ -274,6 +292,7 @@ fn candidate(
         points_toml(&rail),
         numbers_toml(&candidates),
         spin,
+        lifting_group(robots),
         numbers_toml(&grid_min),
         numbers_toml(&grid_max),
         numbers_toml(&resolution),
@@ -281,4 +300,33 @@ fn candidate(
         com.y,
     );
     Ok((toml, n))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_lifting_group_lifts_half_the_heaviest_payload_and_the_paper_lifts_in_pairs() {
+        assert_eq!(
+            lifting_group(8),
+            2,
+            "the paper's eight robots lift in pairs"
+        );
+        assert_eq!(lifting_group(4), 2);
+        for robots in ROBOTS {
+            let k = lifting_group(robots);
+            let spare = k as f32 * (ROBOT_MAX_THRUST - ROBOT_MASS * shared::scenario::GRAVITY);
+            let heaviest = robots as f32 * PAYLOAD_MASS_PER_ROBOT[1] * shared::scenario::GRAVITY;
+            assert!(spare >= 0.5 * heaviest, "{robots} robots, groups of {k}");
+            // The fewest: one robot fewer would not (or the group is the pair).
+            let fewer =
+                (k - 1) as f32 * (ROBOT_MAX_THRUST - ROBOT_MASS * shared::scenario::GRAVITY);
+            assert!(
+                k == 2 || fewer < 0.5 * heaviest,
+                "{robots} robots, groups of {k}"
+            );
+        }
+        assert_eq!(lifting_group(16), 3);
+    }
 }

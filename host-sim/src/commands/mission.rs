@@ -18,7 +18,7 @@ use crate::cli::{Outcome, check_map_error, check_range};
 use crate::commands::fly::MixerArg;
 use crate::inject::{self, Injection};
 use crate::mission_figures;
-use crate::mission_run::{self, MISSION_TIME_LIMIT, MissionOutcome, MissionSetup};
+use crate::mission_run::{self, EscLink, MISSION_TIME_LIMIT, MissionOutcome, MissionSetup};
 use crate::pilot_script::PilotScript;
 use crate::report::print_json;
 use crate::say;
@@ -79,6 +79,10 @@ pub struct MissionArgs {
     /// well as the vehicle's response (docs/failures.md#rotors-that-stop-in-flight).
     #[arg(long)]
     esc_telemetry: bool,
+    /// How the flight controller drives the ESCs: `dshot` on its outputs, or `dronecan` on its
+    /// CAN bus, each ESC's RPM coming in its Status at 50 Hz (docs/hardware.md#can-escs).
+    #[arg(long, value_enum, default_value_t = EscLink::Dshot)]
+    esc: EscLink,
     /// Switch off the formation's in-flight adaptation to a load that shifts.
     #[arg(long)]
     no_adapt: bool,
@@ -160,6 +164,7 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
             mocap_lost_after_takeoff: mocap_lost_after,
             log: args.log.clone(),
             esc_telemetry: args.esc_telemetry,
+            esc: args.esc,
             pilot,
             plant: loaded.plant,
             ..MissionSetup::default()
@@ -205,6 +210,10 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
             "simulated_s": outcome.simulated_s,
             "wall_s": wall_s,
             "max_tilt_deg": outcome.max_tilt_deg,
+            "can_bus": outcome.can_bus_load.map(|(frames, share)| json!({
+                "frames_per_second": frames,
+                "share": share,
+            })),
             "max_thrust_fraction": outcome.max_thrust_fraction,
             "rotors_out": rotors_out_json(&outcome),
             "rotor_landing_offset_m": outcome.rotor_landing_offset_m,
@@ -279,6 +288,12 @@ pub fn run(args: &MissionArgs) -> Result<Outcome> {
             outcome.max_tilt_deg,
             100.0 * outcome.max_thrust_fraction
         )?;
+        if let Some((frames, share)) = outcome.can_bus_load {
+            say!(
+                "CAN bus (DroneCAN ESCs): {frames:.0} frames a second, {:.1} % of 1 Mbit/s",
+                100.0 * share
+            )?;
+        }
         for a in &outcome.adaptations {
             let rebalanced = a
                 .rebalanced_at

@@ -19,11 +19,25 @@ pub struct ValidateArgs {
     /// The scenario file and `--json`.
     #[command(flatten)]
     pub common: Common,
-    /// The flight controller that is to fly it: `pixhawk6c` (8 rotors, 8 steppers) or `qemu`
-    /// (16); the ESC protocol is the default `ESC_PROTOCOL` (DShot600). Without it, the limit
-    /// of 16 robots every board's software takes.
+    /// The flight controller that is to fly it: `pixhawk6c` (8 rotors on its outputs, 16 on
+    /// DroneCAN; 16 steppers) or `qemu` (16). Without it, the limit of 16 robots every board's
+    /// software takes.
     #[arg(long, value_name = "BOARD", value_parser = parse_board)]
     pub board: Option<(String, BoardDrives)>,
+    /// The board's `ESC_PROTOCOL` for `--board`: 0 DShot600 (the default), 1 PWM,
+    /// 2 OneShot125, 3 DroneCAN.
+    #[arg(long, value_name = "N", requires = "board", value_parser = parse_esc_protocol)]
+    pub esc_protocol: Option<u8>,
+}
+
+/// An `ESC_PROTOCOL` value by number.
+fn parse_esc_protocol(text: &str) -> Result<u8, String> {
+    match text.parse::<u8>() {
+        Ok(p) if usize::from(p) < drives::ESC_PROTOCOLS => Ok(p),
+        _ => Err(format!(
+            "`{text}` is no ESC_PROTOCOL: 0 DShot600, 1 PWM, 2 OneShot125, 3 DroneCAN"
+        )),
+    }
 }
 
 /// A board by name ([`drives::BOARDS`]).
@@ -40,14 +54,16 @@ fn parse_board(name: &str) -> Result<(String, BoardDrives), String> {
 pub fn run(args: &ValidateArgs) -> Result<Outcome> {
     let common = &args.common;
     let loaded = scenario_file::load(&common.scenario)?;
-    if let Some((name, board)) = &args.board {
-        let protocol = HardwareConfig::DEFAULT.esc_protocol;
-        if let Err(e) = board.check(loaded.scenario.robots.count(), protocol) {
-            bail!(
-                "{}: {name} refuses this payload description: {e}",
-                loaded.path.display()
-            );
-        }
+    let protocol = args
+        .esc_protocol
+        .unwrap_or(HardwareConfig::DEFAULT.esc_protocol);
+    if let Some((name, board)) = &args.board
+        && let Err(e) = board.check(loaded.scenario.robots.count(), protocol)
+    {
+        bail!(
+            "{}: {name} refuses this payload description: {e}",
+            loaded.path.display()
+        );
     }
     if common.json {
         print_json(report(&loaded))?;
@@ -76,7 +92,6 @@ pub fn run(args: &ValidateArgs) -> Result<Outcome> {
         s.estimation.grid_points()
     )?;
     if let Some((name, board)) = &args.board {
-        let protocol = HardwareConfig::DEFAULT.esc_protocol;
         say!(
             "  {name} drives them: {} rotors (ESC_PROTOCOL {}), {} steppers",
             board.rotors(protocol),

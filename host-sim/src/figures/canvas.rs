@@ -68,9 +68,11 @@ fn render_svg(path: &Path, figure: &impl Figure) -> Result<()> {
     root.present().map_err(draw_error)
 }
 
-/// The palette (matplotlib's "tab10"): colour `i`, repeating after ten.
+/// The palette: colour `i`, repeating after [`PALETTE_SIZE`]. The first ten are matplotlib's
+/// "tab10"; the next ten are darker or paler hues unlike them, so that each of 16 robots has
+/// its own.
 pub fn colour(i: usize) -> RGBColor {
-    const C: [RGBColor; 10] = [
+    const C: [RGBColor; PALETTE_SIZE] = [
         RGBColor(31, 119, 180),
         RGBColor(255, 127, 14),
         RGBColor(44, 160, 44),
@@ -81,9 +83,22 @@ pub fn colour(i: usize) -> RGBColor {
         RGBColor(127, 127, 127),
         RGBColor(188, 189, 34),
         RGBColor(23, 190, 207),
+        RGBColor(0, 0, 0),
+        RGBColor(0, 0, 128),
+        RGBColor(230, 171, 2),
+        RGBColor(231, 41, 138),
+        RGBColor(0, 110, 110),
+        RGBColor(128, 0, 0),
+        RGBColor(85, 107, 47),
+        RGBColor(174, 199, 232),
+        RGBColor(255, 152, 150),
+        RGBColor(152, 223, 138),
     ];
     C[i % C.len()]
 }
+
+/// How many colours [`colour`] has before it repeats.
+pub const PALETTE_SIZE: usize = 20;
 
 /// Grey for things drawn for orientation (outlines, rails).
 pub const GREY: RGBColor = RGBColor(150, 150, 150);
@@ -123,7 +138,17 @@ pub fn with_legend_column<DB: DrawingBackend>(area: &Area<DB>) -> (Area<DB>, Are
     area.split_horizontally(width.saturating_sub(LEGEND_WIDTH))
 }
 
-/// Draws `entries` (label, swatch) one under the other in `area`, starting `top` pixels down.
+/// Distance between two legend entries, pixels.
+pub const LEGEND_PITCH: i32 = 22;
+
+/// How far down a legend of `entries` starting `top` pixels down reaches, pixels (the last
+/// entry's text and swatch, and a few pixels' margin).
+pub fn legend_height(top: i32, entries: usize) -> i32 {
+    top + LEGEND_PITCH * entries.saturating_sub(1) as i32 + 12
+}
+
+/// Draws `entries` (label, swatch) one under the other in `area`, starting `top` pixels down
+/// ([`LEGEND_PITCH`] apart; [`legend_height`] says how far they reach).
 pub fn legend<DB: DrawingBackend>(
     area: &Area<DB>,
     top: i32,
@@ -131,7 +156,7 @@ pub fn legend<DB: DrawingBackend>(
 ) -> Result<()> {
     let font = ("sans-serif", 15).into_font();
     for (k, (label, swatch)) in entries.iter().enumerate() {
-        let y = top + 22 * k as i32;
+        let y = top + LEGEND_PITCH * k as i32;
         let x = 16;
         match *swatch {
             Swatch::Line(c) => area

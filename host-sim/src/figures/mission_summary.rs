@@ -2,20 +2,28 @@
 //! phases on a time line (one row per phase, a bar for each time it was entered), each lift's
 //! reading against the model's lift-off thrust for the truth (where it is known), and from
 //! take-off on the height, roll and pitch, and each rotor's thrust, with the flight's phases
-//! marked. Beside [`crate::mission_figures`]' flight figure; the paper has no such page (its
-//! Figs. 6 and 8 show parts of it). What it draws is [`MissionSummary`]'s data, filled from a
-//! simulated mission ([`crate::mission_figures`]) or from a log ([`crate::log_summary`]).
+//! marked. Where its text goes, so that none overlaps at up to 16 robots and any lift count, is
+//! [`super::summary_layout`]'s. Beside [`crate::mission_figures`]' flight figure; the paper has
+//! no such page (its Figs. 6 and 8 show parts of it). What it draws is [`MissionSummary`]'s
+//! data, filled from a simulated mission ([`crate::mission_figures`]) or from a log
+//! ([`crate::log_summary`]).
 
 use anyhow::Result;
 use plotters::coord::ranged1d::SegmentValue;
 use plotters::prelude::*;
 
+use plotters::style::FontTransform;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
 use super::canvas::{
     self, Area, Figure, Swatch, colour, draw_error, legend, titled, with_legend_column,
 };
+use super::summary_layout::{
+    self as layout, LABEL_FONT, MARGIN, VALUE_FONT, ValueText, X_LABELS, Y_LABELS,
+};
 
-/// The page's size, pixels.
-const SIZE: (u32, u32) = (1300, 1500);
+/// A panel's caption font size, pixels.
+const CAPTION_FONT: u32 = 18;
 
 /// The summary page's data.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -96,13 +104,20 @@ impl Span {
 
 impl Figure for MissionSummary {
     fn size(&self) -> (u32, u32) {
-        SIZE
+        layout::page_size(self.robots())
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &Area<DB>) -> Result<()> {
         let body = titled(root, &self.title)?;
         let spans = &self.phases;
-        let rows = body.split_by_breakpoints([] as [u32; 0], [300, 560, 860, 1160]);
+        let heights = layout::row_heights(self.robots());
+        let mut breaks = [0u32; 4];
+        let mut y = 0;
+        for (b, h) in breaks.iter_mut().zip(heights) {
+            y += h;
+            *b = y;
+        }
+        let rows = body.split_by_breakpoints([] as [u32; 0], breaks);
         self.timeline(&rows[0], spans)?;
         self.lifts(&rows[1])?;
         let flight: Vec<&Span> = spans.iter().skip_while(|s| s.name != "takeoff").collect();
@@ -148,18 +163,7 @@ impl Figure for MissionSummary {
             &attitude,
             &flight,
         )?;
-        let n = first.thrust.len();
-        let thrusts: Vec<Curve> = (0..n)
-            .map(|j| {
-                let points: Vec<(f32, f32)> = series
-                    .iter()
-                    .map(|s| (s.t, s.thrust.get(j).copied().unwrap_or(0.0)))
-                    .collect();
-                // 100 Hz samples: 12 each side is a quarter-second mean (the rate loop's
-                // answer to sensor noise hides the level otherwise).
-                (format!("robot {}", j + 1), colour(j), smoothed(&points, 12))
-            })
-            .collect();
+        let thrusts = self.thrust_curves();
         let (title, unit) = if self.thrust_in_newtons {
             ("rotor thrusts (quarter-second means)", "thrust (N)")
         } else {
@@ -185,6 +189,28 @@ fn note<DB: DrawingBackend>(area: &Area<DB>, text: &str) -> Result<()> {
 }
 
 impl MissionSummary {
+    /// The rotors the flight has (none without a flight).
+    pub fn robots(&self) -> usize {
+        self.series.first().map_or(0, |s| s.thrust.len())
+    }
+
+    /// Each rotor's thrust over the flight, a quarter-second mean, as the rotor panel draws
+    /// it: one curve per robot, named from 1.
+    pub(crate) fn thrust_curves(&self) -> Vec<Curve> {
+        (0..self.robots())
+            .map(|j| {
+                let points: Vec<(f32, f32)> = self
+                    .series
+                    .iter()
+                    .map(|s| (s.t, s.thrust.get(j).copied().unwrap_or(0.0)))
+                    .collect();
+                // 100 Hz samples: 12 each side is a quarter-second mean (the rate loop's
+                // answer to sensor noise hides the level otherwise).
+                (format!("robot {}", j + 1), colour(j), smoothed(&points, 12))
+            })
+            .collect()
+    }
+
     /// One row per phase (in the order first entered), a bar for each time it ran.
     fn timeline<DB: DrawingBackend>(&self, area: &Area<DB>, spans: &[Span]) -> Result<()> {
         let (plot, _) = with_legend_column(area);
@@ -244,7 +270,8 @@ impl MissionSummary {
         Ok(())
     }
 
-    /// Each lift's reading beside the model's lift-off thrust for the truth (where known).
+    /// Each lift's reading beside the model's lift-off thrust for the truth (where known),
+    /// each bar's value written where [`layout::lift_layout`] says.
     fn lifts<DB: DrawingBackend>(&self, area: &Area<DB>) -> Result<()> {
         let lifts = &self.lifts;
         if lifts.is_empty() {
@@ -262,42 +289,44 @@ impl MissionSummary {
             .filter(|v| v.is_finite())
             .fold(0.0f32, f32::max);
         let ceiling = self.max_thrust.unwrap_or(largest.max(1.0));
-        let top = largest.max(ceiling) * 1.12;
-        let names: Vec<String> = lifts
-            .iter()
-            .enumerate()
-            .map(|(k, l)| format!("lift {}: pair {}", k + 1, l.pair))
-            .collect();
         let with_model = lifts.iter().any(|l| l.model.is_some());
         let caption = if with_model {
             "lifts: reading against the model for the truth"
         } else {
             "lifts: reading (no truth to compare with)"
         };
-        let mut chart = ChartBuilder::on(&plot)
-            .caption(caption, ("sans-serif", 18))
-            .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(70)
-            .build_cartesian_2d(-0.5f32..(count as f32 - 0.5), 0f32..top)
+        let inner = captioned(&plot, caption)?;
+        let placed = layout::lift_layout(
+            lifts,
+            ceiling,
+            largest.max(ceiling) * 1.12,
+            layout::plot_size(inner.dim_in_pixel()),
+        );
+        let names = &placed.names;
+        let mut chart = ChartBuilder::on(&inner)
+            .x_label_area_size(X_LABELS)
+            .y_label_area_size(Y_LABELS)
+            .build_cartesian_2d(-0.5f32..(count as f32 - 0.5), 0f32..placed.top)
             .map_err(draw_error)?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
+        let name_of = |v: &f32| {
+            let i = v.round();
+            if (v - i).abs() < 1e-3 && i >= 0.0 {
+                names.get(i as usize).cloned().unwrap_or_default()
+            } else {
+                String::new()
+            }
+        };
+        let mut mesh = chart.configure_mesh();
+        mesh.disable_x_mesh()
             .x_labels(count * 2 + 1)
-            .x_label_formatter(&|v| {
-                let i = v.round();
-                if (v - i).abs() < 1e-3 && i >= 0.0 {
-                    names.get(i as usize).cloned().unwrap_or_default()
-                } else {
-                    String::new()
-                }
-            })
-            .label_style(("sans-serif", 14))
+            .x_label_formatter(&name_of)
+            .label_style(("sans-serif", LABEL_FONT))
             .axis_desc_style(("sans-serif", 16))
-            .y_desc("thrust per robot (N)")
-            .draw()
-            .map_err(draw_error)?;
+            .y_desc("thrust per robot (N)");
+        if let Some(desc) = placed.x_desc {
+            mesh.x_desc(desc);
+        }
+        mesh.draw().map_err(draw_error)?;
         if let Some(max) = self.max_thrust {
             chart
                 .draw_series(DashedLineSeries::new(
@@ -308,30 +337,19 @@ impl MissionSummary {
                 ))
                 .map_err(draw_error)?;
         }
-        let value = |x: f32, v: f32, text: String| {
-            EmptyElement::at((x, v)) + Text::new(text, (0, -10), canvas::centred(13))
-        };
+        let half = 2.0 * layout::BAR_HALF;
         for (k, lift) in lifts.iter().enumerate() {
             let x = k as f32;
-            let shown = match lift.reading {
-                Some(r) => (r, format!("{r:.2}")),
-                None => (ceiling, "could not lift".to_string()),
-            };
-            chart
-                .draw_series([value(x - 0.15, shown.0, shown.1)])
-                .map_err(draw_error)?;
-            if let Some(model) = lift.model {
-                chart
-                    .draw_series([value(x + 0.15, model, format!("{model:.2}"))])
-                    .map_err(draw_error)?;
-            }
             match lift.reading {
                 Some(r) => chart
-                    .draw_series([Rectangle::new([(x - 0.3, 0.0), (x, r)], colour(0).filled())])
+                    .draw_series([Rectangle::new(
+                        [(x - half, 0.0), (x, r)],
+                        colour(0).filled(),
+                    )])
                     .map_err(draw_error)?,
                 None => chart
                     .draw_series([Rectangle::new(
-                        [(x - 0.3, 0.0), (x, ceiling)],
+                        [(x - half, 0.0), (x, ceiling)],
                         colour(0).stroke_width(2),
                     )])
                     .map_err(draw_error)?,
@@ -339,12 +357,30 @@ impl MissionSummary {
             if let Some(model) = lift.model {
                 chart
                     .draw_series([Rectangle::new(
-                        [(x, 0.0), (x + 0.3, model)],
+                        [(x, 0.0), (x + half, model)],
                         canvas::GREY.filled(),
                     )])
                     .map_err(draw_error)?;
             }
         }
+        let level = canvas::centred(VALUE_FONT);
+        let upright = TextStyle::from(
+            ("sans-serif", VALUE_FONT)
+                .into_font()
+                .transform(FontTransform::Rotate270),
+        )
+        .pos(Pos::new(HPos::Left, VPos::Center));
+        let style = match placed.value_text {
+            ValueText::Upright => &upright,
+            _ => &level,
+        };
+        chart
+            .draw_series(placed.values.iter().map(|l| {
+                EmptyElement::at(l.at)
+                    + Rectangle::new(l.backdrop, WHITE.mix(0.85).filled())
+                    + Text::new(l.text.clone(), l.offset, style.clone())
+            }))
+            .map_err(draw_error)?;
         let mut entries = vec![
             ("reading".to_string(), Swatch::Bar(colour(0))),
             ("could not lift".to_string(), Swatch::Ring(colour(0))),
@@ -355,15 +391,39 @@ impl MissionSummary {
         if self.max_thrust.is_some() {
             entries.push(("max. thrust".to_string(), Swatch::Dashed(colour(3))));
         }
-        legend(&key, 50, &entries)
+        legend(&key, 50, &entries)?;
+        if placed.value_text == ValueText::Left {
+            let below = canvas::legend_height(50, entries.len()) + 10;
+            for (k, line) in ["too many lifts to", "write their values"]
+                .iter()
+                .enumerate()
+            {
+                key.draw(&Text::new(
+                    line.to_string(),
+                    (8, below + 18 * k as i32),
+                    ("sans-serif", LABEL_FONT).into_font(),
+                ))
+                .map_err(draw_error)?;
+            }
+        }
+        Ok(())
     }
 }
 
-/// One curve: its label, colour and (time, value) points.
-type Curve = (String, RGBColor, Vec<(f32, f32)>);
+/// `area` less the chart margin, with `caption` across its top: where a chart's label areas
+/// and plot go.
+fn captioned<DB: DrawingBackend>(area: &Area<DB>, caption: &str) -> Result<Area<DB>> {
+    let m = MARGIN as i32;
+    area.margin(m, m, m, m)
+        .titled(caption, ("sans-serif", CAPTION_FONT))
+        .map_err(draw_error)
+}
 
-/// Curves against time over `t`, the flight's phases as dashed lines named at the top, and the
-/// legend in its own column.
+/// One curve: its label, colour and (time, value) points.
+pub(crate) type Curve = (String, RGBColor, Vec<(f32, f32)>);
+
+/// Curves against time over `t`, the flight's phases as dashed lines named at the top (where
+/// [`layout::phase_labels`] says), and the legend in its own column.
 fn curves<DB: DrawingBackend>(
     area: &Area<DB>,
     title: &str,
@@ -373,47 +433,61 @@ fn curves<DB: DrawingBackend>(
     phases: &[&Span],
 ) -> Result<()> {
     let (plot, key) = with_legend_column(area);
+    let inner = captioned(&plot, title)?;
+    let (width, height) = layout::plot_size(inner.dim_in_pixel());
+    // The phase the series starts in (take-off) is named at the left edge.
+    let starts: Vec<(String, f32)> = phases
+        .iter()
+        .filter(|s| s.start >= t.0 - 0.1 && s.start <= t.1)
+        .map(|s| (s.name.clone(), s.start.max(t.0)))
+        .collect();
+    let names = layout::phase_labels(&starts, t, width);
     let (lo, hi) = canvas::span(
         series
             .iter()
             .flat_map(|(_, _, p)| p.iter().map(|&(_, v)| v)),
         (0.0, 1.0),
     );
-    // Room at the top for the phases' names.
+    // Room at the top for the phases' names: a quarter of the range, or the pixels their
+    // rows take.
     let pad = (hi - lo) * 0.08;
-    let (lo, hi) = (lo - pad, hi + 3.0 * pad);
-    let mut chart = ChartBuilder::on(&plot)
-        .caption(title, ("sans-serif", 18))
-        .margin(10)
-        .x_label_area_size(35)
-        .y_label_area_size(70)
+    let lo = lo - pad;
+    let room = (layout::phase_room(&names) as f32 / height.max(1) as f32).min(0.9);
+    let hi = (hi + 3.0 * pad).max((hi - room * lo) / (1.0 - room));
+    let mut chart = ChartBuilder::on(&inner)
+        .x_label_area_size(X_LABELS)
+        .y_label_area_size(Y_LABELS)
         .build_cartesian_2d(t.0..t.1, lo..hi)
         .map_err(draw_error)?;
     chart
         .configure_mesh()
-        .label_style(("sans-serif", 14))
+        .label_style(("sans-serif", LABEL_FONT))
         .axis_desc_style(("sans-serif", 16))
         .x_desc("time (s)")
         .y_desc(y_desc)
         .draw()
         .map_err(draw_error)?;
-    // The phase the series starts in (take-off) is named at the left edge.
-    for s in phases
-        .iter()
-        .filter(|s| s.start >= t.0 - 0.1 && s.start <= t.1)
-    {
-        let start = s.start.max(t.0);
+    for name in &names {
         chart
             .draw_series(DashedLineSeries::new(
-                [(start, lo), (start, hi)],
+                [(name.start, lo), (name.start, hi)],
                 5,
                 4,
                 canvas::GREY.stroke_width(1),
             ))
             .map_err(draw_error)?;
+        let font = ("sans-serif", LABEL_FONT).into_font();
+        let y = layout::PHASE_TOP + name.row as i32 * layout::PHASE_ROW;
+        let (dx, anchor) = if name.right_of_line {
+            (layout::PHASE_INSET, HPos::Left)
+        } else {
+            (-layout::PHASE_INSET, HPos::Right)
+        };
+        let style = TextStyle::from(font).pos(Pos::new(anchor, VPos::Top));
         chart
-            .draw_series([EmptyElement::at((start, hi))
-                + Text::new(s.name.clone(), (4, 2), ("sans-serif", 14).into_font())])
+            .draw_series([
+                EmptyElement::at((name.start, hi)) + Text::new(name.text.clone(), (dx, y), style)
+            ])
             .map_err(draw_error)?;
     }
     for (_, c, points) in series {
@@ -426,7 +500,7 @@ fn curves<DB: DrawingBackend>(
         .map(|(label, c, _)| (label.clone(), Swatch::Line(*c)))
         .chain([("phase begins".to_string(), Swatch::Dashed(canvas::GREY))])
         .collect();
-    legend(&key, 40, &entries)
+    legend(&key, layout::CURVE_LEGEND_TOP, &entries)
 }
 
 /// Mean of each value over a centred window of `half` samples each side.

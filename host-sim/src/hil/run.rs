@@ -264,11 +264,20 @@ struct Firmware {
     restarts_seen: usize,
     /// The board's RC receiver UART (`--rc` with an RC script).
     rc: Option<RcLink>,
+    /// A command the firmware answered TEMPORARILY_REJECTED (a payload description still
+    /// loading), to send again at this step, and the tries left.
+    retry: Option<(u64, OperatorCommand, u32)>,
 }
 
+/// Steps between tries of a command the firmware answered TEMPORARILY_REJECTED (0.25 s of
+/// the vehicle's clock), and the tries: the command protocol's "try again", for up to 10 s.
+const RETRY_STEPS: u64 = 100;
+const RETRIES: u32 = 40;
+
 impl Firmware {
-    /// Checks that the firmware accepted `awaited` with the step just done.
-    fn check_accepted(&self, awaited: Awaited) -> Result<()> {
+    /// Checks that the firmware accepted `awaited` with the step just done; `Ok(false)` when
+    /// it answered TEMPORARILY_REJECTED, to be tried again.
+    fn check_accepted(&self, awaited: Awaited) -> Result<bool> {
         let log = self.session.log();
         let cmd = awaited.command.mav_cmd();
         let what = match awaited.command {
@@ -281,7 +290,8 @@ impl Firmware {
             .find(|(c, _)| *c == cmd)
             .map(|(_, r)| *r)
         {
-            Some(MavResult::MAV_RESULT_ACCEPTED) => Ok(()),
+            Some(MavResult::MAV_RESULT_ACCEPTED) => Ok(true),
+            Some(MavResult::MAV_RESULT_TEMPORARILY_REJECTED) => Ok(false),
             Some(result) => {
                 let why = said_since(log, awaited.texts_before)
                     .or_else(|| last_error(log))
@@ -343,6 +353,12 @@ impl Autopilot for Firmware {
                 self.queue.push_back(command);
             }
         }
+        if let Some((at, command, left)) = self.retry
+            && self.session.steps() >= at
+        {
+            self.queue.push_front(command);
+            self.retry = Some((u64::MAX, command, left));
+        }
         if let Some(command) = self.queue.pop_front() {
             if matches!(
                 command,
@@ -375,8 +391,32 @@ impl Autopilot for Firmware {
         let reply = self
             .session
             .step(&sample, &fixes, self.robots, self.reply_timeout)?;
-        if let Some(awaited) = self.awaited.take() {
-            self.check_accepted(awaited)?;
+        let accepted = match self.awaited.take() {
+            Some(awaited) => Some((awaited, self.check_accepted(awaited)?)),
+            None => None,
+        };
+        if let Some((awaited, true)) = accepted
+            && self.retry.is_some_and(|(_, c, _)| c == awaited.command)
+        {
+            self.retry = None;
+        }
+        if let Some((awaited, false)) = accepted {
+            let left = match self.retry {
+                Some((_, c, left)) if c == awaited.command => left,
+                _ => RETRIES,
+            };
+            if left == 0 {
+                let why = said_since(self.session.log(), awaited.texts_before).unwrap_or_default();
+                bail!(
+                    "the firmware kept answering {:?} TEMPORARILY_REJECTED for 10 s{why}",
+                    awaited.command.mav_cmd()
+                );
+            }
+            self.retry = Some((
+                self.session.steps() + RETRY_STEPS,
+                awaited.command,
+                left - 1,
+            ));
         }
         if let Some(&restart) = self.session.log().restarts.get(self.restarts_seen) {
             self.restarts_seen += 1;
@@ -492,6 +532,7 @@ pub fn run_with_rc(
         payload: file[..len].to_vec(),
         restarts_seen: 0,
         rc,
+        retry: None,
     };
     autopilot.texts_seen = autopilot.session.log().texts.len();
     autopilot.values_seen = autopilot.session.log().values.len();

@@ -593,10 +593,11 @@ impl Session {
                     ": the firmware stalled or the link is down"
                 };
                 bail!(
-                    "lockstep: no HIL_ACTUATOR_CONTROLS for the step at t = {:.4} s (step {}) within {:.1} s{after_reboot}",
+                    "lockstep: no HIL_ACTUATOR_CONTROLS for the step at t = {:.4} s (step {}) within {:.1} s{after_reboot}{}",
                     imu.time_us as f64 * 1e-6,
                     self.steps,
-                    sent.elapsed().as_secs_f64()
+                    sent.elapsed().as_secs_f64(),
+                    self.host_drops_said()
                 );
             };
             if let Some(status) = frame.decode::<ACTUATOR_OUTPUT_STATUS_DATA>() {
@@ -623,6 +624,18 @@ impl Session {
                 self.steps += 1;
                 return Ok(commands);
             }
+        }
+    }
+
+    /// What this machine dropped of the firmware's datagrams, for a lockstep error: a reply
+    /// the firmware sent and the host lost is not the firmware's stall.
+    fn host_drops_said(&self) -> String {
+        match self.link.host_drops() {
+            Some(n) if n > 0 => format!(
+                " (this machine dropped {n} of the firmware's datagrams, its socket's buffer \
+                 full: the reply may be among them)"
+            ),
+            _ => String::new(),
         }
     }
 }

@@ -11,7 +11,10 @@
 use std::io::{self, Read, Write};
 use std::net::{SocketAddr, TcpStream, UdpSocket};
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, SyncSender, TryRecvError};
 use std::sync::{Arc, Mutex};
+use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow, bail};
@@ -70,7 +73,13 @@ pub struct Link {
     batch: Vec<u8>,
     /// Bytes this side has written and read (the ground-station bridge's not counted).
     counts: ByteCounts,
+    /// The datagrams from the firmware the host dropped, when the link can tell
+    /// ([`Self::host_drops`]).
+    host_drops: Option<HostDrops>,
 }
+
+/// Reads how many datagrams the host dropped for the link's socket.
+type HostDrops = Box<dyn Fn() -> Option<u64> + Send>;
 
 /// Bytes that crossed the link.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -130,17 +139,16 @@ impl Link {
             .connect(peer)
             .with_context(|| format!("cannot address the firmware's Ethernet at {peer}"))?;
         socket.set_read_timeout(Some(READ_SLICE))?;
+        ask_receive_buffer(&socket, RECEIVE_BUFFER);
         let writer = FrameWriter {
             socket: socket.try_clone().context("cannot share the UDP socket")?,
             pending: Vec::with_capacity(MAX_PAYLOAD),
         };
-        let reader = FrameReader {
-            socket,
-            datagram: vec![0; 65_536],
-            at: 0,
-            end: 0,
-        };
-        Ok(Self::new(Box::new(reader), Box::new(writer)))
+        let drops = socket_drops(&socket);
+        let reader = FrameReader::start(socket).context("cannot start the link's reader")?;
+        let mut link = Self::new(Box::new(reader), Box::new(writer));
+        link.host_drops = drops;
+        Ok(link)
     }
 
     fn new(reader: Box<dyn Read + Send>, writer: Box<dyn Write + Send>) -> Self {
@@ -155,12 +163,19 @@ impl Link {
             signing: None,
             batch: Vec::new(),
             counts: ByteCounts::default(),
+            host_drops: None,
         }
     }
 
     /// Bytes written and read so far.
     pub fn counts(&self) -> ByteCounts {
         self.counts
+    }
+
+    /// Datagrams from the firmware this machine dropped so far (its socket's buffer was
+    /// full), for a link of datagrams on Linux; `None` where it cannot be told.
+    pub fn host_drops(&self) -> Option<u64> {
+        self.host_drops.as_ref().and_then(|drops| drops())
     }
 
     /// Signs every frame sent from now on with `key` (MAVLink 2 signing, link id
@@ -264,75 +279,192 @@ pub fn write_frame(writer: &SharedWriter, bytes: &[u8]) -> Result<()> {
 /// How long a read looks for a datagram before it blocks.
 const SPIN: Duration = Duration::from_micros(500);
 
+/// Ethernet frames the drain thread holds for the session at most (then it waits, and the
+/// socket's own buffer fills): far more than a flood puts out while the session is busy.
+const DRAINED_FRAMES: usize = 1 << 16;
+
+/// The receive buffer asked of the kernel for the socket from QEMU, bytes (granted up to
+/// `net.core.rmem_max`): room for the frames that come while the drain thread waits for a
+/// core.
+const RECEIVE_BUFFER: usize = 4 << 20;
+
+/// One Ethernet frame's MAVLink bytes, or why the socket failed.
+type Drained = io::Result<Vec<u8>>;
+
 /// Reads the MAVLink bytes of the Ethernet frames QEMU sends as datagrams.
+///
+/// A thread of its own drains the socket into a queue as each datagram comes: QEMU has no
+/// flow control towards this process, and the firmware sends each message group as one
+/// datagram, so a flood's answers (a parameter list restarted 200 times a second, one
+/// `PARAM_VALUE` a datagram) fill the kernel's buffer (about 200 small datagrams by default)
+/// in a few milliseconds whenever the session does not read: while it paces the run
+/// (`--speed`), forwards frames to a ground station, or waits for a core on a loaded machine.
+/// The kernel then drops what comes, the step's `HIL_ACTUATOR_CONTROLS` among the rest, and
+/// the lockstep waited for a reply the firmware had sent.
 struct FrameReader {
-    socket: UdpSocket,
-    datagram: Vec<u8>,
-    /// The current frame's MAVLink bytes not yet read, as a range of `datagram`.
+    frames: Receiver<Drained>,
+    /// The current frame's MAVLink bytes, and the next of them to read.
+    frame: Vec<u8>,
     at: usize,
-    end: usize,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl FrameReader {
+    /// Starts draining `socket` (its read timeout set: the thread looks at its stop flag
+    /// between reads).
+    fn start(socket: UdpSocket) -> io::Result<Self> {
+        let (to_session, frames) = mpsc::sync_channel(DRAINED_FRAMES);
+        let stop = Arc::new(AtomicBool::new(false));
+        let thread = {
+            let stop = Arc::clone(&stop);
+            thread::Builder::new()
+                .name("hil-link-rx".into())
+                .spawn(move || drain(&socket, &to_session, &stop))?
+        };
+        Ok(Self {
+            frames,
+            frame: Vec::new(),
+            at: 0,
+            stop,
+            thread: Some(thread),
+        })
+    }
+}
+
+/// Moves every HIL frame's MAVLink bytes from `socket` to `to_session` until `stop` or the
+/// session is gone; a socket error goes to the session and ends it.
+fn drain(socket: &UdpSocket, to_session: &SyncSender<Drained>, stop: &AtomicBool) {
+    let mut datagram = vec![0u8; 65_536];
+    while !stop.load(Ordering::Relaxed) {
+        let n = match socket.recv(&mut datagram) {
+            Ok(n) => n,
+            // Nothing yet; or a datagram sent before QEMU opened its socket came back
+            // refused: nothing to read yet either.
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::WouldBlock
+                        | io::ErrorKind::TimedOut
+                        | io::ErrorKind::Interrupted
+                        | io::ErrorKind::ConnectionRefused
+                ) =>
+            {
+                continue;
+            }
+            Err(e) => {
+                let _ = to_session.send(Err(e));
+                return;
+            }
+        };
+        // A frame that is not the firmware's HIL frame (QEMU's NIC sends nothing else;
+        // anything else on the port) carries nothing for us.
+        let Ok(payload) = hil_ethernet::payload(&datagram[..n]) else {
+            continue;
+        };
+        if to_session.send(Ok(payload.to_vec())).is_err() {
+            return;
+        }
+    }
 }
 
 impl Read for FrameReader {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        while self.at >= self.end {
+        let gone = || io::Error::new(io::ErrorKind::BrokenPipe, "the link's reader stopped");
+        while self.at >= self.frame.len() {
             // The firmware answers a step within a fraction of a millisecond: look for the
             // answer without sleeping for that long, which spares the wake-up of a blocked
             // read (a context switch) on each step; then block as usual.
             let spin_until = Instant::now() + SPIN;
             let mut got = None;
             while got.is_none() && Instant::now() < spin_until {
-                got = recv_now(&self.socket, &mut self.datagram);
-                std::hint::spin_loop();
-            }
-            let received = match got {
-                Some(n) => Ok(n),
-                None => self.socket.recv(&mut self.datagram),
-            };
-            let n = match received {
-                Ok(n) => n,
-                // A datagram sent before QEMU opened its socket came back refused: nothing to
-                // read yet.
-                Err(e) if e.kind() == io::ErrorKind::ConnectionRefused => {
-                    return Err(io::ErrorKind::WouldBlock.into());
+                match self.frames.try_recv() {
+                    Ok(frame) => got = Some(frame),
+                    Err(TryRecvError::Empty) => std::hint::spin_loop(),
+                    Err(TryRecvError::Disconnected) => return Err(gone()),
                 }
-                Err(e) => return Err(e),
-            };
-            // A frame that is not the firmware's HIL frame (QEMU's NIC sends nothing else;
-            // anything else on the port) carries nothing for us.
-            if let Ok(payload) = hil_ethernet::payload(&self.datagram[..n]) {
-                self.at = hil_ethernet::HEADER_LEN;
-                self.end = self.at + payload.len();
             }
+            let frame = match got {
+                Some(frame) => frame,
+                None => match self.frames.recv_timeout(READ_SLICE) {
+                    Ok(frame) => frame,
+                    Err(RecvTimeoutError::Timeout) => return Err(io::ErrorKind::WouldBlock.into()),
+                    Err(RecvTimeoutError::Disconnected) => return Err(gone()),
+                },
+            };
+            self.frame = frame?;
+            self.at = 0;
         }
-        let n = buf.len().min(self.end - self.at);
-        buf[..n].copy_from_slice(&self.datagram[self.at..self.at + n]);
+        let n = buf.len().min(self.frame.len() - self.at);
+        buf[..n].copy_from_slice(&self.frame[self.at..self.at + n]);
         self.at += n;
         Ok(n)
     }
 }
 
-/// A datagram already waiting on `socket`, without blocking (`MSG_DONTWAIT`); `None` when
-/// there is none (or the socket reports an error, which the blocking read then returns).
-#[cfg(unix)]
-fn recv_now(socket: &UdpSocket, buf: &mut [u8]) -> Option<usize> {
-    use std::os::fd::AsRawFd;
-    // SAFETY: `buf` is valid for `buf.len()` bytes for the call; the descriptor is the open
-    // socket's.
-    let n = unsafe {
-        libc::recv(
-            socket.as_raw_fd(),
-            buf.as_mut_ptr().cast(),
-            buf.len(),
-            libc::MSG_DONTWAIT,
-        )
-    };
-    usize::try_from(n).ok()
+impl Drop for FrameReader {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
 }
 
-/// Elsewhere the read blocks at once.
+/// Asks the kernel for a receive buffer of `bytes` for `socket`; what it grants (at most
+/// `net.core.rmem_max`) is what it grants.
+#[cfg(unix)]
+fn ask_receive_buffer(socket: &UdpSocket, bytes: usize) {
+    use std::os::fd::AsRawFd;
+    let bytes = libc::c_int::try_from(bytes).unwrap_or(libc::c_int::MAX);
+    // SAFETY: `bytes` lives for the call and its size is given; the descriptor is the open
+    // socket's.
+    unsafe {
+        libc::setsockopt(
+            socket.as_raw_fd(),
+            libc::SOL_SOCKET,
+            libc::SO_RCVBUF,
+            (&raw const bytes).cast(),
+            std::mem::size_of::<libc::c_int>() as libc::socklen_t,
+        );
+    }
+}
+
+/// Elsewhere the system's default stands.
 #[cfg(not(unix))]
-fn recv_now(_socket: &UdpSocket, _buf: &mut [u8]) -> Option<usize> {
+fn ask_receive_buffer(_socket: &UdpSocket, _bytes: usize) {}
+
+/// How to read the datagrams the kernel dropped for `socket` (its receive buffer full): the
+/// `drops` column of its line in `/proc/net/udp` (or `udp6`), found by its inode.
+#[cfg(target_os = "linux")]
+fn socket_drops(socket: &UdpSocket) -> Option<HostDrops> {
+    use std::os::fd::AsRawFd;
+    // SAFETY: `stat` is written by the call; the descriptor is the open socket's.
+    let inode = unsafe {
+        let mut stat: libc::stat = std::mem::zeroed();
+        (libc::fstat(socket.as_raw_fd(), &mut stat) == 0).then_some(stat.st_ino)
+    }?
+    .to_string();
+    Some(Box::new(move || {
+        ["/proc/net/udp", "/proc/net/udp6"]
+            .iter()
+            .find_map(|table| {
+                let text = std::fs::read_to_string(table).ok()?;
+                text.lines().skip(1).find_map(|line| {
+                    let fields: Vec<&str> = line.split_whitespace().collect();
+                    // sl, local, remote, st, queues, tr, retrnsmt, uid, timeout, inode, ref,
+                    // pointer, drops.
+                    (fields.get(9) == Some(&inode.as_str()))
+                        .then(|| fields.get(12)?.parse().ok())
+                        .flatten()
+                })
+            })
+    }))
+}
+
+/// Elsewhere the drops are not told.
+#[cfg(not(target_os = "linux"))]
+fn socket_drops(_socket: &UdpSocket) -> Option<HostDrops> {
     None
 }
 

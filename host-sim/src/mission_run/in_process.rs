@@ -223,6 +223,8 @@ pub struct MissionOutcome {
     pub rotors_zero_at: Option<f32>,
     /// When take-off began, s, if it did.
     pub takeoff_at: Option<f32>,
+    /// The DroneCAN bus's traffic (`--esc dronecan`): frames a second, share of 1 Mbit/s.
+    pub can_bus_load: Option<(f32, f32)>,
 }
 
 /// A flight counts as delivered within this distance of the target, m.
@@ -239,6 +241,10 @@ pub fn run(
     let mut config = setup.config;
     if setup.pilot.is_some() {
         crate::pilot_script::PilotScript::configure(&mut config);
+    }
+    // DroneCAN ESCs are the vehicle's `ESC_PROTOCOL` 3, as `hil` would set it.
+    if setup.esc == super::EscLink::Dronecan {
+        config.hardware.esc_protocol = shared::mission::drives::ESC_PROTOCOL_DRONECAN;
     }
     let mut autopilot = InProcess::new(scenario, config)?;
     if let Some(route) = &setup.route {
@@ -309,6 +315,7 @@ pub fn run(
         kill_sent_at: record.kill_sent_at,
         rotors_zero_at: record.rotors_zero_at,
         takeoff_at: record.takeoff_at,
+        can_bus_load: record.can_bus_load,
     };
     Ok((outcome, autopilot))
 }

@@ -12,10 +12,11 @@ use shared::mission::{HardwareFaults, OperatorCommand};
 use shared::scenario::{MAX_ROBOTS, Scenario};
 
 use super::{
-    Autopilot, Event, ImuFaultKind, LOAD_SHIFT_TIME, MISSION_TIME_LIMIT, MissionSetup,
+    Autopilot, EscLink, Event, ImuFaultKind, LOAD_SHIFT_TIME, MISSION_TIME_LIMIT, MissionSetup,
     PACK_SAG_VOLTS, PACK_VOLTS, Sensed,
 };
 use crate::harness::{CONTROL_HZ, DROP_TILT_DEG};
+use crate::plant::dronecan_escs::DroneCanEscs;
 use crate::plant::sensors::{ImuNoise, Sensors};
 use crate::plant::{PHYSICS_DT, Plant, PlantConfig};
 
@@ -105,6 +106,8 @@ pub struct PlantRecord {
     pub rotor_landing_offset_m: Option<f32>,
     /// When take-off began, s (simulated time), if it did.
     pub takeoff_at: Option<f32>,
+    /// The DroneCAN bus's traffic (`--esc dronecan`): frames a second, share of 1 Mbit/s.
+    pub can_bus_load: Option<(f32, f32)>,
     /// Each in-flight re-formation.
     pub adaptations: Vec<Adaptation>,
     /// The flight, sampled at 100 Hz from take-off.
@@ -202,6 +205,7 @@ pub fn fly(
         _ => None,
     };
     let mut dead = vec![false; n];
+    let mut can_escs = (setup.esc == EscLink::Dronecan).then(|| DroneCanEscs::new(n));
     let mut stopped_over: Option<Vec3> = None;
     loop {
         let t = plant.time();
@@ -242,6 +246,10 @@ pub fn fly(
         let mut imu = sensors.imu(&truth_now, dt);
         // The board's front end finds a saturated or stalled IMU (on the raw path).
         faults.imu = sensors.imu_fault().is_some();
+        // A DroneCAN ESC gone silent, or saying it failed, is its rotor's failure.
+        if let Some(escs) = &can_escs {
+            faults.rotors_out = escs.failed();
+        }
         if let Some(fault) = &setup.imu_fault {
             let begin = if fault.from_start {
                 fault.after
@@ -317,13 +325,20 @@ pub fn fly(
             mocap,
             command: command.take(),
             faults,
-            esc_rpm: setup.esc_telemetry.then(|| {
-                let mut rpm = [f32::NAN; MAX_ROBOTS];
-                for (r, v) in rpm.iter_mut().zip(plant.rotor_rpm()) {
-                    *r = v;
-                }
-                rpm
-            }),
+            esc_rpm: if let Some(escs) = can_escs.as_mut() {
+                let max = robots.max_thrust.max(f32::MIN_POSITIVE);
+                let commands: Vec<f32> = record.final_thrusts.iter().map(|t| t / max).collect();
+                let rpm: Vec<f32> = plant.rotor_rpm().collect();
+                Some(escs.step(plant.time_us(), &commands, &rpm))
+            } else {
+                setup.esc_telemetry.then(|| {
+                    let mut rpm = [f32::NAN; MAX_ROBOTS];
+                    for (r, v) in rpm.iter_mut().zip(plant.rotor_rpm()) {
+                        *r = v;
+                    }
+                    rpm
+                })
+            },
             gcs_heartbeat,
             gcs_lost,
             battery_volts,
@@ -480,6 +495,7 @@ pub fn fly(
         d.x.hypot(d.y)
     });
     record.simulated_s = end;
+    record.can_bus_load = can_escs.as_ref().map(DroneCanEscs::load);
     Ok(record)
 }
 

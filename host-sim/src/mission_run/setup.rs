@@ -47,6 +47,9 @@ pub struct MissionSetup {
     pub rotors_out: Vec<RotorStop>,
     /// The ESCs report each rotor's RPM every tick (bidirectional DShot's telemetry).
     pub esc_telemetry: bool,
+    /// How the flight controller drives the ESCs: DShot on its outputs, or DroneCAN on its
+    /// CAN bus, whose ESCs report each rotor's RPM in their `Status` at 50 Hz.
+    pub esc: EscLink,
     /// Write the mission's flight log (ULog) to this file.
     pub log: Option<PathBuf>,
     /// A ground station's route to fly instead of the scenario's target.
@@ -162,6 +165,7 @@ impl Default for MissionSetup {
             battery_drop: None,
             rotors_out: Vec::new(),
             esc_telemetry: false,
+            esc: EscLink::Dshot,
             log: None,
             route: None,
             gyro_bias: None,
@@ -169,4 +173,15 @@ impl Default for MissionSetup {
             plant: scenario_toml::PlantDepartures::MODEL,
         }
     }
+}
+
+/// How the flight controller drives the ESCs (`mission --esc`, `ESC_PROTOCOL`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum EscLink {
+    /// DShot600 on the FMU outputs (`--esc-telemetry` adds bidirectional DShot's RPM).
+    #[default]
+    Dshot,
+    /// DroneCAN ESCs on CAN1 (docs/hardware.md#can-escs): a `RawCommand` each step, each
+    /// ESC's `Status` (its RPM) at 50 Hz, an ESC that falls silent named stopped.
+    Dronecan,
 }

@@ -21,15 +21,19 @@
 //! Two departures act on the rotors' thrust when the scenario asks for them: ground effect,
 //! each rotor's thrust raised by its rotor's height above the ground ([`ground_effect`]), and
 //! the pack's sag, each rotor's thrust for its command lowered by the voltage the rotors'
-//! current leaves ([`battery`]).
+//! current leaves ([`battery`]). In wind ([`wind`]) the air drags on the rotors, the robots and
+//! the payload's edge. The ground touches the plate, and under a hull of more than four corners
+//! a small ball at each corner too ([`support`]).
 //!
 //! Frames: rapier runs directly in the flight software's frames: world NED (gravity along +z,
 //! the ground's top face at z = 0) and body FRD, so nothing is converted.
 
 pub mod battery;
 pub mod departures;
+pub mod dronecan_escs;
 pub mod ground_effect;
 pub mod sensors;
+pub mod support;
 pub mod vibration;
 pub mod wind;
 
@@ -153,6 +157,12 @@ fn mass_properties(config: &PlantConfig) -> MassProperties {
     mass
 }
 
+/// A rotor's speed, RPM, for its thrust `t` (N): thrust goes with the speed squared, the
+/// largest, `max_thrust`, at [`RPM_AT_MAX_THRUST`].
+fn rpm_for(t: f32, max_thrust: f32) -> f32 {
+    RPM_AT_MAX_THRUST * (t.max(0.0) / max_thrust.max(f32::MIN_POSITIVE)).sqrt()
+}
+
 fn vector(v: Vec3) -> Vector {
     Vector::new(v.x, v.y, v.z)
 }
@@ -221,13 +231,19 @@ impl Plant {
                 .can_sleep(false)
                 .build(),
         );
-        let mut hull_points = Vec::with_capacity(2 * config.footprint.len());
-        for p in &config.footprint {
-            hull_points.push(Vector::new(p.x, p.y, 0.0));
-            hull_points.push(Vector::new(p.x, p.y, -PLATE_THICKNESS));
-        }
-        if let Some(shape) = ColliderBuilder::convex_hull(&hull_points) {
+        let support = support::support(&config.footprint, PLATE_THICKNESS);
+        if let Some(shape) = ColliderBuilder::convex_hull(&support.plate) {
             let collider = shape.density(0.0).friction(0.8).build();
+            world
+                .colliders
+                .insert_with_parent(collider, body, &mut world.bodies);
+        }
+        for foot in support.feet {
+            let collider = ColliderBuilder::ball(support::FOOT_RADIUS)
+                .translation(foot)
+                .density(0.0)
+                .friction(0.8)
+                .build();
             world
                 .colliders
                 .insert_with_parent(collider, body, &mut world.bodies);
@@ -338,10 +354,8 @@ impl Plant {
     /// Each rotor's RPM as its ESC would report it: thrust goes with the RPM squared, the
     /// largest thrust at [`RPM_AT_MAX_THRUST`].
     pub fn rotor_rpm(&self) -> impl Iterator<Item = f32> + '_ {
-        let max = self.config.max_thrust.max(f32::MIN_POSITIVE);
-        self.thrusts
-            .iter()
-            .map(move |&t| RPM_AT_MAX_THRUST * (t.max(0.0) / max).sqrt())
+        let max = self.config.max_thrust;
+        self.thrusts.iter().map(move |&t| rpm_for(t, max))
     }
 
     /// One physics step of `PHYSICS_DT` with rotor commands `commands` (N, commanded units).
@@ -420,13 +434,27 @@ impl Plant {
             let spin = f32::from(self.config.spin.get(i).copied().unwrap_or(1));
             yaw_torque += spin * self.config.torque_per_thrust * t;
         }
-        // The wind's drag on the footprint, at its centroid.
-        if let Some(drag) = self
-            .wind
-            .drag(vec3(rb.linvel()), &self.config.footprint, PHYSICS_DT)
-        {
-            let at = pose * Vector::new(drag.at.x, drag.at.y, -0.5 * PLATE_THICKNESS);
-            rb.add_force_at_point(vector(drag.force), at, true);
+        // The wind's drag: on the payload's edge, each robot's body and each rotor.
+        if self.wind.advance(PHYSICS_DT) {
+            let mut relative = self.wind.air() - vec3(rb.linvel());
+            relative.z = 0.0;
+            let relative_body = vec3(rotation.inverse() * vector(relative));
+            let plate = wind::plate_drag(
+                relative,
+                relative_body,
+                &self.config.footprint,
+                PLATE_THICKNESS,
+            );
+            let at = pose * Vector::new(plate.at.x, plate.at.y, -0.5 * PLATE_THICKNESS);
+            rb.add_force_at_point(vector(plate.force), at, true);
+            let axis = vec3(rotation * Vector::new(0.0, 0.0, 1.0));
+            let robot = wind::bluff_drag(relative, wind::ROBOT_FRONTAL_AREA);
+            for (p, &t) in self.config.rotor_points.iter().zip(&self.thrusts) {
+                let omega = rpm_for(t, self.config.max_thrust) * core::f32::consts::TAU / 60.0;
+                let force = robot + wind::rotor_drag(relative, axis, omega);
+                let at = pose * Vector::new(p.x, p.y, rotor_z);
+                rb.add_force_at_point(vector(force), at, true);
+            }
         }
         let body_torque = vector(disturbance) + Vector::new(0.0, 0.0, yaw_torque);
         rb.add_torque(rotation * body_torque, true);

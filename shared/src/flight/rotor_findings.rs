@@ -6,6 +6,9 @@
 pub struct EscTelemetry<'a> {
     /// Each rotor's RPM (NaN where a rotor has no reading), or `None` without telemetry.
     pub rpm: Option<&'a [f32]>,
+    /// Each RPM is the ESC's latest message, held between messages slower than the tick
+    /// (DroneCAN): one low message confirms ([`super::rotor_monitor::MonitorInput::rpm_per_message`]).
+    pub rpm_per_message: bool,
     /// Rotors whose ESC reports them stopped while commanded to turn, bit `i` for rotor `i`.
     pub stopped: u16,
 }

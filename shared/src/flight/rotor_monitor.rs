@@ -27,9 +27,10 @@
 //!   among them).
 //! - Isolation ([`crate::flight::rotor_isolation`]): one rotor's column, or two rotors'
 //!   stopped together, must explain the change in size and direction for
-//!   [`RotorMonitorConfig::confirm_time`]; the rotors named are those that explain the
-//!   change averaged over the last 10 ms (neighbours' columns are close, and one tick's
-//!   noise can favour either).
+//!   [`RotorMonitorConfig::confirm_time`]; on the next tick the rotors named are those that
+//!   explain the change averaged over the last 10 ms (neighbours' columns are close, and one
+//!   tick's noise can favour either). A tick judges or names, never both (each is a search of
+//!   the pairs: 120 at sixteen rotors).
 //! - After a finding the monitor goes on: what the rotors found put into the residuals is
 //!   taken out ([`RotorMonitor::mark_out`]), the baseline from before is kept, and a rotor
 //!   that stopped with them still shows after [`RotorMonitorConfig::blind_time`]; until
@@ -40,7 +41,9 @@
 //!   the next, is named once its loss reaches half the thrust the rotor had when the drift
 //!   was taken from (the controller raises a fading rotor's command as it fades; sized
 //!   against today's, the neighbour whose column fits worse but reads a larger loss would be
-//!   named first).
+//!   named first). While the robots move in flight the model changes every tick, and the
+//!   drift is taken from the latest ([`RotorMonitor::model_changed`]): the believed COM
+//!   carried to the measured one drifts the baseline by a rotor's size on a large payload.
 //! - The ESCs' RPM, where the vehicle has it: a rotor whose RPM squared over its expected
 //!   thrust falls under half its own (learned in its first second of flight) is named in
 //!   [`RPM_CONFIRM_TIME`], whatever the response says.
@@ -167,6 +170,11 @@ pub struct MonitorInput<'a> {
     /// Each rotor's RPM from its ESC's telemetry (NaN where this tick has none), or `None`
     /// without ESC telemetry.
     pub rpm: Option<&'a [f32]>,
+    /// Each RPM is the ESC's latest message, held between messages that come slower than the
+    /// tick (DroneCAN's `Status`, 50 Hz, CRC-checked): one low message confirms. Otherwise
+    /// each tick brings a reading of its own (bidirectional DShot's answers, a 4-bit CRC) and
+    /// [`RPM_CONFIRM_TIME`] of them confirm.
+    pub rpm_per_message: bool,
     /// Body rate, rad/s.
     pub rate: Vec3,
     /// The accelerometer's specific force, body frame, m/s^2.
@@ -299,6 +307,18 @@ impl RotorMonitor {
         self.loud = 0.0;
         self.smoothed = [0.0; 3];
         self.guard = config.resettle_time;
+    }
+
+    /// The model judged against was changed on purpose (the robots moved in flight, and the
+    /// mixer, COM and mass with them): what the baseline drifts by meanwhile is the model's
+    /// error changing (a believed COM carried towards the measured one takes the torque the
+    /// old error made out of the residual), not a rotor fading, so the drift is measured from
+    /// here on. A rotor that stops is still found from the change; one that fades while the
+    /// robots move is found from the drift after they stop.
+    pub fn model_changed(&mut self) {
+        self.reference = self.baseline;
+        self.reference_thrust = self.expected;
+        self.drifting = 0.0;
     }
 
     /// Each rotor's expected thrust: its command through the rotors' response, N.
@@ -481,10 +501,34 @@ impl RotorMonitor {
             !self.out,
             config.min_thrust,
         );
+        let guarded = self.guard > 0.0;
+        if self.confirming >= config.confirm_time {
+            // Confirmed by the last tick: name the rotors that explain the recent change
+            // (neighbours' columns are close; one tick's noise can pick either). A tick judges
+            // the change or names the rotors, never both: at sixteen rotors each is a search
+            // of 120 pairs, and the two together took twice the control tick's budget.
+            let named = explain(
+                &scaled(&self.smoothed),
+                &columns,
+                config,
+                Judging {
+                    sized: false,
+                    thrust_shown: guarded,
+                    pairs: true,
+                    decisive: false,
+                },
+            );
+            if named == 0 {
+                // Judged again on the next tick, named on the one after if it still holds.
+                self.confirming -= dt;
+            } else {
+                self.mark_out(named, input.mixer, config);
+            }
+            return named;
+        }
         if drift_tick {
             return self.watch_drift(input, &columns, &drift);
         }
-        let guarded = self.guard > 0.0;
         let judged = Judging {
             sized: true,
             thrust_shown: guarded,
@@ -514,27 +558,9 @@ impl RotorMonitor {
             }
             return 0;
         }
-        // Some rotor explains it: confirm over time, and name the rotors that explain the
-        // recent change (neighbours' columns are close; one tick's noise can pick either).
+        // Some rotor explains it: confirm over time; the next tick names the rotors.
         self.confirming += dt;
-        if self.confirming < config.confirm_time {
-            return 0;
-        }
-        let named = explain(
-            &scaled(&self.smoothed),
-            &columns,
-            config,
-            Judging {
-                sized: false,
-                thrust_shown: guarded,
-                pairs: true,
-                decisive: false,
-            },
-        );
-        if named != 0 {
-            self.mark_out(named, input.mixer, config);
-        }
-        named
+        0
     }
 
     /// A rotor that fades slowly: its loss goes into the baseline as it grows. The drift
@@ -586,7 +612,8 @@ impl RotorMonitor {
 
     /// The rotors whose ESCs' RPM says they make less than
     /// [`RotorMonitorConfig::min_fraction`] of their expected thrust, for
-    /// [`RPM_CONFIRM_TIME`]. Thrust goes with the RPM squared (one propeller, one air density):
+    /// [`RPM_CONFIRM_TIME`] (or for one message, [`MonitorInput::rpm_per_message`]). Thrust
+    /// goes with the RPM squared (one propeller, one air density):
     /// each rotor's ratio of the two is learned in the first [`RPM_LEARN_TIME`] of flight and
     /// a rotor is judged against its own.
     fn watch_rpm(&mut self, input: &MonitorInput<'_>, n: usize) -> u16 {
@@ -602,7 +629,11 @@ impl RotorMonitor {
         let learning = self.rpm_learned < RPM_LEARN_TIME;
         let first = self.rpm_learned == 0.0;
         let learn = math::clamp(dt / RPM_LEARN_AVERAGE, 0.0, 1.0);
-        let confirm = math::ceil(RPM_CONFIRM_TIME / dt) as u8;
+        let confirm = if input.rpm_per_message {
+            1
+        } else {
+            math::ceil(RPM_CONFIRM_TIME / dt) as u8
+        };
         let mut found = 0u16;
         for (j, &r) in rpm.iter().enumerate().take(n) {
             let expected = self.expected[j];

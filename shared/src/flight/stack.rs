@@ -268,8 +268,10 @@ impl FlightStack {
 
     /// Flies on with `model` (the robots moved, or the payload is believed otherwise): the
     /// mixer and the controller's vehicle model change, the controller's integrators and the
-    /// plan carry on. Rotors found stopped stay out of the new mixer.
+    /// plan carry on. Rotors found stopped stay out of the new mixer; the rotor monitor
+    /// measures a rotor's fading from the new model on ([`RotorMonitor::model_changed`]).
     pub fn set_model(&mut self, model: FlightModel) {
+        self.monitor.model_changed();
         self.weight = model.vehicle.hover_thrust();
         self.controller.set_model(model.vehicle);
         self.com = model.com;
@@ -334,6 +336,7 @@ impl FlightStack {
             com: self.com,
             thrusts,
             rpm: esc.rpm,
+            rpm_per_message: esc.rpm_per_message,
             rate: nav.attitude.rate,
             accel,
             flying: self.config.watch_rotors && self.land.airborne(),

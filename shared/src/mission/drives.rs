@@ -5,8 +5,11 @@
 
 use crate::scenario::MAX_ROBOTS;
 
-/// ESC protocols, by `ESC_PROTOCOL`'s value (0 DShot600, 1 PWM, 2 OneShot125).
-pub const ESC_PROTOCOLS: usize = 3;
+/// ESC protocols, by `ESC_PROTOCOL`'s value (0 DShot600, 1 PWM, 2 OneShot125, 3 DroneCAN).
+pub const ESC_PROTOCOLS: usize = 4;
+
+/// `ESC_PROTOCOL`'s value for DroneCAN ESCs on the CAN bus.
+pub const ESC_PROTOCOL_DRONECAN: u8 = 3;
 
 /// An ESC protocol's name for people, from `ESC_PROTOCOL`'s value.
 pub fn esc_protocol_name(value: u8) -> &'static str {
@@ -14,6 +17,7 @@ pub fn esc_protocol_name(value: u8) -> &'static str {
         0 => "DShot600",
         1 => "PWM",
         2 => "OneShot125",
+        3 => "DroneCAN",
         _ => "unknown",
     }
 }
@@ -27,9 +31,13 @@ pub struct BoardDrives {
     pub steppers: u8,
 }
 
-/// The Pixhawk 6C: eight FMU outputs whatever the protocol (its eight IO outputs go through
-/// the IO co-processor, which this firmware does not drive), eight TMC2209 on two UARTs.
-pub const PIXHAWK_6C: BoardDrives = BoardDrives::uniform(8, 8);
+/// The Pixhawk 6C: eight FMU outputs with DShot, PWM or OneShot125 (its eight IO outputs go
+/// through the IO co-processor, which this firmware does not drive), sixteen DroneCAN ESCs on
+/// CAN1; sixteen TMC2209 on four UARTs.
+pub const PIXHAWK_6C: BoardDrives = BoardDrives {
+    rotors: [8, 8, 8, MAX_ROBOTS as u8],
+    steppers: MAX_ROBOTS as u8,
+};
 
 /// QEMU's mps2-an500 in the loop: the plant takes every robot's command over the link.
 pub const QEMU_MPS2_AN500: BoardDrives = BoardDrives::uniform(MAX_ROBOTS as u8, MAX_ROBOTS as u8);
@@ -116,21 +124,27 @@ mod tests {
     use std::string::ToString;
 
     #[test]
-    fn the_pixhawk_drives_eight_robots_with_any_protocol_and_says_so_past_that() {
+    fn the_pixhawk_drives_eight_robots_on_its_outputs_and_sixteen_on_dronecan() {
         for protocol in 0..ESC_PROTOCOLS as u8 {
             assert_eq!(PIXHAWK_6C.check(8, protocol), Ok(()));
+        }
+        for protocol in 0..ESC_PROTOCOL_DRONECAN {
+            assert!(PIXHAWK_6C.check(9, protocol).is_err(), "{protocol}");
         }
         let refusal = PIXHAWK_6C.check(12, 0).expect_err("12 robots");
         assert_eq!(
             refusal.to_string(),
-            "12 robots; this board drives 8 rotors (ESC_PROTOCOL DShot600) and 8 steppers"
+            "12 robots; this board drives 8 rotors (ESC_PROTOCOL DShot600) and 16 steppers"
         );
+        assert_eq!(PIXHAWK_6C.check(12, ESC_PROTOCOL_DRONECAN), Ok(()));
+        assert_eq!(PIXHAWK_6C.check(MAX_ROBOTS, ESC_PROTOCOL_DRONECAN), Ok(()));
+        assert_eq!(esc_protocol_name(ESC_PROTOCOL_DRONECAN), "DroneCAN");
     }
 
     #[test]
     fn the_fewer_of_rotors_and_steppers_limits_and_an_unknown_protocol_drives_none() {
         let board = BoardDrives {
-            rotors: [16, 8, 8],
+            rotors: [16, 8, 8, 16],
             steppers: 12,
         };
         assert_eq!(board.check(12, 0), Ok(()));
@@ -144,7 +158,7 @@ mod tests {
     fn qemu_drives_every_robot_unless_told_fewer() {
         assert_eq!(QEMU_MPS2_AN500.check(MAX_ROBOTS, 0), Ok(()));
         let eight = QEMU_MPS2_AN500.at_most(8);
-        assert_eq!(eight, PIXHAWK_6C);
+        assert_eq!(eight, BoardDrives::uniform(8, 8));
         assert_eq!(board("qemu"), Some(QEMU_MPS2_AN500));
         assert_eq!(board("pixhawk6c"), Some(PIXHAWK_6C));
         assert_eq!(board("pixhawk"), None);

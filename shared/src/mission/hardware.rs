@@ -9,8 +9,11 @@ use crate::rail::stepper::DriveConfig;
 /// The hardware settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HardwareConfig {
-    /// ESC protocol on the FMU outputs: 0 DShot600, 1 PWM (1000-2000 us), 2 OneShot125.
+    /// ESC protocol: 0 DShot600, 1 PWM (1000-2000 us), 2 OneShot125 on the FMU outputs;
+    /// 3 DroneCAN ESCs on the CAN bus (docs/hardware.md#can-escs).
     pub esc_protocol: u8,
+    /// This flight controller's DroneCAN node ID (`UAVCAN_NODE_ID`, PX4's name and default 1).
+    pub can_node_id: u8,
     /// Thrust (fraction of full thrust) at 20, 40, 60 and 80 % ESC command; rising, inside
     /// (0, 1). The default is the square law of a fixed-pitch propeller.
     pub thrust_map: [f32; 4],
@@ -47,6 +50,7 @@ impl HardwareConfig {
     /// through 0.11 ohm sense resistors (the common TMC2209 boards), stall detection off, motor tests allowed, no ESC telemetry, 14-pole motors.
     pub const DEFAULT: Self = Self {
         esc_protocol: 0,
+        can_node_id: 1,
         thrust_map: [0.04, 0.16, 0.36, 0.64],
         drive: DriveConfig::DEFAULT,
         stepper_current: 0.8,

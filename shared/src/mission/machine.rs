@@ -59,6 +59,7 @@ pub use crate::mission::interface::{
 };
 use bench::Bench;
 pub use bench::MARK_TOLERANCE;
+pub use estimation::{SET_DOWN_CUT_TILT, SET_DOWN_TIME};
 
 /// A job asked for and not yet taken.
 #[derive(Clone, Debug)]
@@ -81,6 +82,11 @@ pub struct Mission {
     rail_move: Option<(RailMove, Positions)>,
     lift_plan: Option<LiftPlan>,
     lift: Option<LiftoffDetector>,
+    /// The lifting pair's thrust when its lift was read, N: the set-down ramps down from it.
+    set_down_from: f32,
+    /// The body's down axis at rest before the lift, for the set-down's tilt; the set-down
+    /// cut (`None`) once the payload tipped past [`estimation::SET_DOWN_CUT_TILT`].
+    set_down_axis: Option<crate::control::vector::Vec3>,
     pending: Option<PendingJob>,
     outgoing: Option<JobRequest>,
     latest: Option<Estimate>,
@@ -156,6 +162,8 @@ impl Mission {
             rail_move: None,
             lift_plan: None,
             lift: None,
+            set_down_from: 0.0,
+            set_down_axis: None,
             pending: None,
             outgoing: None,
             latest: None,

@@ -27,7 +27,7 @@ pub use hardware::HardwareConfig;
 pub use jobs::{FormationPlan, JobRequest, JobResult, LiftPlan, MissionPlanner};
 pub use machine::{
     CommandRefusal, CommandReply, EscRpm, HardwareFaults, ImuDetection, Mission, OperatorCommand,
-    TickInput, TickOutput,
+    SET_DOWN_CUT_TILT, SET_DOWN_TIME, TickInput, TickOutput,
 };
 pub use phases::{AbortReason, Phase, Reason, Transition};
 pub use supervision::{Notice, Supervision, SupervisionConfig};

@@ -248,11 +248,26 @@ impl<W: Write> Sending<W> {
                         continue;
                     }
                     for message in 0..link::esc::messages(vehicle.robots) {
-                        if stream == Stream::EscStatus {
-                            self.encode(&link::esc::esc_status(&vehicle, &rpm, message));
-                        } else {
-                            let counter = self.esc_infos;
-                            self.encode(&link::esc::esc_info(&vehicle, &rpm, message, counter));
+                        {
+                            // Read for this message alone (not kept across the flush).
+                            let e = <Selected as Board>::esc_electrical(message);
+                            if stream == Stream::EscStatus {
+                                self.encode(&link::esc::esc_status(
+                                    &vehicle,
+                                    &rpm,
+                                    e.as_ref(),
+                                    message,
+                                ));
+                            } else {
+                                let counter = self.esc_infos;
+                                self.encode(&link::esc::esc_info(
+                                    &vehicle,
+                                    &rpm,
+                                    e.as_ref(),
+                                    message,
+                                    counter,
+                                ));
+                            }
                         }
                         self.flush().await;
                     }

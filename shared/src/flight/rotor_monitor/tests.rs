@@ -71,6 +71,7 @@ fn fly(
             com: COM,
             thrusts: &thrusts[..8],
             rpm: None,
+            rpm_per_message: false,
             rate: w,
             accel: Vec3::new(0.0, 0.0, accel_z),
             flying: true,
@@ -168,6 +169,7 @@ fn nothing_is_judged_on_the_ground_or_before_settling() {
             com: COM,
             thrusts: &thrusts,
             rpm: None,
+            rpm_per_message: false,
             rate: Vec3::new(3.0, -3.0, 0.0),
             accel: Vec3::new(0.0, 0.0, 0.0),
             flying: false,
@@ -185,6 +187,7 @@ fn nothing_is_judged_on_the_ground_or_before_settling() {
         com: COM,
         thrusts: &[f32::NAN; 8],
         rpm: Some(&[f32::NAN; 8]),
+        rpm_per_message: false,
         rate: Vec3::new(f32::NAN, 0.0, 0.0),
         accel: Vec3::ZERO,
         flying: true,
@@ -210,4 +213,46 @@ fn its_state_is_small() {
     // RAM is within its budget with some 7 KiB to spare).
     let size = core::mem::size_of::<RotorMonitor>();
     assert!(size <= 320, "{size} bytes");
+}
+
+/// Ticks until the RPM path names rotor 2, whose RPM falls to a tenth after a second of
+/// hover (each reading a tick of its own, or the latest message held: `per_message`), and
+/// what it names.
+fn ticks_to_name_by_rpm(per_message: bool) -> (u32, u16) {
+    let mixer = mixer();
+    let v = vehicle();
+    let mut monitor = RotorMonitor::new();
+    let thrusts = [v.hover_thrust() / 8.0; 8];
+    for k in 0..2000u32 {
+        let mut rpm = [5_000.0f32; 8];
+        if k >= 800 {
+            rpm[2] = 500.0;
+        }
+        let found = monitor.update(&MonitorInput {
+            config: &RotorMonitorConfig::DEFAULT,
+            mixer: &mixer,
+            vehicle: &v,
+            com: COM,
+            thrusts: &thrusts,
+            rpm: Some(&rpm),
+            rpm_per_message: per_message,
+            rate: Vec3::ZERO,
+            accel: Vec3::new(0.0, 0.0, -GRAVITY),
+            flying: true,
+            active: true,
+            dt: DT,
+        });
+        if found != 0 {
+            return (k - 800, found);
+        }
+    }
+    (u32::MAX, 0)
+}
+
+#[test]
+fn a_low_rpm_confirms_in_ten_ms_of_readings_a_tick_or_in_one_held_message() {
+    // Bidirectional DShot: a reading each tick, 10 ms of them (four ticks, the fourth names).
+    assert_eq!(ticks_to_name_by_rpm(false), (3, 1 << 2));
+    // DroneCAN: the ESC's Status, held between messages: the first low one names it.
+    assert_eq!(ticks_to_name_by_rpm(true), (0, 1 << 2));
 }

@@ -5,6 +5,7 @@
 
 use super::Mission;
 use crate::control::navigator::NavState;
+use crate::control::vector::Vec3;
 use crate::estimation::Status;
 use crate::liftoff_detector::{LiftState, LiftoffDetector};
 use crate::math;
@@ -12,10 +13,33 @@ use crate::mission::jobs::{JobRequest, JobResult};
 use crate::mission::phases::{AbortReason, Phase, Reason, Transition};
 use crate::scenario::{GRAVITY, MAX_ROBOTS};
 
+/// Time over which the rotors' thrust falls to zero after a lift is read, s.
+pub const SET_DOWN_TIME: f32 = 1.0;
+
+/// Tilt from the lift's resting attitude that cuts the set-down, rad (6 degrees, ten times
+/// the lift-off detector's threshold): the lifted edge still rising that far means the ramp
+/// pushes past the lift-off, and on a light payload it rolled over (a campaign trial, 7
+/// robots, 2.2 kg, tipped past 45 degrees in 0.6 s; cut, it delivers at 0.006 m). At 3
+/// degrees a light payload in ground effect was cut where it would have come down by itself,
+/// and its knock read as IMU noise.
+pub const SET_DOWN_CUT_TILT: f32 = 0.105;
+
 impl Mission {
     /// One robot's weight, N: the thrust that holds a robot that does not lift.
     fn own_weight(&self) -> f32 {
         self.scenario.robots.mass * GRAVITY
+    }
+
+    /// The set-down's length, s: [`SET_DOWN_TIME`], at most half the relax time.
+    fn set_down_time(&self) -> f32 {
+        math::min(SET_DOWN_TIME, 0.5 * self.config.relax_time)
+    }
+
+    /// Whether the rotors set the payload down after a lift (armed, their thrust ramping down).
+    pub(super) fn setting_down(&self) -> bool {
+        self.phase == Phase::Relaxing
+            && self.phase_time < self.set_down_time()
+            && self.set_down_axis.is_some()
     }
 
     /// The pre-flight checks: after `checks_time`, a valid position and the payload level
@@ -89,14 +113,49 @@ impl Mission {
             return None;
         };
         let group = plan.group;
+        self.set_down_from = lift.pair_thrust();
+        self.set_down_axis = Some(lift.resting_axis());
         self.lift = None;
         self.request(JobRequest::Update { group, reading });
         Some(self.enter(Phase::Relaxing, Reason::LiftRead(reading)))
     }
 
-    /// The rotors off while the update runs: then the formation decision once the estimate
-    /// has converged often enough in a row, or another lift.
-    pub(super) fn relaxing(&mut self) -> Result<Option<Transition>, AbortReason> {
+    /// The payload set down and the rotors off while the update runs: then the formation
+    /// decision once the estimate has converged often enough in a row, or another lift.
+    ///
+    /// The set-down: every rotor's thrust falls from the lift's to zero along a ramp of
+    /// [`SET_DOWN_TIME`] (at most half the relax time), so the lifted edge comes back down
+    /// rather than dropping. Cut at once, a heavy edge fell its lift's height onto the ground;
+    /// the knock rang through the IMU's anti-alias filter and notches as some 20 jumps in 32
+    /// ticks, which the IMU monitor came close to calling noise, and on a real payload it is a
+    /// blow to what it carries.
+    pub(super) fn relaxing(
+        &mut self,
+        nav: &NavState,
+        thrusts: &mut [f32; MAX_ROBOTS],
+    ) -> Result<Option<Transition>, AbortReason> {
+        if let Some(rest) = self.set_down_axis {
+            let axis = nav.attitude.attitude.rotate(Vec3::DOWN).normalized();
+            if rest.norm() > 0.0
+                && math::acos(math::clamp(axis.dot(rest.normalized()), -1.0, 1.0))
+                    > SET_DOWN_CUT_TILT
+            {
+                self.set_down_axis = None;
+            }
+        }
+        let left = 1.0 - self.phase_time / self.set_down_time();
+        if left > 0.0 && self.set_down_axis.is_some() {
+            let n = self.scenario.robots.count();
+            let own = self.own_weight();
+            thrusts[..n].iter_mut().for_each(|t| *t = own * left);
+            if let Some(plan) = self.lift_plan.as_ref() {
+                for &i in &plan.lifting {
+                    if let Some(t) = thrusts.get_mut(i) {
+                        *t = self.set_down_from * left;
+                    }
+                }
+            }
+        }
         if let Some(result) = self.take_result()? {
             let JobResult::Updated(estimate) = result else {
                 return Err(AbortReason::JobOverrun);

@@ -130,6 +130,8 @@ impl Mission {
             &thrusts[..n],
             EscTelemetry {
                 rpm: input.esc_rpm.as_ref().map(|r| &r[..n]),
+                rpm_per_message: self.config.hardware.esc_protocol
+                    == crate::mission::drives::ESC_PROTOCOL_DRONECAN,
                 stopped: reported,
             },
             imu_trusted,

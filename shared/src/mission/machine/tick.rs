@@ -144,11 +144,13 @@ impl Mission {
                 let _ = self.notices.push_front(other);
             }
         }
-        let mut armed = matches!(
-            self.phase,
-            Phase::Lifting | Phase::Arming | Phase::Flying(_)
-        );
-        if !matches!(self.phase, Phase::Lifting | Phase::Flying(_)) {
+        let setting_down = self.setting_down();
+        let mut armed = setting_down
+            || matches!(
+                self.phase,
+                Phase::Lifting | Phase::Arming | Phase::Flying(_)
+            );
+        if !setting_down && !matches!(self.phase, Phase::Lifting | Phase::Flying(_)) {
             thrusts = [0.0; MAX_ROBOTS];
         }
         let stalled = input.faults.stalled_robots != 0;
@@ -218,7 +220,7 @@ impl Mission {
             Phase::SelectingPair => self.selecting_pair(),
             Phase::MovingRobots => Ok(self.moving_to_lift()),
             Phase::Lifting => Ok(self.lifting(nav, dt, thrusts)),
-            Phase::Relaxing => self.relaxing(),
+            Phase::Relaxing => self.relaxing(nav, thrusts),
             Phase::DecidingFormation => self.deciding_formation(),
             Phase::Rearranging => self.rearranging(nav),
             Phase::Arming => Ok((self.phase_time >= self.config.arm_time)

@@ -9,9 +9,17 @@ pub(super) const DRIVERS: &[ParamSpec] = &[
         whole "ESC_PROTOCOL",
         "-",
         0.0,
-        2.0,
-        "ESC protocol on the FMU outputs: 0 DShot600, 1 PWM, 2 OneShot125 (taken while disarmed)",
+        3.0,
+        "ESC protocol: 0 DShot600, 1 PWM, 2 OneShot125 on the FMU outputs; 3 DroneCAN ESCs on CAN1 (taken while disarmed)",
         |c| c.hardware.esc_protocol
+    ),
+    param!(
+        whole "UAVCAN_NODE_ID",
+        "-",
+        1.0,
+        125.0,
+        "this flight controller's DroneCAN node ID on the ESCs' bus (PX4's name; taken while disarmed)",
+        |c| c.hardware.can_node_id
     ),
     param!(
         "THR_MAP_20",

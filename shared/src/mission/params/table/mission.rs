@@ -110,7 +110,7 @@ pub(super) const TIMING: &[ParamSpec] = &[
         "s",
         0.2,
         30.0,
-        "time with rotors off after each lift",
+        "time after each lift: the set-down, then rotors off",
         |c| c.relax_time
     ),
     param!(
