@@ -17,6 +17,16 @@
 //! `ramp_rate * detection_delay` for the sensor's own latency.
 //! If the ramp reaches the robots' maximum and holds it for `settle_time` without a tilt, the
 //! reading is "could not lift" (a censored measurement).
+//!
+//! A reading needs a payload at rest when the ramp starts: a payload still rocking (set down
+//! from the last lift, or knocked) crosses the threshold at the ramp's first thrust, and that
+//! thrust says nothing of the payload. So the settle window ends only when the body's down
+//! axis moved less than `rest_tolerance` over it (the lift waits, window after window, up to
+//! [`REST_TIMEOUT`], then gives up: [`LiftState::Restless`]); and a tilt that crosses the
+//! threshold before the ramp has run `least_ramp_time` is the payload's own motion, not the
+//! ramp's doing: the pair drops back to its own weight and the lift starts again (at most
+//! [`MAX_REDOS`] times; a payload that tips that early after a steady window every time
+//! really lifts there). Each wait and each restart is told ([`LiftDelay`]).
 
 use crate::control::vector::{Quat, Vec3};
 use crate::estimation::Measurement;
@@ -35,6 +45,11 @@ pub struct LiftoffConfig {
     pub onset_fraction: f32,
     /// Time held at the start (reference) and at maximum thrust (before giving up), s.
     pub settle_time: f32,
+    /// Largest movement of the body's down axis over the settle window (peak to peak of any
+    /// component, rad) for the payload to count as at rest.
+    pub rest_tolerance: f32,
+    /// Least time the ramp runs before a tilt can be its doing, s.
+    pub least_ramp_time: f32,
 }
 
 impl LiftoffConfig {
@@ -45,6 +60,8 @@ impl LiftoffConfig {
         detection_delay: 0.005,
         onset_fraction: 0.3,
         settle_time: 0.5,
+        rest_tolerance: 0.005,
+        least_ramp_time: 0.25,
     };
 }
 
@@ -65,7 +82,31 @@ pub enum LiftState {
     HoldingMaximum,
     /// Done: the measurement for the estimator.
     Measured(Measurement),
+    /// Done without a reading: the payload did not come to rest within [`REST_TIMEOUT`].
+    Restless,
 }
+
+/// Why a lift did not start its ramp, or started it again (told once each time).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LiftDelay {
+    /// The payload was still moving over the settle window: the lift waits for it.
+    Waiting {
+        /// How far the body's down axis moved over the window, rad.
+        moved: f32,
+    },
+    /// The payload tipped before the ramp could have tipped it: the lift starts again.
+    Redone {
+        /// The restart's count in this lift, from 1.
+        count: u8,
+        /// How long the ramp had run, s.
+        after: f32,
+    },
+}
+
+/// Longest wait for the payload to come to rest before a ramp, s.
+pub const REST_TIMEOUT: f32 = 10.0;
+/// Restarts of one lift for a tilt too early to be the ramp's doing.
+pub const MAX_REDOS: u8 = 2;
 
 /// Samples of (thrust, tilt) kept to find the tilt's onset (one second at 400 Hz).
 pub const HISTORY: usize = 400;
@@ -86,6 +127,15 @@ pub struct LiftoffDetector {
     thrust: f32,
     timer: f32,
     reference_axis: Vec3,
+    /// The down axis's componentwise least and greatest over the settle window.
+    window_low: Vec3,
+    window_high: Vec3,
+    /// Time spent settling since the lift began or last restarted, s.
+    waited: f32,
+    redos: u8,
+    waiting_told: bool,
+    last_moved: f32,
+    delay: Option<LiftDelay>,
     state: LiftState,
     history: heapless::Deque<(f32, f32, Vec3), HISTORY>,
     clock: f32,
@@ -102,6 +152,13 @@ impl LiftoffDetector {
             thrust: start_thrust,
             timer: 0.0,
             reference_axis: Vec3::ZERO,
+            window_low: Vec3::splat(f32::INFINITY),
+            window_high: Vec3::splat(f32::NEG_INFINITY),
+            waited: 0.0,
+            redos: 0,
+            waiting_told: false,
+            last_moved: 0.0,
+            delay: None,
             state: LiftState::Settling,
             history: heapless::Deque::new(),
             clock: 0.0,
@@ -122,6 +179,30 @@ impl LiftoffDetector {
     /// Thrust to command on each robot of the pair now, N.
     pub fn pair_thrust(&self) -> f32 {
         self.thrust
+    }
+
+    /// The last wait or restart not yet taken, if any (the mission tells it).
+    pub fn take_delay(&mut self) -> Option<LiftDelay> {
+        self.delay.take()
+    }
+
+    /// A new settle window: the reference and the window's extremes from nothing.
+    fn open_window(&mut self) {
+        self.reference_axis = Vec3::ZERO;
+        self.window_low = Vec3::splat(f32::INFINITY);
+        self.window_high = Vec3::splat(f32::NEG_INFINITY);
+        self.timer = 0.0;
+    }
+
+    /// How far the down axis moved over the last whole settle window, rad (zero before one).
+    pub fn window_moved(&self) -> f32 {
+        self.last_moved
+    }
+
+    /// How far the down axis moved over the window: the largest peak-to-peak component, rad.
+    fn window_movement(&self) -> f32 {
+        let d = self.window_high - self.window_low;
+        math::max(math::max(d.x, d.y), d.z)
     }
 
     /// The onset of the tilt (detector clock, s) from the history, the tilt now being
@@ -178,11 +259,28 @@ impl LiftoffDetector {
         match self.state {
             LiftState::Settling => {
                 self.reference_axis += axis;
+                self.window_low = self.window_low.min(axis);
+                self.window_high = self.window_high.max(axis);
                 self.timer += dt;
+                self.waited += dt;
                 if self.timer >= self.config.settle_time {
-                    self.reference_axis = self.reference_axis.normalized();
-                    self.timer = 0.0;
-                    self.state = LiftState::Ramping;
+                    let moved = self.window_movement();
+                    self.last_moved = moved;
+                    if moved <= self.config.rest_tolerance {
+                        self.reference_axis = self.reference_axis.normalized();
+                        self.timer = 0.0;
+                        self.clock = 0.0;
+                        self.history.clear();
+                        self.state = LiftState::Ramping;
+                    } else if self.waited >= REST_TIMEOUT {
+                        self.state = LiftState::Restless;
+                    } else {
+                        if !self.waiting_told {
+                            self.waiting_told = true;
+                            self.delay = Some(LiftDelay::Waiting { moved });
+                        }
+                        self.open_window();
+                    }
                 }
             }
             LiftState::Ramping | LiftState::HoldingMaximum => {
@@ -196,7 +294,21 @@ impl LiftoffDetector {
                 let _ = self
                     .history
                     .push_back((self.clock, self.thrust, tilt_vector));
-                if tilt > self.config.tilt_threshold {
+                if tilt > self.config.tilt_threshold
+                    && self.clock < self.config.least_ramp_time
+                    && self.redos < MAX_REDOS
+                {
+                    self.redos += 1;
+                    self.delay = Some(LiftDelay::Redone {
+                        count: self.redos,
+                        after: self.clock,
+                    });
+                    self.thrust = self.start_thrust;
+                    self.waited = 0.0;
+                    self.waiting_told = false;
+                    self.open_window();
+                    self.state = LiftState::Settling;
+                } else if tilt > self.config.tilt_threshold {
                     let onset = self.onset(tilt_vector);
                     let at_onset =
                         ramp_back(self.thrust, self.config.ramp_rate, self.clock - onset);
@@ -217,7 +329,7 @@ impl LiftoffDetector {
                     }
                 }
             }
-            LiftState::Measured(_) => {}
+            LiftState::Measured(_) | LiftState::Restless => {}
         }
         self.state
     }
@@ -226,9 +338,30 @@ impl LiftoffDetector {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::vec::Vec;
 
-    /// A payload that starts tilting `lag` seconds after the pair passes `lift_at`.
-    fn run(lift_at: f32, lag: f32, max: f32) -> (Measurement, f32) {
+    /// What a simulated lift gave: the reading (none when the detector gave up), when it
+    /// ended, and every wait and restart it told.
+    struct Lift {
+        reading: Option<Measurement>,
+        ended: f32,
+        delays: Vec<LiftDelay>,
+    }
+
+    /// A payload that starts tilting `lag` seconds after the pair passes `lift_at`, its roll
+    /// disturbed by `rocking(t)` (rad) besides.
+    fn lift(lift_at: f32, lag: f32, max: f32, rocking: impl Fn(f32) -> f32) -> Lift {
+        lift_growing(lift_at, lag, max, rocking, |s| 0.2 * s.powi(3))
+    }
+
+    /// As [`lift`], the tilt growing as `growth(time since the lift-off)` once it goes.
+    fn lift_growing(
+        lift_at: f32,
+        lag: f32,
+        max: f32,
+        rocking: impl Fn(f32) -> f32,
+        growth: impl Fn(f32) -> f32,
+    ) -> Lift {
         let config = LiftoffConfig {
             detection_delay: lag,
             ..LiftoffConfig::default()
@@ -237,19 +370,64 @@ mod tests {
         let dt = 0.0025;
         let mut tilt_start: Option<f32> = None;
         let mut t = 0.0;
+        let mut delays = Vec::new();
         loop {
             let thrust = d.pair_thrust();
             if thrust >= lift_at && tilt_start.is_none() {
                 tilt_start = Some(t + lag);
+            } else if thrust < lift_at {
+                // Dropped back below the lift-off (a restart): the payload rests again.
+                tilt_start = None;
             }
             // Once it goes the tilt grows as the cube of time (the torque grows with the ramp).
-            let tilt = tilt_start.map_or(0.0, |s| 0.2 * (t - s).max(0.0).powi(3));
-            let q = Quat::from_euler(0.02 + tilt, -0.01, 0.3); // resting slightly off level
-            if let LiftState::Measured(m) = d.step(q, dt) {
-                return (m, t);
+            let tilt = tilt_start.map_or(0.0, |s| growth((t - s).max(0.0)));
+            let q = Quat::from_euler(0.02 + tilt + rocking(t), -0.01, 0.3); // resting off level
+            let state = d.step(q, dt);
+            delays.extend(d.take_delay());
+            match state {
+                LiftState::Measured(m) => {
+                    return Lift {
+                        reading: Some(m),
+                        ended: t,
+                        delays,
+                    };
+                }
+                LiftState::Restless => {
+                    return Lift {
+                        reading: None,
+                        ended: t,
+                        delays,
+                    };
+                }
+                _ => {}
             }
             t += dt;
             assert!(t < 60.0, "the lift must end");
+        }
+    }
+
+    fn run(lift_at: f32, lag: f32, max: f32) -> (Measurement, f32) {
+        let l = lift(lift_at, lag, max, |_| 0.0);
+        assert!(l.delays.is_empty(), "a payload at rest: {:?}", l.delays);
+        (l.reading.expect("a reading"), l.ended)
+    }
+
+    fn lifted(m: Option<Measurement>) -> f32 {
+        match m {
+            Some(Measurement::Lifted { thrust }) => thrust,
+            other => panic!("not a lifted reading: {other:?}"),
+        }
+    }
+
+    /// A decaying rock of `amplitude` rad at 3 Hz, decaying with `tau` s, from time `from`.
+    fn rock(amplitude: f32, tau: f32, from: f32) -> impl Fn(f32) -> f32 {
+        move |t| {
+            if t < from {
+                0.0
+            } else {
+                let s = t - from;
+                amplitude * (-s / tau).exp() * (std::f32::consts::TAU * 3.0 * s).sin()
+            }
         }
     }
 
@@ -269,5 +447,66 @@ mod tests {
         let (m, t) = run(20.0, 0.005, 14.2);
         assert_eq!(m, Measurement::CouldNotLift);
         assert!(t > (14.2 - 0.98) / 1.0, "ramped all the way first: {t}");
+    }
+
+    #[test]
+    fn a_payload_still_rocking_is_waited_for_and_then_read() {
+        // Set down from the last lift: rocking 3 degrees, dying out over 0.4 s.
+        let l = lift(6.0, 0.005, 14.2, rock(0.05, 0.4, 0.0));
+        assert!(
+            matches!(l.delays.as_slice(), [LiftDelay::Waiting { moved }] if *moved > 0.005),
+            "told once that it waits: {:?}",
+            l.delays
+        );
+        let thrust = lifted(l.reading);
+        assert!((thrust - 6.0).abs() < 0.03, "{thrust}");
+    }
+
+    #[test]
+    fn a_payload_that_never_rests_is_no_reading() {
+        let l = lift(6.0, 0.005, 14.2, |t| 0.02 * (std::f32::consts::TAU * 2.0 * t).sin());
+        assert_eq!(l.reading, None);
+        assert!(l.ended >= REST_TIMEOUT - 0.01, "waited its time: {}", l.ended);
+        assert_eq!(l.delays.len(), 1, "told once: {:?}", l.delays);
+    }
+
+    #[test]
+    fn a_knock_as_the_ramp_begins_restarts_the_lift_and_is_not_read() {
+        // The ramp starts after the 0.5 s settle window; a knock 0.1 s into it rocks the
+        // payload 3 degrees. Read as a lift it would be the ramp's first thrust, 1.08 N.
+        let l = lift(6.0, 0.005, 14.2, rock(0.05, 0.15, 0.6));
+        assert!(
+            matches!(l.delays.first(), Some(LiftDelay::Redone { count: 1, after }) if *after < 0.25),
+            "{:?}",
+            l.delays
+        );
+        let thrust = lifted(l.reading);
+        assert!((thrust - 6.0).abs() < 0.03, "the lift's own reading: {thrust}");
+    }
+
+    #[test]
+    fn a_lift_off_at_the_ramps_first_thrust_that_tips_as_a_lift_does_is_read_at_once() {
+        // A COM by the hull's edge: the lift-off 0.01 N above the robots' own weight. The tilt
+        // grows as a lift's does (slowly at first), so it crosses the threshold 0.38 s into
+        // the ramp.
+        let l = lift(0.99, 0.005, 14.2, |_| 0.0);
+        assert!(l.delays.is_empty(), "{:?}", l.delays);
+        let thrust = lifted(l.reading);
+        assert!((thrust - 0.99).abs() < 0.03, "{thrust}");
+    }
+
+    #[test]
+    fn a_payload_that_tips_at_the_ramps_start_every_time_is_read_there() {
+        // A lift-off just above the robots' own weight on a payload that tips fast: every ramp
+        // crosses the threshold within 0.1 s. Two restarts, then the reading.
+        let l = lift_growing(1.0, 0.005, 14.2, |_| 0.0, |s| 0.5 * s);
+        let redone = l
+            .delays
+            .iter()
+            .filter(|d| matches!(d, LiftDelay::Redone { .. }))
+            .count();
+        assert_eq!(redone, usize::from(MAX_REDOS), "{:?}", l.delays);
+        let thrust = lifted(l.reading);
+        assert!((thrust - 1.0).abs() < 0.05, "{thrust}");
     }
 }

@@ -70,6 +70,29 @@ impl Vec3 {
         Self::new(self.x * o.x, self.y * o.y, self.z * o.z)
     }
 
+    /// Every component `v`.
+    pub const fn splat(v: f32) -> Self {
+        Self::new(v, v, v)
+    }
+
+    /// Component-wise least of the two.
+    pub fn min(self, o: Self) -> Self {
+        Self::new(
+            math::min(self.x, o.x),
+            math::min(self.y, o.y),
+            math::min(self.z, o.z),
+        )
+    }
+
+    /// Component-wise greatest of the two.
+    pub fn max(self, o: Self) -> Self {
+        Self::new(
+            math::max(self.x, o.x),
+            math::max(self.y, o.y),
+            math::max(self.z, o.z),
+        )
+    }
+
     /// Each component clamped to `[-limit, limit]`.
     pub fn clamp_each(self, limit: Self) -> Self {
         Self::new(

@@ -120,6 +120,12 @@ pub enum AbortReason {
     /// ([`crate::control::imu_monitor`]): on the ground the mission stops, in flight it lands
     /// on motion capture alone.
     ImuNoisy,
+    /// The payload did not come to rest for a lift within the detector's wait
+    /// ([`crate::liftoff_detector::REST_TIMEOUT`]).
+    PayloadRestless {
+        /// How far its down axis moved over the last settle window, rad.
+        moved: f32,
+    },
     /// A robot's stepper stalled on the rail: the robot is not where the plan put it.
     RobotStalled {
         /// The robot, counted from 0.
@@ -190,6 +196,12 @@ impl core::fmt::Display for AbortReason {
             Self::ImuFault => write!(f, "IMU fault (stalled, saturated or implausible)"),
             Self::ImuStuck => write!(f, "{}", ImuFailure::Stuck),
             Self::ImuNoisy => write!(f, "{}", ImuFailure::Noisy),
+            Self::PayloadRestless { moved } => write!(
+                f,
+                "the payload did not come to rest for a lift in {} s (it still moved {} deg within a settle window)",
+                Fixed(crate::liftoff_detector::REST_TIMEOUT, 0),
+                Fixed(moved.to_degrees(), 2)
+            ),
             Self::RobotStalled { robot } => write!(
                 f,
                 "robot {} stalled on the rail: it is not where the plan put it",

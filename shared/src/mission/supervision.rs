@@ -327,6 +327,14 @@ pub enum Notice {
         /// On.
         on: bool,
     },
+    /// A lift waits for the payload to come to rest, or starts again
+    /// (docs/models.md#lift-off-detector).
+    LiftDelayed {
+        /// The lifting group, as the phase's reason names it.
+        group: usize,
+        /// What the lift does about it.
+        delay: crate::liftoff_detector::LiftDelay,
+    },
     /// The mode switch asked for a mode the vehicle refused.
     SwitchRefused {
         /// The mode asked for.
@@ -439,6 +447,18 @@ impl core::fmt::Display for Notice {
             Self::SwitchRefused { mode, why } => {
                 write!(f, "mode switch: {} refused: {why}", mode.name())
             }
+            Self::LiftDelayed { group, delay } => match delay {
+                crate::liftoff_detector::LiftDelay::Waiting { moved } => write!(
+                    f,
+                    "lift with pair {group} waits: the payload moved {} deg in the last settle window",
+                    Fixed(moved.to_degrees(), 2)
+                ),
+                crate::liftoff_detector::LiftDelay::Redone { count, after } => write!(
+                    f,
+                    "lift with pair {group} started again ({count}): the payload tipped {} s into the ramp, before the ramp could tip it",
+                    Fixed(after, 2)
+                ),
+            },
             Self::RotorsOut {
                 newly,
                 earlier,

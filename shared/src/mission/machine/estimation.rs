@@ -11,6 +11,7 @@ use crate::liftoff_detector::{LiftState, LiftoffDetector};
 use crate::math;
 use crate::mission::jobs::{JobRequest, JobResult};
 use crate::mission::phases::{AbortReason, Phase, Reason, Transition};
+use crate::mission::supervision::Notice;
 use crate::scenario::{GRAVITY, MAX_ROBOTS};
 
 /// Time over which the rotors' thrust falls to zero after a lift is read, s.
@@ -99,25 +100,41 @@ impl Mission {
         nav: &NavState,
         dt: f32,
         thrusts: &mut [f32; MAX_ROBOTS],
-    ) -> Option<Transition> {
+    ) -> Result<Option<Transition>, AbortReason> {
         let n = self.scenario.robots.count();
         let own = self.own_weight();
         thrusts[..n].iter_mut().for_each(|t| *t = own);
-        let lift = self.lift.as_mut()?;
+        let Some(lift) = self.lift.as_mut() else {
+            return Ok(None);
+        };
         let state = lift.step(nav.attitude.attitude, dt);
-        let plan = self.lift_plan.as_ref()?;
+        let delay = lift.take_delay();
+        let moved = lift.window_moved();
+        let Some(plan) = self.lift_plan.as_ref() else {
+            return Ok(None);
+        };
         for &i in &plan.lifting {
             thrusts[i] = lift.pair_thrust();
         }
+        if let Some(delay) = delay {
+            let group = plan.group;
+            if self.notices.is_full() {
+                self.notices.pop_front();
+            }
+            let _ = self.notices.push_back(Notice::LiftDelayed { group, delay });
+        }
+        if state == LiftState::Restless {
+            return Err(AbortReason::PayloadRestless { moved });
+        }
         let LiftState::Measured(reading) = state else {
-            return None;
+            return Ok(None);
         };
         let group = plan.group;
         self.set_down_from = lift.pair_thrust();
         self.set_down_axis = Some(lift.resting_axis());
         self.lift = None;
         self.request(JobRequest::Update { group, reading });
-        Some(self.enter(Phase::Relaxing, Reason::LiftRead(reading)))
+        Ok(Some(self.enter(Phase::Relaxing, Reason::LiftRead(reading))))
     }
 
     /// The payload set down and the rotors off while the update runs: then the formation

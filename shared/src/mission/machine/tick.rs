@@ -219,7 +219,7 @@ impl Mission {
             Phase::PreflightChecks => Ok(self.checks(nav)),
             Phase::SelectingPair => self.selecting_pair(),
             Phase::MovingRobots => Ok(self.moving_to_lift()),
-            Phase::Lifting => Ok(self.lifting(nav, dt, thrusts)),
+            Phase::Lifting => self.lifting(nav, dt, thrusts),
             Phase::Relaxing => self.relaxing(nav, thrusts),
             Phase::DecidingFormation => self.deciding_formation(),
             Phase::Rearranging => self.rearranging(nav),
