@@ -419,12 +419,19 @@ pub fn run_lift_from(
         }
         let nav = navigator.update(&imu, dt, plant.time_us());
         if t >= started {
-            if let LiftState::Measured(m) = detector.step(nav.attitude.attitude, dt) {
-                return Ok(LiftOutcome {
-                    measured: m,
-                    model,
-                    duration_s: t - started,
-                });
+            match detector.step(nav.attitude.attitude, dt) {
+                LiftState::Measured(m) => {
+                    return Ok(LiftOutcome {
+                        measured: m,
+                        model,
+                        duration_s: t - started,
+                    });
+                }
+                LiftState::Restless => bail!(
+                    "lift with group {group}: the payload did not come to rest ({:.2} deg within a settle window)",
+                    detector.window_moved().to_degrees()
+                ),
+                _ => {}
             }
             for &i in &pair {
                 commands[i] = detector.pair_thrust();
