@@ -290,6 +290,10 @@ pub struct TrialResult {
     pub aborted: Option<String>,
     /// Distance from the target where it ended, m (none when dropped).
     pub final_error_m: Option<f32>,
+    /// Why each payload drawn before this one was refused (the vehicle's pre-flight checks
+    /// among them; empty for the paper's cases).
+    #[serde(default)]
+    pub redrawn: Vec<String>,
 }
 
 /// A trial's own random stream: the campaign's seed and the trial's index, nothing else.
@@ -314,23 +318,25 @@ pub struct Trial {
     pub mission_seed: u64,
     /// The fault injected, if one is.
     pub fault: Option<Injection>,
+    /// Why each payload drawn before this one was refused.
+    pub redrawn: Vec<String>,
 }
 
 /// Trial `trial` of `setup`: its payload, plant, mission seed and fault.
 pub fn trial_of(setup: &CampaignSetup, trial: usize) -> Result<Trial> {
     let mut rng = trial_rng(setup.seed, trial);
-    let (mut loaded, scenario_toml, vertices) = match setup.payloads {
+    let (mut loaded, scenario_toml, vertices, redrawn) = match setup.payloads {
         PayloadSource::Paper => {
             let (name, text) = CASES[trial % CASES.len()];
             let loaded = scenario_file::parse(text, std::path::Path::new(name))?;
             let vertices = loaded.scenario.payload.footprint.len();
-            (loaded, text.to_string(), vertices)
+            (loaded, text.to_string(), vertices, Vec::new())
         }
         PayloadSource::Random => {
             let name = format!("random-{}-{trial}", setup.seed);
             let drawn = payload::draw(&name, &mut rng)
                 .with_context(|| format!("trial {trial}: drawing its payload"))?;
-            (drawn.loaded, drawn.toml, drawn.vertices)
+            (drawn.loaded, drawn.toml, drawn.vertices, drawn.redrawn)
         }
     };
     loaded.plant = setup.dispersion.draw(&mut rng);
@@ -347,6 +353,7 @@ pub fn trial_of(setup: &CampaignSetup, trial: usize) -> Result<Trial> {
         vertices,
         mission_seed,
         fault,
+        redrawn,
     })
 }
 
@@ -403,6 +410,7 @@ pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
         outcome: outcome.to_string(),
         aborted: o.aborted.map(|r| r.to_string()),
         final_error_m: (!o.dropped).then_some(o.final_position_error_m),
+        redrawn: t.redrawn,
     })
 }
 
@@ -479,6 +487,10 @@ pub struct Report {
     pub faults: BTreeMap<String, FaultTally>,
     /// The final error of the missions that were not dropped.
     pub final_error_m: ErrorSpread,
+    /// Payloads drawn again before the ones flown, by the kind of reason ([`redraw_kind`]):
+    /// refused by a check of the scenario or the vehicle's pre-flight checks.
+    #[serde(default)]
+    pub redrawn: BTreeMap<String, usize>,
 }
 
 /// The nearest-rank `q` quantile of sorted `values` (none when there are none).
@@ -494,10 +506,27 @@ fn quantile(sorted: &[f32], q: f32) -> Option<f32> {
 /// particulars after it, a COM or a height, differ trial to trial), each number in it as `#`
 /// (`rotor 2 stopped in flight` and `rotor 11 ...` are one kind).
 pub fn abort_kind(said: &str) -> String {
-    let head = said.split(':').next().unwrap_or(said).trim();
+    numbers_as_hash(said.split(':').next().unwrap_or(said).trim())
+}
+
+/// The kind of a redraw's reason, for counting: the key and what is wrong with it, before the
+/// particulars (`robots.pair_size: no group of # adjacent robots can tip ...`), each number
+/// as `#`.
+pub fn redraw_kind(said: &str) -> String {
+    let mut parts = said.splitn(3, ':');
+    let head = match (parts.next(), parts.next()) {
+        (Some(key), Some(what)) => format!("{}:{what}", key.trim()),
+        (Some(all), None) => all.to_string(),
+        _ => said.to_string(),
+    };
+    numbers_as_hash(head.trim())
+}
+
+/// `head` with each run of digits (and the decimal points within it) as one `#`.
+fn numbers_as_hash(head: &str) -> String {
     let mut kind = String::with_capacity(head.len());
     for c in head.chars() {
-        if c.is_ascii_digit() {
+        if c.is_ascii_digit() || (c == '.' && kind.ends_with('#')) {
             if !kind.ends_with('#') {
                 kind.push('#');
             }
@@ -525,6 +554,10 @@ pub fn report(results: &[TrialResult]) -> Report {
         .filter(|e| e.is_finite())
         .collect();
     errors.sort_by(f32::total_cmp);
+    let mut redrawn = BTreeMap::new();
+    for why in results.iter().flat_map(|r| &r.redrawn) {
+        *redrawn.entry(redraw_kind(why)).or_insert(0) += 1;
+    }
     let mut faults: BTreeMap<String, FaultTally> = BTreeMap::new();
     for r in results {
         let Some(fault) = &r.fault else { continue };
@@ -555,6 +588,7 @@ pub fn report(results: &[TrialResult]) -> Report {
             p95: quantile(&errors, 0.95),
             max: errors.last().copied(),
         },
+        redrawn,
     }
 }
 

@@ -30,7 +30,10 @@
 //! carried by sixteen: every lift read "could not lift" until the estimate gave up).
 //! A draw that a check refuses (or that the mission's planner cannot load) is drawn again from
 //! the same stream, at most [`MAX_ATTEMPTS`] times: the campaign never counts a payload that
-//! could not exist as a vehicle's failure.
+//! could not exist as a vehicle's failure. The vehicle's own pre-flight checks are among them
+//! (a payload some grid point of which no lifting group could tip is refused before the first
+//! lift), so the campaign flies only payloads the vehicle accepts; each redraw keeps its
+//! reason, and the report counts them.
 
 use std::fmt::Write as _;
 use std::ops::RangeInclusive;
@@ -84,42 +87,49 @@ pub struct RandomPayload {
     pub loaded: LoadedScenario,
     /// Footprint vertices.
     pub vertices: usize,
-    /// Draws it took (1: the first passed every check).
-    pub attempts: usize,
+    /// Why each draw before it was refused, in order (empty: the first passed every check).
+    pub redrawn: Vec<String>,
 }
 
 /// A payload named `name` drawn from `rng`; an error only if [`MAX_ATTEMPTS`] draws in a row
 /// fail the checks (never, for these ranges: a test draws hundreds).
 pub fn draw(name: &str, rng: &mut ChaCha8Rng) -> Result<RandomPayload> {
     let robots = rng.random_range(ROBOTS);
-    let mut last = String::new();
-    for attempt in 1..=MAX_ATTEMPTS {
+    let mut redrawn = Vec::new();
+    for _ in 0..MAX_ATTEMPTS {
         let (toml, vertices) = match candidate(name, robots, rng) {
             Ok(drawn) => drawn,
             Err(why) => {
-                last = why.to_string();
+                redrawn.push(why.to_string());
                 continue;
             }
         };
         let loaded = match scenario_file::parse(&toml, std::path::Path::new(name)) {
             Ok(l) => l,
             Err(e) => {
-                last = format!("{e:#}");
+                redrawn.push(refusal(&e));
                 continue;
             }
         };
         if let Err(e) = MissionPlanner::new(&loaded.scenario, MissionConfig::default()) {
-            last = format!("the mission cannot load it: {e}");
+            redrawn.push(format!("the mission cannot load it: {e}"));
             continue;
         }
         return Ok(RandomPayload {
             toml,
             loaded,
             vertices,
-            attempts: attempt,
+            redrawn,
         });
     }
+    let last = redrawn.last().map_or("none", String::as_str);
     bail!("no valid payload for {robots} robots in {MAX_ATTEMPTS} draws (the last: {last})")
+}
+
+/// A scenario file's refusal without the file's name in front (every draw has its own name,
+/// and the report counts refusals by kind): the innermost cause, which names the key.
+fn refusal(e: &anyhow::Error) -> String {
+    e.root_cause().to_string()
 }
 
 /// Uniformly in `[lo, hi]`.

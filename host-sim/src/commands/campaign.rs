@@ -125,6 +125,13 @@ fn show(out: &CampaignOutput, json: bool) -> Result<Outcome> {
                 )?;
             }
         }
+        let redrawn: usize = r.redrawn.values().sum();
+        if redrawn > 0 {
+            say!("payloads drawn again before those flown: {redrawn}, refused by")?;
+            for (why, n) in &r.redrawn {
+                say!("  {n}x: {why}")?;
+            }
+        }
         let e = r.final_error_m;
         let m = |v: Option<f32>| v.map_or("none".to_string(), |v| format!("{v:.3} m"));
         say!(

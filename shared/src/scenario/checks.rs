@@ -156,6 +156,7 @@ impl Scenario {
         };
         scenario.lifting_groups()?;
         scenario.grid_support()?;
+        scenario.groups_tip_the_heaviest()?;
         Ok(scenario)
     }
 
@@ -483,5 +484,48 @@ impl Scenario {
         } else {
             fail("estimation.grid_min/grid_max", Problem::GridOutsideHull)
         }
+    }
+
+    /// Refuses a payload that some grid point would make unreadable: at the grid's heaviest
+    /// mass, every COM of the grid inside the hull must be tipped by at least one reachable
+    /// lifting group within `robots.max_thrust` (docs/models.md#lift-off-thrust). Where none
+    /// can, every lift of such a payload reads "could not lift", and the estimate can only
+    /// run out of lifts: the vehicle says so before the first one.
+    fn groups_tip_the_heaviest(&self) -> Result<(), ScenarioError> {
+        let e = &self.estimation;
+        let hull = &self.payload.hull;
+        let heaviest = e.axis_value(2, e.axis_len(2) - 1);
+        let groups: Vec<Vec2, MAX_CANDIDATES> = (0..group_count(self))
+            .filter_map(|i| lift_group(self, i))
+            .filter(|g| g.reachable)
+            .map(|g| g.centroid)
+            .collect();
+        let k = self.robots.pair_size;
+        for i in 0..e.axis_len(0) {
+            for j in 0..e.axis_len(1) {
+                let com = Vec2::new(e.axis_value(0, i), e.axis_value(1, j));
+                if !hull.contains(com, HULL_TOLERANCE) {
+                    continue;
+                }
+                let needed = groups
+                    .iter()
+                    .filter_map(|&m| lift_fraction(hull, com, m, k))
+                    .map(|f| thrust_from_fraction(f, heaviest, self.robots.mass))
+                    .fold(f32::INFINITY, crate::math::min);
+                if needed > self.robots.max_thrust {
+                    return fail(
+                        "robots.pair_size",
+                        Problem::NoGroupTips {
+                            pair_size: k,
+                            mass: heaviest,
+                            com,
+                            needed,
+                            max_thrust: self.robots.max_thrust,
+                        },
+                    );
+                }
+            }
+        }
+        Ok(())
     }
 }

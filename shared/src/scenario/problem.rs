@@ -169,6 +169,20 @@ pub enum Problem {
         /// `robots.min_spacing`, m.
         min_spacing: f32,
     },
+    /// No reachable lifting group can tip the grid's heaviest payload at some grid COM: its
+    /// every lift would read "could not lift".
+    NoGroupTips {
+        /// Robots per lifting group.
+        pair_size: usize,
+        /// The grid's heaviest mass, kg.
+        mass: f32,
+        /// The grid's COM no group tips, m.
+        com: Vec2,
+        /// Thrust per robot the best group needs there, N (infinite: none can tip it at all).
+        needed: f32,
+        /// `robots.max_thrust`, N.
+        max_thrust: f32,
+    },
     /// Every robot spins the same way: yaw cannot be balanced.
     OneSpinDirection {
         /// The one sign present.
@@ -333,6 +347,21 @@ impl core::fmt::Display for Problem {
                 f,
                 "no {pair_size} adjacent candidates can hold robots: they are closer than robots.min_spacing {min_spacing} m or leave no room for the other robots",
                 min_spacing = Num(min_spacing)
+            ),
+            Self::NoGroupTips {
+                pair_size,
+                mass,
+                com,
+                needed,
+                max_thrust,
+            } => write!(
+                f,
+                "no group of {pair_size} adjacent robots can tip a payload of {} kg (the grid's heaviest) with its COM at ({}, {}) m: the best needs {} N per robot, above robots.max_thrust {} N; lift in larger groups or narrow the grid's mass",
+                Num(mass),
+                Num(com.x),
+                Num(com.y),
+                crate::numbers::Fixed(needed, 2),
+                Num(max_thrust)
             ),
             Self::OneSpinDirection { sign } => write!(
                 f,

@@ -192,6 +192,34 @@ fn lifting_groups_that_cannot_be_formed_are_refused() {
 }
 
 #[test]
+fn a_payload_no_pair_can_tip_at_the_grids_heaviest_mass_is_refused_and_threes_lift_it() {
+    // rect-sim1's grid up to 12 kg: at some grid COM every pair needs more than 14.2 N per
+    // robot (a pair across the long side lifts 0.16 of the weight there at best).
+    let err = refusal(|s| s.estimation.grid_max[2] = 12.0);
+    assert_eq!(err.key, "robots.pair_size");
+    let Problem::NoGroupTips {
+        pair_size,
+        mass,
+        needed,
+        max_thrust,
+        ..
+    } = err.problem
+    else {
+        panic!("{err}");
+    };
+    assert_eq!((pair_size, mass, max_thrust), (2, 12.0, 14.2));
+    assert!(needed > 14.2 && needed < 20.0, "{needed}");
+    assert!(err.to_string().contains("the grid's heaviest"), "{err}");
+    // Up to 4 kg (the paper's) every grid COM has a pair that tips it.
+    Scenario::from_input(&rect_sim1()).expect("the paper's rectangle");
+    // Groups of three robots tip 12 kg.
+    let mut threes = rect_sim1();
+    threes.estimation.grid_max[2] = 12.0;
+    threes.robots.pair_size = 3;
+    Scenario::from_input(&threes).expect("threes lift it");
+}
+
+#[test]
 fn a_grid_wholly_outside_the_hull_is_refused() {
     let err = refusal(|s| {
         s.estimation.grid_min[0] = 0.9;
