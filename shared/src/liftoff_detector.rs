@@ -464,9 +464,15 @@ mod tests {
 
     #[test]
     fn a_payload_that_never_rests_is_no_reading() {
-        let l = lift(6.0, 0.005, 14.2, |t| 0.02 * (std::f32::consts::TAU * 2.0 * t).sin());
+        let l = lift(6.0, 0.005, 14.2, |t| {
+            0.02 * (std::f32::consts::TAU * 2.0 * t).sin()
+        });
         assert_eq!(l.reading, None);
-        assert!(l.ended >= REST_TIMEOUT - 0.01, "waited its time: {}", l.ended);
+        assert!(
+            l.ended >= REST_TIMEOUT - 0.01,
+            "waited its time: {}",
+            l.ended
+        );
         assert_eq!(l.delays.len(), 1, "told once: {:?}", l.delays);
     }
 
@@ -481,7 +487,10 @@ mod tests {
             l.delays
         );
         let thrust = lifted(l.reading);
-        assert!((thrust - 6.0).abs() < 0.03, "the lift's own reading: {thrust}");
+        assert!(
+            (thrust - 6.0).abs() < 0.03,
+            "the lift's own reading: {thrust}"
+        );
     }
 
     #[test]

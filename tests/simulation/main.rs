@@ -13,6 +13,7 @@ mod estimation;
 mod flight;
 mod flight_log;
 mod formation;
+mod ground_contact;
 mod ground_loss_battery;
 mod imu_faults;
 mod manual_control;

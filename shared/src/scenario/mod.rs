@@ -16,11 +16,11 @@
 use heapless::Vec;
 
 use crate::estimation::groups::{group_count, lift_group};
-use crate::liftoff_thrust::{lift_fraction, thrust_from_fraction};
 use crate::geometry::{
     ConvexHull, MAX_VERTICES, PolygonError, Rail, Vec2, check_simple_polygon, farthest_beyond,
     first_touching_edges, polygon_contains,
 };
+use crate::liftoff_thrust::{lift_fraction, thrust_from_fraction};
 use crate::numbers::Num;
 
 /// Most robots on one rail.
