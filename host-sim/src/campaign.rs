@@ -24,6 +24,7 @@ use serde::{Deserialize, Serialize};
 use crate::inject::{self, Injection};
 use crate::mission_run::{self, MissionSetup};
 use crate::scenario_file::{self, LoadedScenario, PlantDepartures};
+use shared::mission::AbortReason;
 
 /// A mission delivered its payload when it landed this close to the target, m.
 pub const DELIVERED_WITHIN: f32 = 0.1;
@@ -284,8 +285,13 @@ pub struct TrialResult {
     pub fault: Option<String>,
     /// Whether the vehicle stopped or landed for that fault's reason.
     pub fault_found: Option<bool>,
-    /// `delivered`, `not delivered`, `dropped` or `aborted`.
+    /// `delivered`, `not delivered`, `dropped`, `refused` (the vehicle refused to take off
+    /// for want of margin: [`refused`]) or `aborted`.
     pub outcome: String,
+    /// A refused trial flown again with the refusal off: how that went (`delivered`, `not
+    /// delivered`, `dropped`, `aborted`), to show whether the refusal was right.
+    #[serde(default)]
+    pub flown_anyway: Option<String>,
     /// Why it aborted, as the vehicle said it.
     pub aborted: Option<String>,
     /// Distance from the target where it ended, m (none when dropped).
@@ -371,7 +377,33 @@ pub fn trial_file(setup: &CampaignSetup, trial: usize) -> Result<String> {
     ))
 }
 
-/// Runs trial `trial`.
+/// Whether the vehicle refused to take off because no one could fly the payload as
+/// estimated: the heaviest payload the estimate allows needs more than the allowed share of
+/// thrust, or the formation cannot hold the flight's design torque
+/// (docs/failures.md#refused-before-take-off). Neither a failure nor a false alarm.
+pub fn refused(reason: &AbortReason) -> bool {
+    matches!(
+        reason,
+        AbortReason::ThrustMarginTooSmall { .. } | AbortReason::FormationTooWeak { .. }
+    )
+}
+
+/// How a mission came out, as the campaign counts it.
+fn outcome_of(o: &mission_run::MissionOutcome) -> &'static str {
+    if o.dropped {
+        "dropped"
+    } else if o.aborted.as_ref().is_some_and(refused) {
+        "refused"
+    } else if o.aborted.is_some() {
+        "aborted"
+    } else if o.delivered && o.final_position_error_m <= DELIVERED_WITHIN {
+        "delivered"
+    } else {
+        "not delivered"
+    }
+}
+
+/// Runs trial `trial`; a refused one is flown again with the refusals off.
 pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
     let t = trial_of(setup, trial)?;
     let loaded = t.loaded;
@@ -388,14 +420,15 @@ pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
     let fault_found = t
         .fault
         .map(|f| !o.dropped && o.aborted.is_some_and(|r| faults::found(&f.fault, &r)));
-    let outcome = if o.dropped {
-        "dropped"
-    } else if o.aborted.is_some() {
-        "aborted"
-    } else if o.delivered && o.final_position_error_m <= DELIVERED_WITHIN {
-        "delivered"
+    let outcome = outcome_of(&o);
+    let flown_anyway = if outcome == "refused" {
+        let mut anyway = mission_setup.clone();
+        anyway.config.refuse_weak_formation = false;
+        anyway.config.max_hover_fraction = 1.0;
+        let (again, _) = mission_run::run(&loaded.scenario, &anyway, &mut |_, _, _| {})?;
+        Some(outcome_of(&again).to_string())
     } else {
-        "not delivered"
+        None
     };
     Ok(TrialResult {
         trial,
@@ -408,6 +441,7 @@ pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
         fault: t.fault.map(|f| f.to_string()),
         fault_found,
         outcome: outcome.to_string(),
+        flown_anyway,
         aborted: o.aborted.map(|r| r.to_string()),
         final_error_m: (!o.dropped).then_some(o.final_position_error_m),
         redrawn: t.redrawn,
@@ -479,8 +513,16 @@ pub struct Report {
     pub dropped: usize,
     /// Aborted, by the kind of reason ([`abort_kind`]; each trial keeps its whole reason).
     pub aborted: BTreeMap<String, usize>,
-    /// Aborts of a healthy vehicle (one given no fault).
+    /// Aborts of a healthy vehicle (one given no fault), refusals apart.
     pub false_alarms: usize,
+    /// Refused before take-off for want of margin ([`refused`]; not among `aborted`, each
+    /// trial keeps its reason).
+    #[serde(default)]
+    pub refused: usize,
+    /// The refused trials flown anyway with the refusals off: how many of them did not
+    /// deliver (the refusal was right), of how many.
+    #[serde(default)]
+    pub refused_flown_failed: [usize; 2],
     /// Trials given a fault.
     pub faulted: usize,
     /// By kind of fault, what came of the trials given it.
@@ -580,6 +622,17 @@ pub fn report(results: &[TrialResult]) -> Report {
             .iter()
             .filter(|r| r.outcome == "aborted" && r.fault.is_none())
             .count(),
+        refused: count("refused"),
+        refused_flown_failed: {
+            let flown: Vec<&String> = results
+                .iter()
+                .filter_map(|r| r.flown_anyway.as_ref())
+                .collect();
+            [
+                flown.iter().filter(|o| o.as_str() != "delivered").count(),
+                flown.len(),
+            ]
+        },
         faulted: results.iter().filter(|r| r.fault.is_some()).count(),
         faults,
         aborted,
@@ -732,18 +785,45 @@ mod tests {
             fault: None,
             fault_found: None,
             outcome: outcome.into(),
-            aborted: (outcome == "aborted").then(|| "position lost".into()),
+            flown_anyway: (outcome == "refused").then(|| "dropped".into()),
+            aborted: match outcome {
+                "aborted" => Some("position lost".into()),
+                "refused" => Some("formation too weak: ...".into()),
+                _ => None,
+            },
             final_error_m: e,
+            redrawn: if trial == 0 {
+                vec![
+                    "the rail runs too close to the footprint".into(),
+                    "robots.pair_size: no group of 2 adjacent robots can tip the grid's heaviest payload: 7.5 kg with its COM at (0.1, -0.05) m needs 15.2 N".into(),
+                    "robots.pair_size: no group of 3 adjacent robots can tip the grid's heaviest payload: 8 kg with its COM at (0.2, 0.05) m needs 14.9 N".into(),
+                ]
+            } else {
+                Vec::new()
+            },
         };
         let results: Vec<_> = (0..20)
             .map(|i| r(i, "delivered", Some(i as f32 * 0.01)))
-            .chain([r(20, "aborted", Some(0.5)), r(21, "dropped", None)])
+            .chain([
+                r(20, "aborted", Some(0.5)),
+                r(21, "dropped", None),
+                r(22, "refused", Some(0.3)),
+            ])
             .collect();
         let rep = report(&results);
         assert_eq!(
             (rep.trials, rep.delivered, rep.dropped, rep.false_alarms),
-            (22, 20, 1, 1)
+            (23, 20, 1, 1)
         );
+        assert_eq!((rep.refused, rep.refused_flown_failed), (1, [1, 1]));
+        assert_eq!(
+            rep.aborted.len(),
+            1,
+            "a refusal is no abort: {:?}",
+            rep.aborted
+        );
+        assert_eq!(rep.redrawn.values().sum::<usize>(), 3);
+        assert_eq!(rep.redrawn.len(), 2, "two kinds: {:?}", rep.redrawn);
         assert_eq!(rep.aborted.get("position lost"), Some(&1));
         assert_eq!(
             abort_kind("rotor 11 stopped in flight: flying on the other rotors"),

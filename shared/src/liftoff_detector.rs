@@ -8,7 +8,7 @@
 //! Tilt shows up late: after equilibrium is lost the payload must turn far enough to cross the
 //! threshold, slowly for a heavy axis, while the thrust ramps on. Past lift-off the unbalanced
 //! torque grows with the ramp, `(T - lambda) ~ ramp_rate (t - t0)`, so the tilt grows as
-//! `k (t - t0)^3`. The detector keeps the last second of (time, thrust, tilt vector); on
+//! `k (t - t0)^3`. The detector keeps the last second of (time, tilt vector); on
 //! crossing the threshold at `t2` it projects that history onto the direction the payload tipped
 //! (so the estimate's noise averages out instead of adding to a magnitude), smooths it over a
 //! few samples, finds where it first rose above `onset_fraction` of the threshold, `t1`, and
@@ -108,7 +108,7 @@ pub const REST_TIMEOUT: f32 = 10.0;
 /// Restarts of one lift for a tilt too early to be the ramp's doing.
 pub const MAX_REDOS: u8 = 2;
 
-/// Samples of (thrust, tilt) kept to find the tilt's onset (one second at 400 Hz).
+/// Samples of the tilt kept to find its onset (one second at 400 Hz).
 pub const HISTORY: usize = 400;
 /// Samples averaged when the history is projected (20 ms at 400 Hz).
 const SMOOTHING: usize = 8;
@@ -137,7 +137,9 @@ pub struct LiftoffDetector {
     last_moved: f32,
     delay: Option<LiftDelay>,
     state: LiftState,
-    history: heapless::Deque<(f32, f32, Vec3), HISTORY>,
+    /// (detector clock, tilt vector) of the last [`HISTORY`] ticks: the thrust at any of
+    /// them follows from the ramp ([`ramp_back`]).
+    history: heapless::Deque<(f32, Vec3), HISTORY>,
     clock: f32,
 }
 
@@ -216,7 +218,7 @@ impl LiftoffDetector {
             .history
             .iter()
             .rev()
-            .map(|&(t, _, v)| (t, v.dot(direction)));
+            .map(|&(t, v)| (t, v.dot(direction)));
         // Samples i, i - 1, ..., i - SMOOTHING + 1: the window of the smoothed value at i.
         let mut window: heapless::Deque<(f32, f32), SMOOTHING> = heapless::Deque::new();
         let mut sum = 0.0f32;
@@ -291,9 +293,7 @@ impl LiftoffDetector {
                     self.history.pop_front();
                 }
                 let tilt_vector = axis.normalized() - self.reference_axis;
-                let _ = self
-                    .history
-                    .push_back((self.clock, self.thrust, tilt_vector));
+                let _ = self.history.push_back((self.clock, tilt_vector));
                 if tilt > self.config.tilt_threshold
                     && self.clock < self.config.least_ramp_time
                     && self.redos < MAX_REDOS

@@ -95,7 +95,7 @@ fn show(out: &CampaignOutput, json: bool) -> Result<Outcome> {
     } else {
         let r = &out.report;
         say!(
-            "{} trials (seed {}, shard {}/{}): {} delivered within {} m, {} not delivered, {} dropped, {} aborted ({} false alarms)",
+            "{} trials (seed {}, shard {}/{}): {} delivered within {} m, {} not delivered, {} dropped, {} refused, {} aborted ({} false alarms)",
             r.trials,
             out.seed,
             out.shard[0],
@@ -104,11 +104,19 @@ fn show(out: &CampaignOutput, json: bool) -> Result<Outcome> {
             campaign::DELIVERED_WITHIN,
             r.not_delivered,
             r.dropped,
+            r.refused,
             r.aborted.values().sum::<usize>(),
             r.false_alarms
         )?;
         for (why, n) in &r.aborted {
             say!("  aborted {n}x: {why}")?;
+        }
+        if r.refused > 0 {
+            let [failed, flown] = r.refused_flown_failed;
+            say!(
+                "refused before take-off for want of margin: {} (flown anyway with the refusal off: {failed} of {flown} did not deliver)",
+                r.refused
+            )?;
         }
         if r.faulted > 0 {
             say!(

@@ -18,6 +18,8 @@ pub enum Outcome {
     NotDelivered,
     /// Dropped.
     Dropped,
+    /// Refused before take-off for want of margin.
+    Refused,
     /// A healthy vehicle aborted.
     FalseAlarm,
     /// A fault was injected and the vehicle stopped or landed for it.
@@ -28,9 +30,10 @@ pub enum Outcome {
 
 impl Outcome {
     /// Every outcome, in the legend's order.
-    pub const ALL: [Self; 6] = [
+    pub const ALL: [Self; 7] = [
         Self::Delivered,
         Self::NotDelivered,
+        Self::Refused,
         Self::FalseAlarm,
         Self::FaultFound,
         Self::FaultMissed,
@@ -47,6 +50,8 @@ impl Outcome {
             } else {
                 Self::FaultMissed
             }
+        } else if r.outcome == "refused" {
+            Self::Refused
         } else if r.outcome == "aborted" {
             Self::FalseAlarm
         } else if r.outcome == "delivered" {
@@ -61,6 +66,7 @@ impl Outcome {
             Self::Delivered => "delivered",
             Self::NotDelivered => "not delivered",
             Self::Dropped => "dropped (at the top)",
+            Self::Refused => "refused before take-off",
             Self::FalseAlarm => "aborted, no fault",
             Self::FaultFound => "fault found",
             Self::FaultMissed => "fault missed",
@@ -72,6 +78,7 @@ impl Outcome {
             Self::Delivered => Swatch::Dot(colour(2)),
             Self::NotDelivered => Swatch::Dot(colour(1)),
             Self::Dropped => Swatch::Cross(colour(3)),
+            Self::Refused => Swatch::Ring(colour(6)),
             Self::FalseAlarm => Swatch::Triangle(colour(4)),
             Self::FaultFound => Swatch::Ring(colour(0)),
             Self::FaultMissed => Swatch::Triangle(colour(5)),

@@ -460,6 +460,29 @@ impl Mixer {
         })
     }
 
+    /// The torque the mixer can add about each body axis (roll, pitch, yaw), N m, on top of a
+    /// level hover of collective `thrust`, N, with every rotor within `[0, max_thrust]`: the
+    /// smaller of the two directions, each axis alone (its column through the mixer from the
+    /// hover's thrusts). Zero on an axis the hover already saturates or the mixer does not
+    /// fly. For deciding whether a formation can hold a disturbance, not for the step.
+    pub fn authority(&self, thrust: f32) -> Vec3 {
+        let mut base = [0.0f32; MAX_ROBOTS];
+        for (b, c) in base.iter_mut().zip(&self.columns[0][..self.count]) {
+            *b = c * thrust;
+        }
+        let mut each = [0.0f32; 3];
+        for (axis, value) in each.iter_mut().enumerate() {
+            let column = &self.columns[axis + 1];
+            if column[..self.count].iter().all(|v| *v == 0.0) {
+                continue;
+            }
+            if let Some((lo, hi)) = self.room(&base, column) {
+                *value = math::max(math::min(-lo, hi), 0.0);
+            }
+        }
+        Vec3::new(each[0], each[1], each[2])
+    }
+
     /// Whether the mixer delivers yaw torque (false once yaw was given up for a lost rotor).
     pub fn flies_yaw(&self) -> bool {
         self.columns[3][..self.count].iter().any(|v| *v != 0.0)

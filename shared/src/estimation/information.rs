@@ -281,9 +281,9 @@ mod tests {
 
     #[test]
     fn a_group_that_surely_cannot_lift_carries_no_information() {
-        let mut input = rect_sim1();
-        input.robots.max_thrust = 1.5; // just above a robot's own weight
-        let scenario = checked(input);
+        // The likelihood's robots reach 1.5 N, just above their own weight (a payload
+        // description with such robots is refused: no group could tip its payloads).
+        let scenario = checked(rect_sim1());
         let grid = Grid::new(&scenario.estimation, None).unwrap();
         let g = lift_group(&scenario, 2).unwrap();
         let fractions: heapless::Vec<f32, MAX_GRID_POINTS> = (0..grid.com_len())

@@ -39,6 +39,10 @@ pub struct MissionConfig {
     /// posterior's 95 % upper bound on the mass) may need to hover; above it the mission
     /// refuses to take off.
     pub max_hover_fraction: f32,
+    /// Refuse a formation that cannot hold the flight's design torque about every axis
+    /// (docs/failures.md#refused-before-take-off). Off only to show what such a formation
+    /// does (the campaign flies a sample of the refused so).
+    pub refuse_weak_formation: bool,
     /// Time on the ground, rotors off, before the estimation starts (the attitude estimator
     /// learns the gyro bias meanwhile), s.
     pub checks_time: f32,
@@ -70,6 +74,7 @@ impl MissionConfig {
         mixer: MixerKind::EqualSplit,
         adapt: AdaptConfig::DEFAULT,
         max_hover_fraction: 0.7,
+        refuse_weak_formation: true,
         checks_time: 5.0,
         relax_time: 2.0,
         confirmations: 1,

@@ -146,6 +146,7 @@ struct PlannerConfig {
     rail_limits: MotionLimits,
     max_hover_fraction: f32,
     mixer: MixerKind,
+    refuse_weak_formation: bool,
 }
 
 impl PlannerConfig {
@@ -157,6 +158,7 @@ impl PlannerConfig {
         },
         max_hover_fraction: 0.0,
         mixer: MixerKind::EqualSplit,
+        refuse_weak_formation: false,
     };
 
     fn of(config: &MissionConfig) -> Self {
@@ -164,6 +166,7 @@ impl PlannerConfig {
             rail_limits: config.rail_limits,
             max_hover_fraction: config.max_hover_fraction,
             mixer: config.mixer,
+            refuse_weak_formation: config.refuse_weak_formation,
         }
     }
 }
@@ -307,6 +310,9 @@ impl MissionPlanner {
         let com = Vec2::new(e.theta[0], e.theta[1]);
         let problem = FormationProblem::for_scenario(&self.scenario, com, Some(robots));
         let formation = solve(&problem).map_err(AbortReason::NoBalancedFormation)?;
+        if self.config.refuse_weak_formation {
+            self.check_authority(&formation.positions, com, heaviest)?;
+        }
         let rail_move = RailMove::plan(
             &self.scenario.payload.rail,
             robots,
@@ -320,6 +326,34 @@ impl MissionPlanner {
             det: formation.figures.det,
             rail_move,
         })
+    }
+
+    /// Refuses a formation (rail positions `positions`, about `com`) whose rotors, hovering
+    /// the heaviest payload the estimate allows (`heaviest`, kg), cannot add the flight's
+    /// design torque about every axis ([`design_torque`]).
+    fn check_authority(
+        &self,
+        positions: &[f32],
+        com: Vec2,
+        heaviest: f32,
+    ) -> Result<(), AbortReason> {
+        let r = &self.scenario.robots;
+        let model = FlightModel::build(&self.scenario, positions, com, heaviest, self.config.mixer)
+            .map_err(AbortReason::Uncontrollable)?;
+        let weight = (heaviest + r.count() as f32 * r.mass) * GRAVITY;
+        let available = model.mixer.authority(weight).to_array();
+        let needed = design_torque(&self.scenario, weight).to_array();
+        for axis in 0..3 {
+            if available[axis] < needed[axis] {
+                return Err(AbortReason::FormationTooWeak {
+                    axis: axis as u8,
+                    available: available[axis],
+                    needed: needed[axis],
+                    mass: heaviest,
+                });
+            }
+        }
+        Ok(())
     }
 
     fn reform(&self, robots: &[f32], com: Vec2) -> Result<(Positions, f32), AbortReason> {
@@ -337,4 +371,23 @@ impl MissionPlanner {
         FlightModel::build(&self.scenario, robots, com, e.theta[2], self.config.mixer)
             .map_err(AbortReason::Uncontrollable)
     }
+}
+
+/// Spread of the rotors' thrust about the model's that the yaw axis must absorb (each rotor
+/// within 10 % of its model; the campaign's plants spread theirs by up to 8 %).
+pub const THRUST_SPREAD: f32 = 0.1;
+
+/// The torque a formation must be able to add about each body axis (roll, pitch, yaw), N m, on
+/// top of the hover of `weight`, N (docs/failures.md#refused-before-take-off): on roll and
+/// pitch the scenario's disturbance torque (which acts on those axes) and the torque of a COM
+/// half a grid cell from the estimate (the stopping rule leaves the truth within the MAP's
+/// cell); on yaw the drag torque of the rotors of one spin all [`THRUST_SPREAD`] strong.
+pub fn design_torque(scenario: &Scenario, weight: f32) -> crate::control::vector::Vec3 {
+    let disturbance = scenario.flight.map_or(0.0, |f| f.disturbance_torque);
+    let res = scenario.estimation.resolution;
+    crate::control::vector::Vec3::new(
+        disturbance + 0.5 * weight * res[1],
+        disturbance + 0.5 * weight * res[0],
+        THRUST_SPREAD * 0.5 * weight * scenario.robots.torque_per_thrust,
+    )
 }

@@ -87,6 +87,19 @@ pub enum AbortReason {
         /// Thrust allowed for hover, N.
         allowed: f32,
     },
+    /// Refused before take-off: the formation, hovering the heaviest payload the estimate
+    /// allows, cannot add the flight's design torque about one axis
+    /// (docs/failures.md#refused-before-take-off).
+    FormationTooWeak {
+        /// The axis: 0 roll, 1 pitch, 2 yaw.
+        axis: u8,
+        /// Torque the rotors can add about it at that hover, N m.
+        available: f32,
+        /// Torque the flight must hold about it, N m.
+        needed: f32,
+        /// The heaviest payload the estimate allows, kg.
+        mass: f32,
+    },
     /// No balanced formation exists for the estimated COM.
     NoBalancedFormation(FormationError),
     /// The formation's rotors cannot control every axis.
@@ -176,6 +189,23 @@ impl core::fmt::Display for AbortReason {
                 "not enough thrust margin: the heaviest payload the estimate allows needs {} N to hover, {} N allowed",
                 Fixed(needed, 1),
                 Fixed(allowed, 1)
+            ),
+            Self::FormationTooWeak {
+                axis,
+                available,
+                needed,
+                mass,
+            } => write!(
+                f,
+                "formation too weak: hovering {} kg (the heaviest the estimate allows) its rotors can add {} N m of {} torque, the flight must hold {} N m",
+                Fixed(mass, 2),
+                Fixed(available, 2),
+                match axis {
+                    0 => "roll",
+                    1 => "pitch",
+                    _ => "yaw",
+                },
+                Fixed(needed, 2)
             ),
             Self::NoBalancedFormation(e) => write!(f, "no balanced formation: {e}"),
             Self::Uncontrollable(e) => write!(f, "the formation cannot be flown: {e}"),

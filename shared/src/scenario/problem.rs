@@ -356,7 +356,7 @@ impl core::fmt::Display for Problem {
                 max_thrust,
             } => write!(
                 f,
-                "no group of {pair_size} adjacent robots can tip a payload of {} kg (the grid's heaviest) with its COM at ({}, {}) m: the best needs {} N per robot, above robots.max_thrust {} N; lift in larger groups or narrow the grid's mass",
+                "no group of {pair_size} adjacent robots can tip the grid's heaviest payload: {} kg with its COM at ({}, {}) m needs {} N per robot of the best group, above robots.max_thrust {} N; lift in larger groups or narrow the grid's mass",
                 Num(mass),
                 Num(com.x),
                 Num(com.y),

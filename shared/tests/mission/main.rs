@@ -296,6 +296,66 @@ fn a_thin_thrust_margin_never_flies() {
 }
 
 #[test]
+fn a_formation_that_cannot_hold_the_design_torque_is_refused_before_take_off() {
+    // rect-sim1's formation adds some 8 N m of roll at hover; the flight asks for 10.
+    let mut s = straight_up_scenario(3.5);
+    if let Some(f) = s.flight.as_mut() {
+        f.disturbance_torque = 10.0;
+    }
+    let fly = |config: MissionConfig| {
+        let mut world = World::new(&s);
+        run_with(
+            &s,
+            config,
+            &mut world,
+            Jobs::OnTime,
+            &[(1, OperatorCommand::Start)],
+            |_, _, _| {},
+            200_000,
+        )
+    };
+    let r = fly(MissionConfig::default());
+    let Some(AbortReason::FormationTooWeak {
+        axis,
+        available,
+        needed,
+        ..
+    }) = r.mission.abort_reason()
+    else {
+        panic!("{:?}", r.mission.abort_reason());
+    };
+    assert_eq!(axis, 0, "roll, the short axis");
+    assert!(
+        available < needed && needed > 10.0,
+        "{available} < {needed}"
+    );
+    assert!(r.mission.estimate().is_some(), "estimated first");
+    let said = r
+        .mission
+        .abort_reason()
+        .map(|a| a.to_string())
+        .unwrap_or_default();
+    assert!(
+        said.starts_with("formation too weak") && said.contains("roll"),
+        "{said}"
+    );
+    assert!(
+        !r.transitions.iter().any(|t| t.2 == Phase::Arming),
+        "never armed"
+    );
+    // With the refusal off the same mission goes on to arm and take off.
+    let anyway = fly(MissionConfig {
+        refuse_weak_formation: false,
+        ..MissionConfig::default()
+    });
+    assert!(
+        anyway.transitions.iter().any(|t| t.2 == Phase::Arming),
+        "{:?}",
+        anyway.mission.abort_reason()
+    );
+}
+
+#[test]
 fn the_operator_aborts_on_the_ground_in_any_phase() {
     let s = straight_up_scenario(3.5);
     // Ticks that fall in checks, a lift, and the rearrangement's formation decision.

@@ -279,3 +279,44 @@ fn rotors_on_one_line_are_uncontrollable() {
         Err(AllocationError::Uncontrollable)
     );
 }
+
+#[test]
+fn the_authority_at_hover_is_the_largest_torque_each_axis_takes_within_the_rotors_limits() {
+    let m = mixer(MixerKind::Allocation, Vec2::new(0.12, 0.01));
+    let hover = 42.0;
+    let authority = m.authority(hover);
+    for axis in 0..3 {
+        let reach = [authority.x, authority.y, authority.z][axis];
+        assert!(reach > 0.0, "axis {axis}: {authority:?}");
+        let torque = |t: f32| {
+            let mut v = [0.0f32; 3];
+            v[axis] = t;
+            Vec3::from_array(v)
+        };
+        for sign in [1.0, -1.0] {
+            // Just within: delivered whole; just beyond, in one direction or the other, cut.
+            let within = m.allocate(&Wrench {
+                thrust: hover,
+                torque: torque(sign * 0.99 * reach),
+            });
+            assert!(!within.saturation.any(), "axis {axis}: {within:?}");
+        }
+        let beyond = [1.0, -1.0].map(|sign| {
+            m.allocate(&Wrench {
+                thrust: hover,
+                torque: torque(sign * 1.02 * reach),
+            })
+            .saturation
+            .any()
+        });
+        assert!(
+            beyond.contains(&true),
+            "axis {axis}: {reach} N m is the limit"
+        );
+    }
+    // A heavier hover leaves less room.
+    let heavy = m.authority(100.0);
+    assert!(heavy.x < authority.x && heavy.y < authority.y, "{heavy:?}");
+    // At full thrust nothing is left.
+    assert_eq!(m.authority(8.0 * 14.2), Vec3::ZERO);
+}
