@@ -433,7 +433,7 @@ pub fn step_texts(out: &TickOutput, each: &mut impl FnMut(LogLevel, core::fmt::A
     if let Some(notice) = out.notice {
         let level = match notice {
             Notice::BatteryCritical { .. } | Notice::RotorsOut { .. } => LogLevel::Critical,
-            Notice::LinkRegained { .. } => LogLevel::Notice,
+            Notice::LinkRegained { .. } | Notice::LiftDelayed { .. } => LogLevel::Notice,
             _ => LogLevel::Warning,
         };
         each(level, format_args!("{notice}"));

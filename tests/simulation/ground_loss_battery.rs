@@ -7,7 +7,7 @@ use crate::common;
 use common::load;
 
 use host_sim::mission_run::{self, BatteryDrop, MissionOutcome, MissionSetup, Onset};
-use shared::mission::supervision::GcsLossAction;
+use shared::mission::supervision::{FenceAction, GcsLossAction};
 use shared::mission::{AbortReason, CommandRefusal, MissionConfig};
 
 /// What a run said: each phase and notice with its time, s.
@@ -230,4 +230,67 @@ fn a_low_battery_on_the_ground_refuses_the_start() {
         .find("refused", "battery low")
         .expect("refused with the reason");
     assert!(text.contains("13.5"), "{text}");
+}
+
+fn fence_config(action: FenceAction, horizontal: f32, vertical: f32) -> MissionConfig {
+    let mut c = MissionConfig::default();
+    c.supervision.fence_action = action;
+    c.supervision.fence_horizontal = horizontal;
+    c.supervision.fence_vertical = vertical;
+    c
+}
+
+/// A vehicle that climbs past its geofence (rect-ex1's plan hovers 0.5 m up; the fence is
+/// 0.3 m) lands where it is, saying why, and is not dropped.
+#[test]
+fn a_climb_past_the_geofence_lands_where_it_is() {
+    let f = fly(
+        fence_config(FenceAction::Land, 20.0, 0.3),
+        MissionSetup::default(),
+    );
+    let Some(AbortReason::GeofenceBreached { height, distance }) = f.outcome.aborted else {
+        panic!("{:?}", f.outcome.aborted);
+    };
+    assert!((0.3..0.35).contains(&height), "breached at {height} m");
+    assert!(distance < 1.0, "{distance}");
+    assert!(!f.outcome.dropped);
+    assert!(f.outcome.phases.iter().any(|(p, _)| p == "disarmed"), "landed and disarmed");
+    let top = f.outcome.series.iter().map(|s| s.height).fold(0.0f32, f32::max);
+    assert!(top < 0.45, "the climb stopped short of the plan's 0.5 m: {top}");
+    let (at, text) = f.find("landing", "geofence breached").expect("the landing says why");
+    assert!(text.contains("landing where it is"), "{text}");
+    assert!(at > 0.0);
+}
+
+/// Across the ground: a fence 1 m round the take-off point, the target 2 m away. With the
+/// warning alone the flight goes on and delivers; with landing it comes down near the fence.
+#[test]
+fn a_flight_past_the_geofence_across_the_ground_warns_or_lands() {
+    let warned = fly(
+        fence_config(FenceAction::Warning, 1.0, 10.0),
+        MissionSetup::default(),
+    );
+    let (_, text) = warned
+        .find("notice", "geofence breached")
+        .expect("the breach is told");
+    assert!(text.contains("m from the take-off point"), "{text}");
+    assert!(warned.outcome.delivered, "{:?}", warned.outcome.aborted);
+    let landed = fly(
+        fence_config(FenceAction::Land, 1.0, 10.0),
+        MissionSetup::default(),
+    );
+    assert!(
+        matches!(
+            landed.outcome.aborted,
+            Some(AbortReason::GeofenceBreached { .. })
+        ),
+        "{:?}",
+        landed.outcome.aborted
+    );
+    assert!(!landed.outcome.dropped);
+    let from_start = distance(landed.final_xy(), landed.xy_at(0.0));
+    assert!(
+        (0.9..1.6).contains(&from_start),
+        "landed {from_start} m from where it started"
+    );
 }

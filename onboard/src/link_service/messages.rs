@@ -83,9 +83,9 @@ pub enum Outbound {
     Identity,
     /// `COMPONENT_METADATA` (where the general metadata file is), on request.
     ComponentMetadata,
-    /// The `PARAM_VALUE`s of these indices (bit `i`: index `i`; the values a request changed
-    /// go as one entry), from the values in force.
-    Params(u128),
+    /// The `PARAM_VALUE`s of these indices (the values a request changed go as one entry),
+    /// from the values in force.
+    Params(ParamBits),
     /// `TIMESYNC`: an answer to a request.
     TimeSync {
         /// The vehicle's time, ns.
@@ -159,5 +159,40 @@ pub fn mav_result(r: CommandResult) -> MavResult {
         CommandResult::Failed => MavResult::MAV_RESULT_FAILED,
         CommandResult::TemporarilyRejected => MavResult::MAV_RESULT_TEMPORARILY_REJECTED,
         CommandResult::Denied => MavResult::MAV_RESULT_DENIED,
+    }
+}
+
+/// A set of parameter indices, one bit each (room for [`ParamBits::CAPACITY`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ParamBits([u32; 5]);
+
+impl ParamBits {
+    /// Indices it can hold.
+    pub const CAPACITY: usize = 160;
+
+    /// The set of `index` alone.
+    pub fn one(index: usize) -> Self {
+        let mut bits = Self::default();
+        bits.insert(index);
+        bits
+    }
+
+    /// Adds `index` (one beyond the capacity is not held).
+    pub fn insert(&mut self, index: usize) {
+        if let Some(word) = self.0.get_mut(index / 32) {
+            *word |= 1 << (index % 32);
+        }
+    }
+
+    /// Whether `index` is in the set.
+    pub fn contains(&self, index: usize) -> bool {
+        self.0
+            .get(index / 32)
+            .is_some_and(|w| w & (1 << (index % 32)) != 0)
+    }
+
+    /// Whether the set holds no index.
+    pub fn is_empty(&self) -> bool {
+        self.0.iter().all(|w| *w == 0)
     }
 }

@@ -31,8 +31,8 @@ use shared::mission::params::ParamValues;
 use shared::scenario_wire::MAX_ENCODED_LEN;
 
 pub use messages::{
-    Bulk, Outbound, PendingCommand, Received, SensorSample, StepMessages, mav_result, mav_severity,
-    report,
+    Bulk, Outbound, ParamBits, PendingCommand, Received, SensorSample, StepMessages, mav_result,
+    mav_severity, report,
 };
 pub use ports::VehiclePorts;
 pub use queue_ports::QueuePorts;

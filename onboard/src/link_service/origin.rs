@@ -10,6 +10,7 @@ use link::msg::MavResult;
 use link::signing::Verdict;
 
 use super::commands::refuse;
+use super::messages::ParamBits;
 use super::{LinkService, Outbound, VehiclePorts, change_refused, report};
 use crate::autonomy::Severity;
 
@@ -69,13 +70,13 @@ impl<F: NorFlash> LinkService<F> {
         let Ok(changed) = self.params.set_origin(origin) else {
             return;
         };
-        let mut answered = 0u128;
+        let mut answered = ParamBits::default();
         for &(index, value) in &changed {
             // Without a store (it did not open, said at the start) nothing more is said.
             if self.store.is_some() {
                 self.save_param(index, value, io).await;
             }
-            answered |= 1 << index;
+            answered.insert(index);
         }
         // One entry for the five values: the queue keeps room for the origin after them (whose
         // announcement hands the send task the values in force).

@@ -12,12 +12,13 @@ use link::vehicle::Sender;
 use shared::mission::bringup::CalibrationKind;
 use shared::mission::params::{COUNT as PARAM_COUNT, NAME_LEN, ParamValues, TABLE, is_origin};
 
+use super::messages::ParamBits;
 use super::ports::send_values;
 use super::{LinkService, Outbound, VehiclePorts, change_refused, report};
 use crate::autonomy::{Report, Severity};
 
 // Every parameter's index is a bit of `Outbound::Params`.
-const _: () = assert!(PARAM_COUNT <= 128);
+const _: () = assert!(PARAM_COUNT <= ParamBits::CAPACITY);
 
 impl<F: NorFlash> LinkService<F> {
     /// Reads the stored values and puts them in force; says what it found.
@@ -117,7 +118,7 @@ impl<F: NorFlash> LinkService<F> {
             CalibrationKind::Gyro => ["CAL_GYRO0_XOFF", "CAL_GYRO0_YOFF", "CAL_GYRO0_ZOFF"],
             CalibrationKind::Level => ["CAL_ACC0_XOFF", "CAL_ACC0_YOFF", "CAL_ACC0_ZOFF"],
         };
-        let mut answered = 0u128;
+        let mut answered = ParamBits::default();
         for (name, value) in names.into_iter().zip(offsets) {
             let mut id = [0u8; NAME_LEN];
             id[..name.len()].copy_from_slice(name.as_bytes());
@@ -128,7 +129,7 @@ impl<F: NorFlash> LinkService<F> {
                 self.save_param(index, value, io).await;
             }
             if let Values::One(index) = answer.values {
-                answered |= 1 << index;
+                answered.insert(index);
             }
         }
         // The three values as one entry of the queue.

@@ -21,7 +21,7 @@ use shared::mission::bringup::CalibrationKind;
 use shared::mission::drives::BoardDrives;
 use shared::mission::params::ParamValues;
 
-use super::messages::{Bulk, Outbound, PendingCommand, Received, SensorSample};
+use super::messages::{Bulk, Outbound, ParamBits, PendingCommand, Received, SensorSample};
 use crate::autonomy::RouteChange;
 
 /// The vehicle around the link's receive service (see the module's text).
@@ -120,7 +120,7 @@ pub(super) fn send_values(
     io.publish(values);
     match (which, from) {
         (Values::None, _) => {}
-        (Values::One(index), _) => io.reply(Outbound::Params(1 << index)),
+        (Values::One(index), _) => io.reply(Outbound::Params(ParamBits::one(index))),
         (Values::All, Some(from)) => io.list_params(from),
         // Every value without a requester: not asked for.
         (Values::All, None) => {}

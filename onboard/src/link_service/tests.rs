@@ -167,7 +167,7 @@ fn a_parameter_write_is_stored_answered_and_applied() {
     assert!(
         replies
             .iter()
-            .any(|r| matches!(r, Outbound::Params(bits) if *bits != 0)),
+            .any(|r| matches!(r, Outbound::Params(bits) if !bits.is_empty())),
         "no PARAM_VALUE: {replies:?}"
     );
     assert!(

@@ -33,6 +33,7 @@
 use crate::control::imu_monitor::ImuMonitor;
 use crate::control::navigator::Navigator;
 use crate::control::trajectory::FlightPhase;
+use crate::control::vector::Vec3;
 use crate::estimation::Estimate;
 use crate::flight::{AdaptEvent, Adapter, FlightStack, Route};
 use crate::liftoff_detector::LiftoffDetector;
@@ -115,6 +116,10 @@ pub struct Mission {
     jump: Option<u8>,
     /// The operator holds the vehicle where it is in flight.
     held: bool,
+    /// Where the flight took off (the geofence's centre), once built.
+    home: Option<Vec3>,
+    /// The geofence was breached in this flight (its action is taken once).
+    fence_breached: bool,
     /// The flight was built in the last tick: arming begins in this one (the build and the
     /// phase's change, its report and log record, in one tick exceed the control step's
     /// budget).
@@ -184,6 +189,8 @@ impl Mission {
             route_first: 0,
             jump: None,
             held: false,
+            home: None,
+            fence_breached: false,
             flight_built: false,
             bench: Bench::IDLE,
             pilot: Pilot::new(&MissionConfig::DEFAULT.manual),
@@ -234,6 +241,8 @@ impl Mission {
         self.gcs_hold = None;
         self.jump = None;
         self.held = false;
+        self.home = None;
+        self.fence_breached = false;
         self.flight_built = false;
         self.pilot.configure(&self.config.manual);
         self.position = false;

@@ -133,6 +133,13 @@ pub enum AbortReason {
     /// ([`crate::control::imu_monitor`]): on the ground the mission stops, in flight it lands
     /// on motion capture alone.
     ImuNoisy,
+    /// The vehicle left its geofence in flight (`GF_ACTION` land): it lands where it is.
+    GeofenceBreached {
+        /// Its distance from the take-off point across the ground, m.
+        distance: f32,
+        /// Its height above the take-off point, m.
+        height: f32,
+    },
     /// The payload did not come to rest for a lift within the detector's wait
     /// ([`crate::liftoff_detector::REST_TIMEOUT`]).
     PayloadRestless {
@@ -226,6 +233,12 @@ impl core::fmt::Display for AbortReason {
             Self::ImuFault => write!(f, "IMU fault (stalled, saturated or implausible)"),
             Self::ImuStuck => write!(f, "{}", ImuFailure::Stuck),
             Self::ImuNoisy => write!(f, "{}", ImuFailure::Noisy),
+            Self::GeofenceBreached { distance, height } => write!(
+                f,
+                "geofence breached: {} m from the take-off point, {} m above it (GF_MAX_HOR_DIST, GF_MAX_VER_DIST); landing where it is",
+                Fixed(distance, 1),
+                Fixed(height, 1)
+            ),
             Self::PayloadRestless { moved } => write!(
                 f,
                 "the payload did not come to rest for a lift in {} s (it still moved {} deg within a settle window)",

@@ -71,6 +71,37 @@ impl GcsLossAction {
     }
 }
 
+/// What the vehicle does when it leaves its geofence (PX4's `GF_ACTION` numbers; PX4's 3,
+/// return, and 4, terminate, are not offered: this vehicle has no return path, and stopping
+/// the rotors drops the payload).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum FenceAction {
+    /// Nothing: the fence is not watched.
+    Off = 0,
+    /// A warning (`STATUSTEXT`); the flight goes on.
+    Warning = 1,
+    /// Hold where the vehicle is until the operator lands it or resumes the plan.
+    Hold = 2,
+    /// Land where the vehicle is.
+    Land = 5,
+}
+
+impl FenceAction {
+    /// The action of a parameter value (0, 1, 2, 5; anything else is [`Self::Land`]).
+    pub fn from_value(v: f32) -> Self {
+        if v < 0.5 {
+            Self::Off
+        } else if v < 1.5 {
+            Self::Warning
+        } else if v < 2.5 {
+            Self::Hold
+        } else {
+            Self::Land
+        }
+    }
+}
+
 /// The supervision's tuning.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SupervisionConfig {
@@ -84,6 +115,12 @@ pub struct SupervisionConfig {
     pub battery_low: f32,
     /// Pack voltage below which the battery is critical: a landing in place, V (0: off).
     pub battery_critical: f32,
+    /// What to do outside the geofence.
+    pub fence_action: FenceAction,
+    /// The geofence's radius about the take-off point, m (0: no horizontal limit).
+    pub fence_horizontal: f32,
+    /// The geofence's height above the take-off point, m (0: no vertical limit).
+    pub fence_vertical: f32,
 }
 
 impl SupervisionConfig {
@@ -97,6 +134,9 @@ impl SupervisionConfig {
         gcs_hold_time: 10.0,
         battery_low: 14.0,
         battery_critical: 13.2,
+        fence_action: FenceAction::Land,
+        fence_horizontal: 20.0,
+        fence_vertical: 10.0,
     };
 }
 
@@ -327,6 +367,15 @@ pub enum Notice {
         /// On.
         on: bool,
     },
+    /// The vehicle left its geofence (docs/failures.md#failures).
+    FenceBreached {
+        /// Its distance from the take-off point across the ground, m.
+        distance: f32,
+        /// Its height above the take-off point, m.
+        height: f32,
+        /// What it does about it.
+        action: FenceAction,
+    },
     /// A lift waits for the payload to come to rest, or starts again
     /// (docs/models.md#lift-off-detector).
     LiftDelayed {
@@ -446,6 +495,23 @@ impl core::fmt::Display for Notice {
             Self::KillSwitch { on: false } => write!(f, "kill switch off"),
             Self::SwitchRefused { mode, why } => {
                 write!(f, "mode switch: {} refused: {why}", mode.name())
+            }
+            Self::FenceBreached {
+                distance,
+                height,
+                action,
+            } => {
+                write!(
+                    f,
+                    "geofence breached: {} m from the take-off point, {} m above it (GF_MAX_HOR_DIST, GF_MAX_VER_DIST)",
+                    Fixed(distance, 1),
+                    Fixed(height, 1)
+                )?;
+                match action {
+                    FenceAction::Off | FenceAction::Warning => Ok(()),
+                    FenceAction::Hold => write!(f, "; holding where it is"),
+                    FenceAction::Land => write!(f, "; landing where it is"),
+                }
             }
             Self::LiftDelayed { group, delay } => match delay {
                 crate::liftoff_detector::LiftDelay::Waiting { moved } => write!(

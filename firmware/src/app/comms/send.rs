@@ -331,7 +331,7 @@ impl<W: Write> Sending<W> {
             Outbound::Identity => self.identity().await,
             Outbound::ComponentMetadata => self.component_metadata().await,
             Outbound::Params(indices) => {
-                for index in (0..PARAM_COUNT).filter(|i| indices & (1 << i) != 0) {
+                for index in (0..PARAM_COUNT).filter(|&i| indices.contains(i)) {
                     self.param_value(index).await;
                 }
             }

@@ -66,6 +66,7 @@ impl Mission {
             None if !self.route.is_empty() => [start.x, start.y, 0.0],
             None => return Err(AbortReason::NoFlightTarget),
         };
+        self.home = Some(start);
         let flight = self
             .flight
             .insert(FlightStack::new(self.config.flight, model, start, target));
@@ -139,6 +140,7 @@ impl Mission {
                             | AbortReason::ImuNoisy
                             | AbortReason::RobotStalled { .. }
                             | AbortReason::GcsLost
+                            | AbortReason::GeofenceBreached { .. }
                             | AbortReason::ManualLost
                             | AbortReason::BatteryCritical { .. }),
                         ) => Reason::Abort(why),

@@ -8,7 +8,9 @@ use crate::control::navigator::NavState;
 use crate::flight::EscTelemetry;
 use crate::mission::interface::TickInput;
 use crate::mission::phases::{AbortReason, Phase, Transition};
-use crate::mission::supervision::{BatteryLevel, GcsLossAction, LinkChange, LinkResponse, Notice};
+use crate::mission::supervision::{
+    BatteryLevel, FenceAction, GcsLossAction, LinkChange, LinkResponse, Notice,
+};
 use crate::scenario::MAX_ROBOTS;
 
 impl Mission {
@@ -104,6 +106,52 @@ impl Mission {
             Some(BatteryLevel::Ok) | None => {}
         }
         (None, landing, notices)
+    }
+
+    /// The geofence (PX4's `GF_MAX_HOR_DIST`, `GF_MAX_VER_DIST`, `GF_ACTION`), watched while
+    /// the flight flies its plan: the first time the vehicle is farther from its take-off
+    /// point across the ground, or higher above it, than the fence allows, the action is
+    /// taken once: a warning, a hold (until the operator lands or resumes), or a landing in
+    /// place (the reason returned). What to tell people comes with it.
+    pub(super) fn watch_fence(&mut self, nav: &NavState) -> (Option<AbortReason>, Option<Notice>) {
+        let sup = self.config.supervision;
+        let Some(home) = self.home else {
+            return (None, None);
+        };
+        if sup.fence_action == FenceAction::Off || self.fence_breached || !self.cruising() {
+            return (None, None);
+        }
+        let p = nav.position.position;
+        let (north, east) = (p.x - home.x, p.y - home.y);
+        let distance = libm::sqrtf(north * north + east * east);
+        // NED: up is minus z.
+        let height = home.z - p.z;
+        let outside = (sup.fence_horizontal > 0.0 && distance > sup.fence_horizontal)
+            || (sup.fence_vertical > 0.0 && height > sup.fence_vertical);
+        if !outside {
+            return (None, None);
+        }
+        self.fence_breached = true;
+        match sup.fence_action {
+            FenceAction::Land => (
+                Some(AbortReason::GeofenceBreached { distance, height }),
+                None,
+            ),
+            action => {
+                if action == FenceAction::Hold {
+                    self.held = true;
+                    self.apply_hold();
+                }
+                (
+                    None,
+                    Some(Notice::FenceBreached {
+                        distance,
+                        height,
+                        action,
+                    }),
+                )
+            }
+        }
     }
 
     /// After this tick's flight step: a rotor found stopped (or reported by its ESC) is flown

@@ -97,6 +97,16 @@ impl Mission {
             for n in said.into_iter().flatten() {
                 self.tell(&mut notice, n);
             }
+            let (fenced, said) = self.watch_fence(&nav);
+            if let Some(why) = fenced
+                && self.abort.is_none()
+            {
+                self.abort = Some(why);
+                supervision_landing = true;
+            }
+            if let Some(n) = said {
+                self.tell(&mut notice, n);
+            }
         }
         let mut fault_landing = false;
         let fault = input

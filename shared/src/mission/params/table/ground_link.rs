@@ -1,7 +1,8 @@
-//! The ground link's parameters: its and the battery's failsafes, and the map origin
+//! The ground link's parameters: its, the battery's and the geofence's failsafes, and the map origin
 //! (docs/ground-link.md#the-map-origin).
 
 use super::*;
+use crate::mission::supervision::FenceAction;
 
 /// The ground link's and the battery's failsafes (mission::supervision).
 pub(super) const LINK_FAILSAFES: &[ParamSpec] = &[
@@ -17,6 +18,34 @@ pub(super) const LINK_FAILSAFES: &[ParamSpec] = &[
         get: |c| c.supervision.gcs_action as u8 as f32,
         set: |c, v| c.supervision.gcs_action = GcsLossAction::from_value(v),
     },
+    ParamSpec {
+        name: "GF_ACTION",
+        unit: "-",
+        min: 0.0,
+        max: 5.0,
+        integer: true,
+        allowed: &[0.0, 1.0, 2.0, 5.0],
+        #[cfg(feature = "docs")]
+        doc: "outside the geofence in flight: 0 not watched, 1 a warning, 2 hold where it is (until the operator lands or resumes), 5 land where it is (PX4's numbers; no return, and no termination: it would drop the payload)",
+        get: |c| c.supervision.fence_action as u8 as f32,
+        set: |c, v| c.supervision.fence_action = FenceAction::from_value(v),
+    },
+    param!(
+        "GF_MAX_HOR_DIST",
+        "m",
+        0.0,
+        1000.0,
+        "the geofence's radius about the take-off point, across the ground; 0 no limit",
+        |c| c.supervision.fence_horizontal
+    ),
+    param!(
+        "GF_MAX_VER_DIST",
+        "m",
+        0.0,
+        1000.0,
+        "the geofence's height above the take-off point; 0 no limit",
+        |c| c.supervision.fence_vertical
+    ),
     param!(
         "FS_GCS_LOSS_T",
         "s",
