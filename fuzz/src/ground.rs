@@ -58,7 +58,7 @@ impl Vehicle {
                 self.send(&component_metadata(now_ms, 0, uri));
             }
             Outbound::Params(indices) => {
-                for index in (0..PARAM_COUNT).filter(|i| indices & (1 << i) != 0) {
+                for index in (0..PARAM_COUNT).filter(|&i| indices.contains(i)) {
                     let m = value_message(&self.io.values, index).expect("an index in range");
                     self.send(&m);
                 }
