@@ -116,6 +116,7 @@ pub fn test_image(workspace: &Path) -> Result<PathBuf, String> {
     static BUILT: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
     BUILT
         .get_or_init(|| {
+            ensure_target(workspace);
             let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
             let output = Command::new(cargo)
                 .current_dir(workspace)
@@ -144,6 +145,32 @@ pub fn test_image(workspace: &Path) -> Result<PathBuf, String> {
             Ok(image_path(workspace))
         })
         .clone()
+}
+
+/// Adds the Cortex-M7 target to the toolchain in force when rustup lacks it: the toolchain
+/// file names it, but a rustup whose toolchain was already installed before the file asked
+/// for it does not add it by itself. Without rustup, or when adding fails (no network), the
+/// build below says what is missing.
+fn ensure_target(workspace: &Path) {
+    const TARGET: &str = "thumbv7em-none-eabihf";
+    let installed = Command::new("rustup")
+        .current_dir(workspace)
+        .args(["target", "list", "--installed"])
+        .output();
+    let Ok(installed) = installed else {
+        return;
+    };
+    if String::from_utf8_lossy(&installed.stdout)
+        .lines()
+        .any(|l| l.trim() == TARGET)
+    {
+        return;
+    }
+    eprintln!("adding the {TARGET} target to the toolchain (rustup target add {TARGET})");
+    let _ = Command::new("rustup")
+        .current_dir(workspace)
+        .args(["target", "add", TARGET])
+        .status();
 }
 
 /// Tests of this process skipped because QEMU is missing, and those skipped for another
