@@ -91,9 +91,6 @@ pub struct FlightSetup {
     pub map_error: f32,
     /// How the plant departs from the model (the scenario's `[plant]`).
     pub plant: scenario_toml::PlantDepartures,
-    /// The heaviest the take-off may find the vehicle, a multiple of the believed mass (1: it
-    /// does not search; the mission sets it from the estimate's bound).
-    pub takeoff_bound: f32,
 }
 
 /// One row of the time series (100 Hz).
@@ -238,14 +235,12 @@ pub fn fly_formation(scenario: &Scenario, setup: &FlightSetup) -> Result<FlightO
         }
         let nav = navigator.update(&imu, dt, now_us);
         if t >= ARM_DELAY && flight_stack.is_none() {
-            let mut stack = FlightStack::new(
+            flight_stack = Some(FlightStack::new(
                 FlightConfig::default(),
                 model.clone(),
                 nav.position.position,
                 flight.target,
-            );
-            stack.set_takeoff_bound(setup.takeoff_bound);
-            flight_stack = Some(stack);
+            ));
         }
         let out = flight_stack.as_mut().map(|f| f.step(&nav, None, dt));
         let (setpoint, phase, collective, saturated) = match &out {

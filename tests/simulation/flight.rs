@@ -11,18 +11,6 @@ use shared::control::allocation::MixerKind;
 use shared::flight::FlightStop;
 
 fn fly(name: &str, formation: FormationChoice, mixer: MixerKind) -> FlightOutcome {
-    fly_believing(name, formation, mixer, 1.0, 1.0)
-}
-
-/// As [`fly`], the controller believing the payload `light` times its true mass, its
-/// take-off free to find up to `bound` times that.
-fn fly_believing(
-    name: &str,
-    formation: FormationChoice,
-    mixer: MixerKind,
-    light: f32,
-    bound: f32,
-) -> FlightOutcome {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../tests/scenarios")
         .join(format!("{name}.toml"));
@@ -32,11 +20,10 @@ fn fly_believing(
         formation,
         mixer,
         believed_com: truth.com,
-        believed_mass: truth.mass * light,
+        believed_mass: truth.mass,
         seed: 7,
         map_error: 1.0,
         plant: scenario_file::PlantDepartures::MODEL,
-        takeoff_bound: bound,
     };
     harness::fly_formation(&s, &setup).expect("flight runs")
 }
@@ -123,58 +110,6 @@ fn even_rectangle_cannot_take_off_with_the_papers_mixer() {
             even.stop
         );
     }
-}
-
-#[test]
-fn a_take_off_finds_a_payload_heavier_than_believed_but_not_an_even_formations_pivot() {
-    for name in ["rect-sim1", "L-sim1"] {
-        // Believed 0.75 of its mass: without the search the collective never reaches the
-        // weight and the rotors stop.
-        let stuck = fly_believing(
-            name,
-            FormationChoice::Optimized,
-            MixerKind::EqualSplit,
-            0.75,
-            1.0,
-        );
-        assert!(
-            matches!(stuck.stop, Some(FlightStop::TakeoffFailed { .. })),
-            "{}",
-            line(name, "believed light, no search", &stuck)
-        );
-        // With the search up to 1.5 times the belief it takes off and delivers.
-        let found = fly_believing(
-            name,
-            FormationChoice::Optimized,
-            MixerKind::EqualSplit,
-            0.75,
-            1.5,
-        );
-        assert!(
-            found.landed && !found.dropped && found.final_position_error_m < 0.1,
-            "{}",
-            line(name, "believed light, searched", &found)
-        );
-    }
-    // The even rectangle pivots on an edge instead of lifting: the search stops, and the
-    // take-off still fails (the paper's experiment).
-    let even = fly_believing(
-        "rect-sim1",
-        FormationChoice::Even,
-        MixerKind::EqualSplit,
-        1.0,
-        1.5,
-    );
-    assert!(
-        even.max_height_m < 0.1,
-        "{}",
-        line("rect-sim1", "even", &even)
-    );
-    assert!(
-        matches!(even.stop, Some(FlightStop::TakeoffFailed { .. })),
-        "{:?}",
-        even.stop
-    );
 }
 
 #[test]

@@ -361,7 +361,6 @@ fn a_take_off_that_does_not_leave_the_ground_stops_the_rotors() {
         // held back further by the collective limit.
         map_error: 2.5,
         plant: host_sim::scenario_file::PlantDepartures::MODEL,
-        takeoff_bound: 1.0,
     };
     let out = harness::fly_formation(&s, &setup).expect("flight runs");
     assert!(

@@ -315,7 +315,6 @@ fn fly_takes_the_departures_too() {
         seed: 1,
         map_error: 1.0,
         plant,
-        takeoff_bound: 1.0,
     };
     let model =
         harness::fly_formation(&loaded.scenario, &setup(PlantDepartures::MODEL)).expect("flies");

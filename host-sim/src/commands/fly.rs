@@ -169,7 +169,6 @@ pub fn run(args: &FlyArgs) -> Result<Outcome> {
         seed: args.seed,
         map_error,
         plant: loaded.plant,
-        takeoff_bound: 1.0,
     };
     let started = Instant::now();
     let outcome = harness::fly_formation(s, &setup)?;

@@ -6,14 +6,10 @@
 //! when its time is up *and* the vehicle is within [`FlightConfig::arrival_tolerance`] of its
 //! end point (a landing segment ends on time; the land detector then decides). Nets, each an
 //! event with its reason:
-//! - take-off: a payload still down and level after [`TAKEOFF_SEARCH_AFTER`] at the believed
-//!   weight is taken to be heavier than believed: the believed mass rises, up to the bound
-//!   the estimate allows ([`FlightStack::set_takeoff_bound`]), and the flight keeps what it
-//!   found. If the payload has not left the ground after [`FlightConfig::takeoff_timeout`]
-//!   seconds of a collective at or above the believed weight, the search over (at its bound,
-//!   or stopped by a payload that tips), the rotors stop ([`FlightStop::TakeoffFailed`]): a
-//!   payload heavier than the estimate allows, or a formation that pivots it on an edge,
-//!   never flies on the clock alone;
+//! - take-off: if the payload has not left the ground after
+//!   [`FlightConfig::takeoff_timeout`] seconds of a collective at or above the believed
+//!   weight, the rotors stop ([`FlightStop::TakeoffFailed`]): a payload heavier than believed,
+//!   or a formation that pivots it on an edge, never flies on the clock alone;
 //! - a segment not reached [`FlightConfig::arrival_timeout`] seconds after its end: land where
 //!   the vehicle is ([`LandingCause::TrackingLost`]);
 //! - position lost in the air: never cut the rotors there; descend on velocity alone and stop
@@ -51,17 +47,6 @@ use crate::flight::route::Route;
 use crate::geometry::Vec2;
 use crate::math;
 use crate::scenario::{GRAVITY, MAX_ROBOTS};
-
-/// Time at the believed weight on the ground before the take-off searches for a heavier
-/// weight, s: a payload as heavy as believed has left by then.
-pub const TAKEOFF_SEARCH_AFTER: f32 = 1.0;
-/// How fast the take-off's search raises the believed mass, a share of it per second.
-pub const TAKEOFF_SEARCH_RATE: f32 = 0.15;
-/// The most the search may find, a multiple of the believed mass.
-pub const MAX_TAKEOFF_BOUND: f32 = 1.6;
-/// Tilt (its sine squared; 1.5 degrees) past which a payload on the ground is tipping, not
-/// level: the search stops.
-pub const TAKEOFF_LEVEL_SIN2: f32 = 6.85e-4;
 
 /// Tuning of a flight beyond the cascade's gains.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -204,13 +189,6 @@ pub struct FlightStack {
     controller: FlightController,
     /// Collective that holds the believed weight, N.
     weight: f32,
-    /// The heaviest the take-off may find the vehicle, as a multiple of the mass believed at
-    /// the start ([`Self::set_takeoff_bound`]; 1: no search).
-    takeoff_bound: f32,
-    /// The believed mass at the start of the flight, kg.
-    start_mass: f32,
-    /// The take-off's search for the weight stopped: the payload tipped on the ground.
-    takeoff_search_off: bool,
     plan: FlightPlan,
     segment: usize,
     segment_time: f32,
@@ -250,9 +228,6 @@ impl FlightStack {
         Self {
             config,
             weight: model.vehicle.hover_thrust(),
-            takeoff_bound: 1.0,
-            start_mass: model.vehicle.mass,
-            takeoff_search_off: false,
             controller: FlightController::new(config.control, model.vehicle),
             mixer: model.mixer,
             plan: FlightPlan::new(start, target, 0.0, config.plan),
@@ -306,41 +281,6 @@ impl FlightStack {
         } else {
             model.mixer.without(out).unwrap_or(model.mixer)
         };
-    }
-
-    /// Lets the take-off find a weight up to `bound` times the believed mass (the estimate's
-    /// heaviest plausible payload, with a margin): see [`TAKEOFF_SEARCH_AFTER`].
-    pub fn set_takeoff_bound(&mut self, bound: f32) {
-        self.takeoff_bound = math::clamp(bound, 1.0, MAX_TAKEOFF_BOUND);
-    }
-
-    /// The take-off's search for the weight, on the ground: after [`TAKEOFF_SEARCH_AFTER`] at
-    /// the believed weight with the payload still down and level, the believed mass (the
-    /// controller's feed-forward) rises at [`TAKEOFF_SEARCH_RATE`] up to the bound. A payload
-    /// that tips instead (a formation that pivots it on an edge) stops the search: more
-    /// thrust would only tip it further.
-    fn search_weight(&mut self, nav: &NavState, dt: f32) {
-        if self.takeoff_search_off || self.takeoff_bound <= 1.0 {
-            return;
-        }
-        if nav.sin2_tilt() > TAKEOFF_LEVEL_SIN2 {
-            self.takeoff_search_off = true;
-            return;
-        }
-        let mut model = *self.controller.model();
-        let top = self.start_mass * self.takeoff_bound;
-        if self.thrust_on_ground < TAKEOFF_SEARCH_AFTER || model.mass >= top {
-            return;
-        }
-        model.mass = math::min(model.mass + TAKEOFF_SEARCH_RATE * self.start_mass * dt, top);
-        self.weight = model.hover_thrust();
-        self.controller.set_model(model);
-    }
-
-    /// Whether the take-off's search has nothing left: at its bound, or stopped.
-    fn search_done(&self) -> bool {
-        self.takeoff_search_off
-            || self.controller.model().mass >= self.start_mass * self.takeoff_bound - 1e-6
     }
 
     /// Rotors found stopped in flight, in the order found (the first two).
@@ -731,9 +671,8 @@ impl FlightStack {
         if contact == Contact::OnGround && self.phase == FlightPhase::Takeoff {
             if self.collective >= 0.95 * self.weight {
                 self.thrust_on_ground += dt;
-                self.search_weight(nav, dt);
             }
-            if self.thrust_on_ground >= self.config.takeoff_timeout && self.search_done() {
+            if self.thrust_on_ground >= self.config.takeoff_timeout {
                 return self.stop(FlightStop::TakeoffFailed {
                     height: self.max_height,
                 });

@@ -70,16 +70,6 @@ impl Mission {
         let flight = self
             .flight
             .insert(FlightStack::new(self.config.flight, model, start, target));
-        // The take-off may find the payload as heavy as the estimate's 95 % bound and a tenth
-        // more (light lifts, ground effect, the robots' spread of mass).
-        if let Some(e) = self.estimate {
-            let robots = self.scenario.robots.mass * self.scenario.robots.count() as f32;
-            let believed = e.theta[2] + robots;
-            let heaviest = 1.1 * crate::math::max(e.mass_upper_95, e.theta[2]) + robots;
-            if believed > 0.0 {
-                flight.set_takeoff_bound(heaviest / believed);
-            }
-        }
         if !self.route.is_empty() {
             flight.follow_route(start, &self.route, usize::from(self.route_first));
         }
