@@ -254,10 +254,23 @@ fn a_climb_past_the_geofence_lands_where_it_is() {
     assert!((0.3..0.35).contains(&height), "breached at {height} m");
     assert!(distance < 1.0, "{distance}");
     assert!(!f.outcome.dropped);
-    assert!(f.outcome.phases.iter().any(|(p, _)| p == "disarmed"), "landed and disarmed");
-    let top = f.outcome.series.iter().map(|s| s.height).fold(0.0f32, f32::max);
-    assert!(top < 0.45, "the climb stopped short of the plan's 0.5 m: {top}");
-    let (at, text) = f.find("landing", "geofence breached").expect("the landing says why");
+    assert!(
+        f.outcome.phases.iter().any(|(p, _)| p == "disarmed"),
+        "landed and disarmed"
+    );
+    let top = f
+        .outcome
+        .series
+        .iter()
+        .map(|s| s.height)
+        .fold(0.0f32, f32::max);
+    assert!(
+        top < 0.45,
+        "the climb stopped short of the plan's 0.5 m: {top}"
+    );
+    let (at, text) = f
+        .find("landing", "geofence breached")
+        .expect("the landing says why");
     assert!(text.contains("landing where it is"), "{text}");
     assert!(at > 0.0);
 }
