@@ -4,7 +4,10 @@
 //! - IMU: gyro with a constant bias (drawn from the seed, or given: `hil --gyro-bias`) and
 //!   white noise; accelerometer reading the specific force
 //!   (acceleration minus gravity) in the body frame, with white noise. Sampled at the control
-//!   rate; its acceleration is the origin's velocity change over the sample period. Its output
+//!   rate; as a real IMU's anti-alias filter and delta-angle output do, each sample carries
+//!   the motion over the whole period: the acceleration is the origin's velocity change over
+//!   it and the rate the attitude's change over it (a knock lasting less than a period is
+//!   not lost between two samples). Its output
 //!   lags [`IMU_DELAY_SAMPLES`] samples (the sensor's filter and transfer): part of the delay
 //!   the lift-off detection must live with.
 //! - Motion capture: position and attitude of the payload frame at [`MOCAP_HZ`], with noise,
@@ -78,6 +81,7 @@ pub struct Sensors {
     rng: ChaCha8Rng,
     gyro_bias: Vec3,
     last_velocity: Option<Vec3>,
+    last_attitude: Option<Quat>,
     imu_queue: VecDeque<ImuSample>,
     pending: VecDeque<(f32, MocapFix)>,
     next_fix: f32,
@@ -97,6 +101,20 @@ pub struct Sensors {
 /// Mean length of a burst of lost motion-capture fixes (occlusions last tens of ms).
 const DROPOUT_BURST_FIXES: f32 = 5.0;
 
+/// The body rate that turns `from` into `to` in `dt` seconds, rad/s (body axes): the rotation
+/// vector of `from^-1 to` over `dt`.
+fn mean_rate(from: Quat, to: Quat, dt: f32) -> Vec3 {
+    let delta = from.conjugate() * to;
+    let sign = if delta.w < 0.0 { -1.0 } else { 1.0 };
+    let v = delta.vector() * sign;
+    let half_sin = v.norm();
+    if half_sin < 1e-9 {
+        return Vec3::ZERO;
+    }
+    let angle = 2.0 * half_sin.atan2(delta.w * sign);
+    v * (angle / (half_sin * dt))
+}
+
 fn noise(rng: &mut ChaCha8Rng, sigma: f32) -> f32 {
     Normal::new(0.0, sigma).map_or(0.0, |n| n.sample(rng))
 }
@@ -111,6 +129,7 @@ impl Sensors {
             rng,
             gyro_bias,
             last_velocity: None,
+            last_attitude: None,
             imu_queue: VecDeque::new(),
             pending: VecDeque::new(),
             next_fix: 0.0,
@@ -220,15 +239,19 @@ impl Sensors {
         let specific = truth
             .attitude
             .inverse_rotate(acceleration - Vec3::DOWN * GRAVITY);
+        let rate = match self.last_attitude.replace(truth.attitude) {
+            Some(q) if dt > 0.0 => mean_rate(q, truth.attitude, dt),
+            _ => truth.rate,
+        };
         let sample = if let Some(raw) = &mut self.raw {
-            let ([gyro, accel], fault) = raw.tick(truth.rate + self.gyro_bias, specific, dt);
+            let ([gyro, accel], fault) = raw.tick(rate + self.gyro_bias, specific, dt);
             self.imu_fault = fault;
             ImuSample { gyro, accel }
         } else {
             let rng = &mut self.rng;
             let mut n = |s: f32| Vec3::new(noise(rng, s), noise(rng, s), noise(rng, s));
             ImuSample {
-                gyro: truth.rate + self.gyro_bias + n(GYRO_NOISE),
+                gyro: rate + self.gyro_bias + n(GYRO_NOISE),
                 accel: specific + n(ACCEL_NOISE),
             }
         };
@@ -286,6 +309,31 @@ mod tests {
             attitude: Quat::IDENTITY,
             rate: Vec3::ZERO,
         }
+    }
+
+    /// A rotation that comes and goes between two samples (a knock shorter than a period):
+    /// the sample after it carries the whole turn, as a real IMU's delta angle does, though
+    /// the body is at rest again when it is taken.
+    #[test]
+    fn a_turn_between_samples_is_in_the_next_sample() {
+        let dt = 0.0025;
+        let mut sensors = Sensors::new(3).with_gyro_bias(Vec3::ZERO);
+        let mut turned = at_rest();
+        let mut total = 0.0f32;
+        for k in 0..40 {
+            if k == 20 {
+                // 0.01 rad about x between samples 19 and 20; at rest when sampled.
+                turned.attitude = Quat::from_rotation_vector(Vec3::new(0.01, 0.0, 0.0));
+            }
+            let sample = sensors.imu(&turned, dt);
+            total += sample.gyro.x * dt;
+        }
+        // The turn less the white noise's share (40 samples of 5 mrad/s over 2.5 ms).
+        assert!((total - 0.01).abs() < 5e-4, "integrated {total} rad");
+        assert!(
+            (mean_rate(Quat::IDENTITY, turned.attitude, dt).x - 4.0).abs() < 1e-3,
+            "0.01 rad over 2.5 ms is 4 rad/s"
+        );
     }
 
     #[test]

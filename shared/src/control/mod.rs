@@ -13,6 +13,7 @@
 //! - [`navigator`]: both estimators together, fed by the IMU and motion capture.
 //! - [`imu_monitor`]: the IMU's samples checked every tick: frozen, or wildly noisy.
 //! - [`thrust_map`]: rotor thrust to ESC command, a table a bench calibration replaces.
+//! - [`voltage_compensation`]: the rotors' commands raised for a pack that sags.
 
 pub mod allocation;
 pub mod attitude_estimator;
@@ -27,3 +28,4 @@ pub mod thrust_map;
 pub mod trajectory;
 pub mod vector;
 pub mod vehicle;
+pub mod voltage_compensation;

@@ -102,6 +102,8 @@ pub struct Mission {
     imu_detection: Option<ImuDetection>,
     link: LinkMonitor,
     battery: BatteryMonitor,
+    /// The rotors' commands raised for a pack that sags.
+    compensation: crate::control::voltage_compensation::VoltageCompensation,
     /// Time left of the hold after the ground link was lost in flight, s.
     gcs_hold: Option<f32>,
     /// Notices that could not go out in their own tick (one goes out per tick; a tick makes
@@ -183,6 +185,7 @@ impl Mission {
             imu_detection: None,
             link: LinkMonitor::new(),
             battery: BatteryMonitor::new(),
+            compensation: crate::control::voltage_compensation::VoltageCompensation::new(),
             gcs_hold: None,
             notices: heapless::Deque::new(),
             route: Route::EMPTY,

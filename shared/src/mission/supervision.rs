@@ -121,6 +121,8 @@ pub struct SupervisionConfig {
     pub fence_horizontal: f32,
     /// The geofence's height above the take-off point, m (0: no vertical limit).
     pub fence_vertical: f32,
+    /// The pack the thrust map was measured with, for the rotors' voltage compensation.
+    pub pack: crate::control::voltage_compensation::PackModel,
 }
 
 impl SupervisionConfig {
@@ -137,6 +139,7 @@ impl SupervisionConfig {
         fence_action: FenceAction::Land,
         fence_horizontal: 20.0,
         fence_vertical: 10.0,
+        pack: crate::control::voltage_compensation::PackModel::DEFAULT,
     };
 }
 

@@ -1,7 +1,8 @@
 //! The flight's supervision (docs/system.md#failsafes): what the ground link's and the
 //! battery's changes mean in the phase the mission is in (the monitors are
 //! [`crate::mission::supervision`]'s), and the rotors watched in flight for one that stops
-//! (the monitor is [`crate::flight::rotor_monitor`]'s).
+//! (the monitor is [`crate::flight::rotor_monitor`]'s); the rotors' commands raised for a pack
+//! that sags ([`crate::control::voltage_compensation`]).
 
 use super::Mission;
 use crate::control::navigator::NavState;
@@ -195,5 +196,29 @@ impl Mission {
             left: found.left,
             holdable: found.holdable,
         })
+    }
+
+    /// Raises the rotors' thrusts for a pack that sags below the thrust map's
+    /// (`crate::control::voltage_compensation`): the rotors then make what the step asked.
+    pub(super) fn compensate_voltage(&mut self, thrusts: &mut [f32; MAX_ROBOTS], dt: f32) {
+        let n = self.scenario.robots.count().min(MAX_ROBOTS);
+        let max = self.scenario.robots.max_thrust;
+        let full = max * n as f32;
+        let load = if full > 0.0 {
+            thrusts[..n].iter().sum::<f32>() / full
+        } else {
+            0.0
+        };
+        let scale = self.compensation.scale(
+            &self.config.supervision.pack,
+            self.battery.volts(),
+            load,
+            dt,
+        );
+        if scale != 1.0 {
+            for t in &mut thrusts[..n] {
+                *t = crate::math::min(*t * scale, max);
+            }
+        }
     }
 }

@@ -174,6 +174,9 @@ impl Mission {
         if !matches!(self.phase, Phase::Flying(_)) {
             cascade = None;
         }
+        if !motor_test {
+            self.compensate_voltage(&mut thrusts, dt);
+        }
         if pilot.rotors_off {
             // The kill switch: every rotor at zero from the tick that sees it, whatever the
             // phase or the bench does.

@@ -144,12 +144,12 @@ macro_rules! param {
 }
 
 /// Number of parameters.
-pub const COUNT: usize = 131;
+pub const COUNT: usize = 134;
 
 /// Index of the first of the map origin's five parameters, in this order: `ORIG_LAT_DEG`,
 /// `ORIG_LAT_E7`, `ORIG_LON_DEG`, `ORIG_LON_E7`, `ORIG_ALT` (docs/ground-link.md#the-map-origin).
 /// They are the ground link's, not the mission's: no field of [`MissionConfig`].
-pub const ORIGIN: usize = 93;
+pub const ORIGIN: usize = 96;
 /// How many parameters the map origin has.
 pub const ORIGIN_LEN: usize = 5;
 /// `ORIG_ALT`'s default, m: PX4's simulation home (47.397742 N, 8.545594 E, 488 m), a

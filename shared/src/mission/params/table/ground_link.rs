@@ -78,6 +78,27 @@ pub(super) const LINK_FAILSAFES: &[ParamSpec] = &[
         "filtered pack voltage below which the battery is critical: landing in place (stop on the ground); 0 off",
         |c| c.supervision.battery_critical
     ),
+    param!(
+        flag "MC_BAT_SCALE_EN",
+        "raise the rotors' commands as the pack sags below the thrust map's pack (PX4's name)",
+        |c| c.supervision.pack.enabled
+    ),
+    param!(
+        "BAT_V_MAP",
+        "V",
+        1.0,
+        100.0,
+        "open-circuit pack voltage at which the thrust map was measured (the voltage compensation's reference)",
+        |c| c.supervision.pack.map_volts
+    ),
+    param!(
+        "BAT_V_FULL_DROP",
+        "V",
+        0.0,
+        10.0,
+        "how far the thrust map's pack read below its open-circuit voltage with every rotor at full thrust",
+        |c| c.supervision.pack.full_load_drop
+    ),
 ];
 
 /// The map origin: the ground link's (a ground station's map), no field of the
