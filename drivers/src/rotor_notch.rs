@@ -8,18 +8,21 @@
 //! mission's IMU monitor ([`shared::control::imu_monitor`]) reads both.
 //!
 //! A notch is on while its frequency is at least [`MIN_NOTCH_HZ`] (PX4's
-//! `IMU_GYRO_DNF_MIN` is 25 Hz) and below 0.45 of the sample rate; its width is half its
-//! frequency (ArduPilot's default) for up to [`FULL_WIDTH_ROTORS`] rotors, at least
-//! [`MIN_BANDWIDTH_HZ`]: a narrower notch leaves more of a line whose rotor changes speed
-//! fast (a few rotors carrying a light payload) and rings longer after a knock (a payload set
-//! down after a lift). The notches lie in series in the rate loop, and below its centre each
-//! lags the signal by about (f / f0) / Q: at the 5 to 6 Hz where the rate loop crosses over,
-//! 28 notches half their frequency wide (fourteen robots) lag it by about 32 degrees against
-//! 15 to 20 for eight, and a payload of thirteen or more robots oscillated in roll until its
-//! rotors saturated. So with more rotors each notch is narrower by `FULL_WIDTH_ROTORS / n`,
-//! and the bank lags the loop as eight rotors' does. Rotors turning at the same speed share
-//! one notch per harmonic. A notch that
-//! comes on starts settled at the latest sample (or the first, if it comes on before any), so
+//! `IMU_GYRO_DNF_MIN` is 25 Hz) and below 0.45 of the sample rate; its width is a quarter of
+//! its frequency for up to [`FULL_WIDTH_ROTORS`] rotors, at least [`MIN_BANDWIDTH_HZ`]
+//! (between ArduPilot's default of half the frequency and PX4's fixed 15 Hz,
+//! `IMU_GYRO_DNF_BW`). The notches lie in series in the rate loop, and below its centre each
+//! lags the signal by about (f / f0) / Q. Half-frequency notches on twelve to sixteen robots
+//! lagged the loop by some 30 degrees at its crossover, and a payload whose true inertia was
+//! 13 % below the model's (the campaign's `inertia_scale`) oscillated at 8 Hz until the rotor
+//! monitor named healthy rotors and the payload fell (seed 7, trials 384 and 511); with a
+//! quarter they fly. PX4's 15 Hz everywhere was tried too: it leaves a line whose rotor
+//! changes speed fast (a touchdown at the paper's strongest vibration) and the IMU monitor
+//! called the IMU noisy. With more rotors each notch is narrower still, by
+//! `FULL_WIDTH_ROTORS / n`, so the bank lags the loop as eight rotors' does. A narrower notch
+//! rings longer after a knock; the IMU monitor tells a ring-down from a noisy sensor
+//! ([`shared::control::imu_monitor`]). Rotors turning at the same speed share one notch per
+//! harmonic. A notch that comes on starts settled at the latest sample (or the first, if it comes on before any), so
 //! switching it adds no transient; the front end notches after its low-pass, so that sample is
 //! a smooth one.
 
@@ -29,15 +32,18 @@ use crate::biquad::{BiquadCoefficients, RetunableState};
 pub const HARMONICS: usize = 2;
 /// Lowest frequency notched, Hz: below it a rotor is idle or stopped.
 pub const MIN_NOTCH_HZ: f32 = 25.0;
+/// A notch's width over its frequency (up to [`FULL_WIDTH_ROTORS`] rotors).
+pub const QUARTER: f32 = 0.25;
 /// Narrowest notch, Hz.
 pub const MIN_BANDWIDTH_HZ: f32 = 10.0;
-/// Rotors up to which a notch is half its frequency wide; beyond, narrower in proportion.
+/// Rotors up to which a notch is a quarter of its frequency wide; beyond, narrower in
+/// proportion.
 pub const FULL_WIDTH_ROTORS: usize = 8;
 /// Change of a rotor's frequency, Hz, below which its notches keep their coefficients (RPM
 /// telemetry jitters; recomputing costs a sine and a cosine).
 const RETUNE_HZ: f32 = 0.5;
 
-/// Each notch's width as a share of the full (half its frequency) with `rotors` notched:
+/// Each notch's width as a share of the full (a quarter of its frequency) with `rotors` notched:
 /// one up to [`FULL_WIDTH_ROTORS`], then in proportion, so the bank's lag at the rate loop's
 /// crossover stays that of eight rotors.
 pub fn width_share(rotors: usize) -> f32 {
@@ -115,7 +121,7 @@ impl<const ROTORS: usize> RotorNotches<ROTORS> {
                     continue;
                 }
                 let was_off = notch.centre_hz == 0.0;
-                let width = (0.5 * f * share).max(MIN_BANDWIDTH_HZ);
+                let width = (QUARTER * f * share).max(MIN_BANDWIDTH_HZ);
                 notch.coefficients = BiquadCoefficients::notch(f, width, self.sample_hz);
                 notch.centre_hz = f;
                 if let (true, Some(latest)) = (was_off, &self.latest) {
@@ -223,8 +229,10 @@ mod tests {
         // carrying a long one (about 4 N each, 5,800 RPM).
         let eight = lag_at_crossover::<16>(8, 7_400.0);
         let sixteen = lag_at_crossover::<16>(16, 5_800.0);
-        assert!(eight > 10.0 && eight < 20.0, "eight rotors lag {eight} deg");
-        // Half their frequency wide, sixteen rotors' notches would lag it by about 37 deg.
+        // A quarter of their frequency wide: half the 15 to 20 deg of half-frequency notches.
+        assert!(eight > 5.0 && eight < 10.0, "eight rotors lag {eight} deg");
+        // Half their frequency wide and not narrowed, sixteen rotors' notches would lag it by
+        // about 37 deg.
         assert!(
             sixteen < 1.3 * eight,
             "sixteen {sixteen} deg, eight {eight} deg"

@@ -205,10 +205,13 @@ mod tests {
             }
             last = Some(s);
             noisy |= monitor
-                .check(&ImuSample {
-                    gyro: s[0],
-                    accel: s[1],
-                })
+                .check(
+                    &ImuSample {
+                        gyro: s[0],
+                        accel: s[1],
+                    },
+                    true,
+                )
                 .is_some();
         }
         (dg, da, noisy)

@@ -37,8 +37,23 @@
 //! leave tick-to-tick changes under half the thresholds. Without ESC RPM telemetry nothing is
 //! notched: check the tick-to-tick change in flight logs before flying a new airframe so.
 //!
-//! Non-finite samples count as jumps. The state is a previous sample and two counters
-//! (40 bytes): the flight controller's RAM is tight.
+//! **A knock rings down; a broken sensor does not.** A knock (a payload set down after a lift,
+//! a hard touchdown) rings through the anti-alias filter and the notches for tens of
+//! milliseconds, long enough at a narrow notch to fill the window with jumps. So the jumps'
+//! size (the larger of the gyro's and the accelerometer's change over its threshold) is
+//! averaged twice, over about 4 ticks and about 16: a ringing knock decays (the recent average
+//! falls below [`RING_DOWN_RATIO`] of the longer one within the 24 ticks the window needs),
+//! a noisy sensor does not, and only jumps that do not decay make a noisy IMU. A noise fault
+//! that starts is no slower to flag: its recent average is the larger.
+//!
+//! **On the ground a noisy IMU must stay noisy.** Setting a heavy payload down after a lift
+//! rattles it on its feet for a tenth of a second or more, jumps that neither decay smoothly
+//! nor last. Before take-off nothing is at stake in waiting, so there a noisy verdict counts
+//! only once it has held for [`GROUND_NOISY_TICKS`] (0.5 s); in flight it counts at once. A
+//! frozen IMU counts at once everywhere.
+//!
+//! Non-finite samples count as jumps (of size [`NON_FINITE_JUMP`]). The state is a previous
+//! sample, two counters and two averages (48 bytes): the flight controller's RAM is tight.
 
 use crate::control::navigator::ImuSample;
 use crate::control::vector::Vec3;
@@ -58,6 +73,20 @@ pub const JUMP_ACCEL: f32 = 1.5;
 pub const NOISY_WINDOW: u32 = 32;
 /// Jumps among the last [`NOISY_WINDOW`] ticks that make a noisy IMU.
 pub const NOISY_JUMPS: u32 = 24;
+/// Share of the long average of the jumps' size below which the short one says they are
+/// dying away (a ring-down, not a noisy sensor).
+pub const RING_DOWN_RATIO: f32 = 0.5;
+/// Weight of a tick in the short average of the jumps' size (about 4 ticks).
+const SHORT_WEIGHT: f32 = 0.25;
+/// Weight of a tick in the long average (about 16 ticks).
+const LONG_WEIGHT: f32 = 1.0 / 16.0;
+/// Size of a non-finite sample's jump, in thresholds.
+pub const NON_FINITE_JUMP: f32 = 10.0;
+/// Ticks a noisy verdict must hold on the ground before it counts (0.5 s at 400 Hz).
+pub const GROUND_NOISY_TICKS: u16 = 200;
+/// Largest size a jump counts with, in thresholds (one absurd sample does not hold the long
+/// average up for long).
+const LARGEST_JUMP: f32 = 100.0;
 
 /// What is wrong with the IMU's samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -91,6 +120,11 @@ pub struct ImuMonitor {
     still: u8,
     /// Bit `k` set: the tick `k` ticks ago was a jump.
     jumps: u32,
+    /// The jumps' size (change over threshold) averaged over about 4 ticks and about 16.
+    short_size: f32,
+    long_size: f32,
+    /// Ticks in a row the samples have been noisy.
+    noisy_ticks: u16,
 }
 
 impl Default for ImuMonitor {
@@ -106,23 +140,31 @@ impl ImuMonitor {
             previous: None,
             still: 0,
             jumps: 0,
+            short_size: 0.0,
+            long_size: 0.0,
+            noisy_ticks: 0,
         }
     }
 
-    /// Takes this tick's sample; what is wrong with the IMU now, if anything (the verdict
-    /// clears once the samples are plausible again: the caller latches what it acts on).
-    pub fn check(&mut self, sample: &ImuSample) -> Option<ImuFailure> {
+    /// Takes this tick's sample, `flying` or on the ground; what is wrong with the IMU now,
+    /// if anything (the verdict clears once the samples are plausible again: the caller
+    /// latches what it acts on).
+    pub fn check(&mut self, sample: &ImuSample, flying: bool) -> Option<ImuFailure> {
         let finite = sample.gyro.is_finite() && sample.accel.is_finite();
-        let (jump, still) = match (&self.previous, finite) {
-            (_, false) => (true, false),
-            (None, true) => (false, false),
+        let (size, still) = match (&self.previous, finite) {
+            (_, false) => (NON_FINITE_JUMP, false),
+            (None, true) => (0.0, false),
             (Some(p), true) => {
                 let dg = sample.gyro - p.gyro;
                 let da = sample.accel - p.accel;
                 let still = max_abs(dg) <= STILL_GYRO && max_abs(da) <= STILL_ACCEL;
-                (dg.norm() > JUMP_GYRO || da.norm() > JUMP_ACCEL, still)
+                let size = crate::math::max(dg.norm() / JUMP_GYRO, da.norm() / JUMP_ACCEL);
+                (crate::math::min(size, LARGEST_JUMP), still)
             }
         };
+        let jump = size > 1.0;
+        self.short_size += SHORT_WEIGHT * (size - self.short_size);
+        self.long_size += LONG_WEIGHT * (size - self.long_size);
         if finite {
             self.previous = Some(*sample);
         }
@@ -137,9 +179,16 @@ impl ImuMonitor {
             (1u32 << NOISY_WINDOW) - 1
         };
         self.jumps = ((self.jumps << 1) | u32::from(jump)) & mask;
+        let noisy = self.jumps.count_ones() >= NOISY_JUMPS
+            && self.short_size >= RING_DOWN_RATIO * self.long_size;
+        self.noisy_ticks = if noisy {
+            self.noisy_ticks.saturating_add(1)
+        } else {
+            0
+        };
         if self.still >= STUCK_TICKS {
             Some(ImuFailure::Stuck)
-        } else if self.jumps.count_ones() >= NOISY_JUMPS {
+        } else if noisy && (flying || self.noisy_ticks >= GROUND_NOISY_TICKS) {
             Some(ImuFailure::Noisy)
         } else {
             None
@@ -191,7 +240,7 @@ mod tests {
         limit: u32,
         mut make: impl FnMut(u32) -> ImuSample,
     ) -> Option<(u32, ImuFailure)> {
-        (1..=limit).find_map(|k| monitor.check(&make(k)).map(|f| (k, f)))
+        (1..=limit).find_map(|k| monitor.check(&make(k), true).map(|f| (k, f)))
     }
 
     #[test]
@@ -222,7 +271,7 @@ mod tests {
             "the first frozen sample is new: still from the second on"
         );
         // Once it moves again the verdict clears.
-        assert_eq!(monitor.check(&sample(&mut noise, 1.0)), None);
+        assert_eq!(monitor.check(&sample(&mut noise, 1.0), true), None);
     }
 
     #[test]
@@ -277,9 +326,52 @@ mod tests {
         assert_eq!(verdict, None);
     }
 
+    /// A knock as a narrow notch rings it down: the accelerometer swings at 30 Hz from
+    /// 190 m/s^2, decaying with a 21 ms time constant (a 15 Hz wide notch), so its tick-to-tick
+    /// change stays above the threshold for some 35 ticks in a row. A ring-down, not noise;
+    /// the same swing held at its size is noise.
+    #[test]
+    fn a_ringing_knock_is_no_noise_but_a_swing_that_holds_is() {
+        for (decays, flagged) in [(true, false), (false, true)] {
+            let mut noise = Noise(21);
+            let mut monitor = ImuMonitor::new();
+            let verdict = ticks_to_verdict(&mut monitor, 800, |k| {
+                let mut s = sample(&mut noise, 1.0);
+                if k >= 400 {
+                    let t = (k - 400) as f32 * 0.0025;
+                    let size = if decays { libm::expf(-t / 0.021) } else { 0.2 };
+                    s.accel.z += 190.0 * size * libm::sinf(core::f32::consts::TAU * 30.0 * t);
+                }
+                s
+            });
+            if flagged {
+                assert!(
+                    matches!(verdict, Some((k, ImuFailure::Noisy)) if k <= 440),
+                    "{verdict:?}"
+                );
+            } else {
+                assert_eq!(verdict, None);
+            }
+        }
+    }
+
+    /// On the ground a noisy IMU counts after half a second of noise; in flight at once.
+    #[test]
+    fn on_the_ground_noise_must_last_half_a_second() {
+        let mut noise = Noise(17);
+        let mut monitor = ImuMonitor::new();
+        let on_ground = (1..=400)
+            .find(|_| monitor.check(&sample(&mut noise, 100.0), false).is_some())
+            .map(|k| k as u16);
+        assert!(
+            on_ground.is_some_and(|k| (GROUND_NOISY_TICKS..GROUND_NOISY_TICKS + 40).contains(&k)),
+            "flagged on the ground after {on_ground:?} ticks"
+        );
+    }
+
     #[test]
     fn the_state_stays_small() {
-        assert!(core::mem::size_of::<ImuMonitor>() <= 40);
+        assert!(core::mem::size_of::<ImuMonitor>() <= 48);
     }
 
     #[test]

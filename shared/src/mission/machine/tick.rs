@@ -23,7 +23,9 @@ impl Mission {
         self.phase_time += dt;
         // The calibrated offsets off the sample before anything reads it.
         let imu = self.config.sensors.correct(&input.imu);
-        let imu_failure = self.imu_monitor.check(&imu);
+        let imu_failure = self
+            .imu_monitor
+            .check(&imu, matches!(self.phase, Phase::Flying(_)));
         let started = !matches!(self.phase, Phase::Idle | Phase::Disarmed | Phase::Aborted);
         if let Some(failure) = imu_failure
             && started
