@@ -1,7 +1,8 @@
 //! The IMU's failsafes in the physics plant (`imu-stuck` and `imu-noise:X`): a
-//! frozen or wildly noisy IMU is found within 100 ms; in flight the vehicle lands where it is
-//! on motion capture without dropping the payload and stops its rotors; on the ground the
-//! mission stops with the reason and never arms; no normal mission is ever flagged.
+//! frozen or wildly noisy IMU is found within 100 ms (on the ground a noisy one within 0.6 s:
+//! its noise must hold half a second there); in flight the vehicle lands where it is on motion
+//! capture without dropping the payload and stops its rotors; on the ground the mission stops
+//! with the reason and never arms; no normal mission is ever flagged.
 
 use crate::common;
 use common::{host_sim, load};
@@ -9,7 +10,7 @@ use common::{host_sim, load};
 use host_sim::mission_run::{
     self, ImuFaultKind, ImuInjection, LoadShift, MissionOutcome, MissionSetup,
 };
-use shared::control::imu_monitor::ImuFailure;
+use shared::control::imu_monitor::{GROUND_NOISY_TICKS, ImuFailure};
 use shared::geometry::Vec2;
 use shared::mission::AbortReason;
 
@@ -103,7 +104,11 @@ fn a_faulty_imu_on_the_ground_stops_the_mission_before_the_rotors_arm() {
             let o = fly("rect-ex1", kind, after, true);
             let (delay, _) = detection(&o);
             eprintln!("{kind:?} from {after} s after the start: stopped after {delay:.4} s");
-            assert!(delay <= DETECT_WITHIN, "{kind:?}@{after}: {delay}");
+            let within = match kind {
+                ImuFaultKind::Noise(_) => DETECT_WITHIN + f32::from(GROUND_NOISY_TICKS) / 400.0,
+                _ => DETECT_WITHIN,
+            };
+            assert!(delay <= within, "{kind:?}@{after}: {delay}");
             assert_eq!(o.aborted, Some(reason), "{kind:?}@{after}");
             assert!(!o.armed, "{kind:?}@{after}: rotors never armed");
             assert!(!o.flew, "{kind:?}@{after}");

@@ -425,6 +425,41 @@ fn the_packs_sag_lowers_the_voltage_a_fresh_pack_delivers_and_a_dead_one_is_a_na
     );
 }
 
+/// A pack that sags beyond the thrust map's (0.02 Ohm) makes every rotor weaker than commanded;
+/// the voltage compensation (`MC_BAT_SCALE_EN`, docs/models.md#battery-compensation) raises the
+/// commands so the rotors make what was asked: each lift reads within 1 % of the model pack's
+/// reading. Without it the same lifts read heavy, by the thrust the sag took.
+#[test]
+fn a_sagging_packs_lifts_read_as_the_model_packs_with_the_compensation_on() {
+    let model = mission(PlantDepartures::MODEL);
+    let sagging = PlantDepartures {
+        battery_sag: 0.02,
+        ..PlantDepartures::MODEL
+    };
+    let compensated = mission(sagging);
+    let loaded = scenario_file::load(&scenario_path("rect-ex1")).expect("rect-ex1");
+    let mut config = shared::mission::MissionConfig::default();
+    config.supervision.pack.enabled = false;
+    let setup = MissionSetup {
+        plant: sagging,
+        config,
+        ..MissionSetup::default()
+    };
+    let uncompensated = mission_run::run(&loaded.scenario, &setup, &mut |_, _, _| {})
+        .expect("runs")
+        .0;
+    assert!(compensated.delivered && uncompensated.delivered);
+    let reading = |o: &MissionOutcome, k: usize| o.lifts.get(k).and_then(|l| l.1);
+    let first = |o: &MissionOutcome| reading(o, 0).expect("the first pair lifts");
+    // The first lift is the same pair in all three (the same start).
+    let (m, c, u) = (first(&model), first(&compensated), first(&uncompensated));
+    assert!(
+        (c - m).abs() < 0.01 * m,
+        "compensated {c} N, model pack {m} N"
+    );
+    assert!(u > m + 0.05, "uncompensated {u} N, model pack {m} N");
+}
+
 /// Campaign trials (seed 1, the default dispersion, random payloads) that found faults in the
 /// vehicle, flown again (docs/commands.md#campaign): trial 440, four robots, lost its position
 /// in flight to a 0.53 s burst of motion-capture dropouts against the observer's 0.5 s
