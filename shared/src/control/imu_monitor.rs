@@ -48,9 +48,10 @@
 //!
 //! **On the ground a noisy IMU must stay noisy.** Setting a heavy payload down after a lift
 //! rattles it on its feet for a tenth of a second or more, jumps that neither decay smoothly
-//! nor last. Before take-off nothing is at stake in waiting, so there a noisy verdict counts
-//! only once it has held for [`GROUND_NOISY_TICKS`] (0.5 s); in flight it counts at once. A
-//! frozen IMU counts at once everywhere.
+//! nor last, and so do the rotors spinning down after a touchdown. On the ground nothing is at
+//! stake in waiting, so there a noisy verdict counts only once it has held for
+//! [`GROUND_NOISY_TICKS`] (0.5 s); in flight it counts at once. A frozen IMU counts at once
+//! everywhere.
 //!
 //! Non-finite samples count as jumps (of size [`NON_FINITE_JUMP`]). The state is a previous
 //! sample, two counters and two averages (48 bytes): the flight controller's RAM is tight.

@@ -402,7 +402,15 @@ fn commands_out_of_place_are_refused_with_a_reason() {
             .find(|(at, _)| *at == t)
             .map(|(_, reply)| reply.outcome)
     };
-    assert_eq!(outcome(10), Some(Err(CommandRefusal::AlreadyStarted)));
+    // A second start of the running mission is taken and changes nothing: one start.
+    assert_eq!(outcome(10), Some(Ok(())));
+    assert_eq!(
+        r.transitions
+            .iter()
+            .filter(|(_, _, p)| *p == Phase::PreflightChecks)
+            .count(),
+        1
+    );
     assert_eq!(outcome(20), Some(Err(CommandRefusal::NotFlying)));
     assert_eq!(outcome(30), Some(Ok(())));
     assert_eq!(outcome(40), Some(Err(CommandRefusal::Finished)));

@@ -190,9 +190,11 @@ impl Mission {
                 self.apply_hold();
                 Ok(())
             }
-            OperatorCommand::Start => Err(CommandRefusal::AlreadyStarted),
-            // Mission mode asked for while the mission runs: it is in it already.
-            OperatorCommand::Resume => Ok(()),
+            // A second start of the mission running (a ground station's beside the operator's,
+            // as QGroundControl's Start Mission sends it), or mission mode asked for while the
+            // mission runs: it is in it already. Taken, and nothing changes (PX4 accepts
+            // MAV_CMD_MISSION_START in mission mode so).
+            OperatorCommand::Start | OperatorCommand::Resume => Ok(()),
             OperatorCommand::Hold if !flying => Err(CommandRefusal::NotFlying),
             OperatorCommand::Hold => {
                 let cruising = self.cruising();

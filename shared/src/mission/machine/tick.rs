@@ -23,9 +23,10 @@ impl Mission {
         self.phase_time += dt;
         // The calibrated offsets off the sample before anything reads it.
         let imu = self.config.sensors.correct(&input.imu);
-        let imu_failure = self
-            .imu_monitor
-            .check(&imu, matches!(self.phase, Phase::Flying(_)));
+        // Set down (the plan done, the weight on the ground while the landing is confirmed)
+        // counts as on the ground: the rotors spinning down shake the frame as on a lift.
+        let airborne = matches!(self.phase, Phase::Flying(p) if p != FlightPhase::Done);
+        let imu_failure = self.imu_monitor.check(&imu, airborne);
         let started = !matches!(self.phase, Phase::Idle | Phase::Disarmed | Phase::Aborted);
         if let Some(failure) = imu_failure
             && started
