@@ -1,51 +1,21 @@
-//! ESC pulses for ESCs without DShot: the protocol choice and the pulse width of a
-//! command fraction. PWM: 1000 us (stop) to 2000 us (full) at 400 Hz; OneShot125: 125 us to
+//! ESC pulses for ESCs without DShot: the pulse width of a command fraction for each
+//! protocol ([`EscProtocol`], `shared`'s). PWM: 1000 us (stop) to 2000 us (full) at 400 Hz; OneShot125: 125 us to
 //! 250 us, one pulse per control step. The board's timers turn the width into compare counts.
 
-/// The ESC protocol on the eight FMU outputs (parameter `ESC_PROTOCOL`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum EscProtocol {
-    /// DShot600, digital (see [`crate::dshot`]); the default.
-    Dshot600,
-    /// Standard PWM: 1000-2000 us pulses at 400 Hz.
-    Pwm,
-    /// OneShot125: 125-250 us pulses, one per control step.
-    OneShot125,
-    /// DroneCAN ESCs on the CAN bus (see [`crate::dronecan::esc_bus`]): the outputs' timers
-    /// send nothing, their lines held low.
-    DroneCan,
-}
+pub use shared::mission::esc_protocol::{EscProtocol, UnknownProtocol};
 
-/// A protocol number that names no protocol.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct UnknownProtocol(pub i32);
-
-impl core::fmt::Display for UnknownProtocol {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(
-            f,
-            "ESC protocol {} is unknown (0 DShot600, 1 PWM, 2 OneShot125, 3 DroneCAN)",
-            self.0
-        )
-    }
-}
-
-impl EscProtocol {
-    /// The protocol a parameter value names: 0 DShot600, 1 PWM, 2 OneShot125, 3 DroneCAN.
-    pub fn from_param(value: i32) -> Result<Self, UnknownProtocol> {
-        match value {
-            0 => Ok(Self::Dshot600),
-            1 => Ok(Self::Pwm),
-            2 => Ok(Self::OneShot125),
-            3 => Ok(Self::DroneCan),
-            other => Err(UnknownProtocol(other)),
-        }
-    }
-
+/// The pulses a protocol puts on the FMU outputs.
+pub trait Pulses {
     /// The pulse width (ns) for a command fraction in `[0, 1]`: the stop width at or below
-    /// zero, for a non-finite fraction, and always 0 (no pulse: the line held low) for DShot and
-    /// DroneCAN, which send frames instead.
-    pub fn pulse_ns(self, fraction: f32) -> u32 {
+    /// zero, for a non-finite fraction, and always 0 (no pulse: the line held low) for DShot
+    /// and DroneCAN, which send frames instead.
+    fn pulse_ns(self, fraction: f32) -> u32;
+    /// Pulses per second the outputs run at, for a control step of `tick_hz`.
+    fn update_hz(self, tick_hz: u32) -> u32;
+}
+
+impl Pulses for EscProtocol {
+    fn pulse_ns(self, fraction: f32) -> u32 {
         let (stop, span) = match self {
             Self::Dshot600 | Self::DroneCan => return 0,
             Self::Pwm => (1_000_000, 1_000_000),
@@ -57,8 +27,7 @@ impl EscProtocol {
         stop + shared::math::round(fraction.min(1.0) * span as f32) as u32
     }
 
-    /// Pulses per second the outputs run at, for a control step of `tick_hz`.
-    pub fn update_hz(self, tick_hz: u32) -> u32 {
+    fn update_hz(self, tick_hz: u32) -> u32 {
         match self {
             Self::Dshot600 | Self::OneShot125 | Self::DroneCan => tick_hz,
             Self::Pwm => tick_hz.min(400),
@@ -83,23 +52,12 @@ pub fn duty_of(pulse_ns: u32, period_ns: u32, max_duty: u32) -> u32 {
     duty.min(u64::from(max_duty)) as u32
 }
 
-/// Period of the PWM and OneShot125 outputs at [`EscProtocol::update_hz`] 400 Hz, ns.
+/// Period of the PWM and OneShot125 outputs at [`Pulses::update_hz`] 400 Hz, ns.
 pub const PERIOD_400HZ_NS: u32 = 2_500_000;
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn parameter_values_name_the_protocols_and_others_are_refused() {
-        assert_eq!(EscProtocol::from_param(0), Ok(EscProtocol::Dshot600));
-        assert_eq!(EscProtocol::from_param(1), Ok(EscProtocol::Pwm));
-        assert_eq!(EscProtocol::from_param(2), Ok(EscProtocol::OneShot125));
-        assert_eq!(EscProtocol::from_param(3), Ok(EscProtocol::DroneCan));
-        let err = EscProtocol::from_param(7).unwrap_err();
-        assert_eq!(err, UnknownProtocol(7));
-        assert!(std::format!("{err}").starts_with("ESC protocol 7"));
-    }
 
     #[test]
     fn pulse_widths_span_the_protocols_ranges() {

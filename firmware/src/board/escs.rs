@@ -28,7 +28,7 @@ use core::sync::atomic::{AtomicBool, AtomicU8, AtomicUsize, Ordering::Relaxed};
 use drivers::dshot::{self, BitTiming, SLOTS};
 use drivers::dshot_telemetry::{self as answer, Answer};
 use drivers::esc_gate::{EscCommand, EscGate};
-use drivers::pulse::{self, EscProtocol, PERIOD_400HZ_NS};
+use drivers::pulse::{self, EscProtocol, PERIOD_400HZ_NS, Pulses};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::typelevel::Binding;
 use embassy_stm32::interrupt::{InterruptExt, Priority};

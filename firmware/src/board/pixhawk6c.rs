@@ -109,7 +109,7 @@ impl Outputs {
             Ok(map) => self.thrust_map = map,
             Err(e) => refuse(format_args!("{e}; the previous map stays")),
         }
-        match EscProtocol::from_param(i32::from(settings.esc_protocol)) {
+        match EscProtocol::from_value(i32::from(settings.esc_protocol)) {
             Ok(p) => self.protocol = p,
             Err(e) => refuse(format_args!("{e}")),
         }

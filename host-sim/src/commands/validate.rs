@@ -7,6 +7,7 @@ use clap::Args;
 use serde_json::json;
 use shared::mission::HardwareConfig;
 use shared::mission::drives::{self, BoardDrives};
+use shared::mission::esc_protocol::{Choices, EscProtocol};
 
 use crate::cli::{Common, Outcome};
 use crate::report::print_json;
@@ -32,12 +33,11 @@ pub struct ValidateArgs {
 
 /// An `ESC_PROTOCOL` value by number.
 fn parse_esc_protocol(text: &str) -> Result<u8, String> {
-    match text.parse::<u8>() {
-        Ok(p) if usize::from(p) < drives::ESC_PROTOCOLS => Ok(p),
-        _ => Err(format!(
-            "`{text}` is no ESC_PROTOCOL: 0 DShot600, 1 PWM, 2 OneShot125, 3 DroneCAN"
-        )),
-    }
+    text.parse::<i32>()
+        .ok()
+        .and_then(|n| EscProtocol::from_value(n).ok())
+        .map(EscProtocol::value)
+        .ok_or_else(|| format!("`{text}` is no ESC_PROTOCOL: {Choices}"))
 }
 
 /// A board by name ([`drives::BOARDS`]).

@@ -5,21 +5,17 @@
 
 use crate::scenario::MAX_ROBOTS;
 
-/// ESC protocols, by `ESC_PROTOCOL`'s value (0 DShot600, 1 PWM, 2 OneShot125, 3 DroneCAN).
-pub const ESC_PROTOCOLS: usize = 4;
+use crate::mission::esc_protocol::EscProtocol;
+
+/// ESC protocols ([`EscProtocol::ALL`]).
+pub const ESC_PROTOCOLS: usize = EscProtocol::ALL.len();
 
 /// `ESC_PROTOCOL`'s value for DroneCAN ESCs on the CAN bus.
-pub const ESC_PROTOCOL_DRONECAN: u8 = 3;
+pub const ESC_PROTOCOL_DRONECAN: u8 = EscProtocol::DroneCan.value();
 
-/// An ESC protocol's name for people, from `ESC_PROTOCOL`'s value.
+/// An ESC protocol's name for people, from `ESC_PROTOCOL`'s value ("unknown" for none).
 pub fn esc_protocol_name(value: u8) -> &'static str {
-    match value {
-        0 => "DShot600",
-        1 => "PWM",
-        2 => "OneShot125",
-        3 => "DroneCAN",
-        _ => "unknown",
-    }
+    EscProtocol::from_value(i32::from(value)).map_or("unknown", EscProtocol::name)
 }
 
 /// What one board drives.

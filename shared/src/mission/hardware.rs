@@ -4,13 +4,15 @@
 //! replaces them without a new image; the mission itself does not use them.
 
 use crate::manual::rc_map::RcMap;
+use crate::mission::esc_protocol::{EscProtocol, UnknownProtocol};
 use crate::rail::stepper::DriveConfig;
 
 /// The hardware settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HardwareConfig {
-    /// ESC protocol: 0 DShot600, 1 PWM (1000-2000 us), 2 OneShot125 on the FMU outputs;
-    /// 3 DroneCAN ESCs on the CAN bus (docs/hardware.md#can-escs).
+    /// ESC protocol, [`EscProtocol::value`]: 0 DShot600, 1 PWM (1000-2000 us), 2 OneShot125 on
+    /// the FMU outputs; 3 DroneCAN ESCs on the CAN bus (docs/hardware.md#can-escs). The
+    /// parameter's number; [`Self::esc`] is the type.
     pub esc_protocol: u8,
     /// This flight controller's DroneCAN node ID (`UAVCAN_NODE_ID`, PX4's name and default 1).
     pub can_node_id: u8,
@@ -46,6 +48,11 @@ pub struct HardwareConfig {
 }
 
 impl HardwareConfig {
+    /// The ESC protocol `esc_protocol` names.
+    pub fn esc(&self) -> Result<EscProtocol, UnknownProtocol> {
+        EscProtocol::from_value(i32::from(self.esc_protocol))
+    }
+
     /// DShot600, the square law, 200-step motors at 16 microsteps on a 20 mm pinion, 0.8 A
     /// through 0.11 ohm sense resistors (the common TMC2209 boards), stall detection off, motor tests allowed, no ESC telemetry, 14-pole motors.
     pub const DEFAULT: Self = Self {

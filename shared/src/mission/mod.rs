@@ -14,6 +14,7 @@
 pub mod bringup;
 pub mod config;
 pub mod drives;
+pub mod esc_protocol;
 pub mod hardware;
 pub mod interface;
 pub mod jobs;

@@ -179,8 +179,7 @@ impl Mission {
             &thrusts[..n],
             EscTelemetry {
                 rpm: input.esc_rpm.as_ref().map(|r| &r[..n]),
-                rpm_per_message: self.config.hardware.esc_protocol
-                    == crate::mission::drives::ESC_PROTOCOL_DRONECAN,
+                rpm_per_message: self.config.hardware.esc().is_ok_and(|p| p.on_can_bus()),
                 stopped: reported,
             },
             imu_trusted,

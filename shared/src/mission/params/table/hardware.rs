@@ -9,7 +9,7 @@ pub(super) const DRIVERS: &[ParamSpec] = &[
         whole "ESC_PROTOCOL",
         "-",
         0.0,
-        3.0,
+        (crate::mission::esc_protocol::EscProtocol::ALL.len() - 1) as f32,
         "ESC protocol: 0 DShot600, 1 PWM, 2 OneShot125 on the FMU outputs; 3 DroneCAN ESCs on CAN1 (taken while disarmed)",
         |c| c.hardware.esc_protocol
     ),
