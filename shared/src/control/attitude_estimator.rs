@@ -46,7 +46,8 @@ pub struct AttitudeEstimatorGains {
     pub bias_limit: f32,
     /// The accelerometer corrects only while `| |f| - g |` is below this fraction of `g`.
     pub accel_trust_band: f32,
-    /// The gyro bias is learnt only while the body turns slower than this, rad/s.
+    /// After the initial seconds, the gyro bias is learnt only while the body turns slower
+    /// than this, rad/s.
     pub bias_spin_limit: f32,
 }
 
@@ -200,13 +201,16 @@ impl AttitudeEstimator {
             correction += measured_down.cross(estimated_down) * self.gains.accel_p;
         }
         let rate = gyro - self.state.gyro_bias;
-        let bias_i = if self.running < self.gains.initial_bias_time {
+        // The first seconds learn whatever the gyro reads (its offset may exceed the spin
+        // limit before it is learnt); after them, slowly and only while turning slowly.
+        let initial = self.running < self.gains.initial_bias_time;
+        let bias_i = if initial {
             self.running += dt;
             self.gains.initial_bias_i
         } else {
             self.gains.bias_i
         };
-        if rate.norm() < self.gains.bias_spin_limit {
+        if initial || rate.norm() < self.gains.bias_spin_limit {
             let bias_step = -correction * (bias_i * dt);
             let limit = Vec3::splat(self.gains.bias_limit);
             self.state.gyro_bias = (self.state.gyro_bias + bias_step).clamp_each(limit);
@@ -372,6 +376,23 @@ mod tests {
             }
         }
         assert!(high - low < 1e-3, "moved {} rad", high - low);
+    }
+
+    /// A gyro whose offset is above the spin limit (0.3 rad/s, within the firmware's
+    /// calibration's 0.35): the first seconds learn it anyway, and the estimate holds level.
+    #[test]
+    fn an_offset_above_the_spin_limit_is_learnt_at_rest() {
+        let bias = Vec3::new(0.3, -0.2, 0.1);
+        let mut est = AttitudeEstimator::new(AttitudeEstimatorGains::default());
+        for k in 0..400 * 10 {
+            if k % 4 == 0 {
+                est.set_reference(Quat::IDENTITY, k * 2500);
+            }
+            est.update(bias, at_rest(Quat::IDENTITY), 0.0025, k * 2500);
+        }
+        let s = est.state();
+        assert!((s.gyro_bias - bias).norm() < 5e-3, "{:?}", s.gyro_bias);
+        assert!(s.attitude.rotate(Vec3::DOWN).z > 0.99999, "level");
     }
 
     #[test]
