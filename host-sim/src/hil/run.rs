@@ -47,7 +47,7 @@ use crate::pilot_script::{PilotFrame, PilotScript};
 use crate::scenario_file::LoadedScenario;
 
 /// Plant steps between two `BATTERY_STATUS` (10 Hz, as PX4's battery status goes out).
-const BATTERY_EVERY: u64 = 40;
+pub const BATTERY_EVERY: u64 = 40;
 
 /// How long the firmware may take to say whether it takes a payload description.
 const PAYLOAD_TIMEOUT: Duration = Duration::from_secs(20);

@@ -648,3 +648,19 @@ fn is_payload_verdict(text: &str) -> bool {
         || text.starts_with("payload upload refused")
         || (text.starts_with("payload ") && text.contains(" accepted"))
 }
+
+/// The pack's voltage as the firmware's control step reads it after `BATTERY_STATUS` carried
+/// it (`link::vehicle::battery_status`: whole millivolts, cut; `battery_volts` back to volts;
+/// the link service's millivolts, cut again; volts in the step): what the in-process vehicle
+/// is given, so that `mission` and `hil` agree to the bit.
+pub fn carried_volts(volts: f32) -> f32 {
+    let mv = volts * 1000.0;
+    let sent = if mv.is_nan() {
+        0
+    } else {
+        mv.min(65_534.0) as u16
+    };
+    let received = f32::from(sent) * 1e-3;
+    let held = (received * 1000.0) as u32;
+    held as f32 * 1e-3
+}

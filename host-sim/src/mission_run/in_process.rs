@@ -13,6 +13,8 @@ use shared::scenario::Scenario;
 
 use super::{Adaptation, Autopilot, Commanded, Event, FlightSample, MissionSetup, Sensed, fly};
 use crate::flight_log::LogFile;
+use crate::hil::run::BATTERY_EVERY;
+use crate::hil::session::carried_volts;
 
 /// `shared`'s mission in this process: the tick side and the planner, each job run in line
 /// and taken at its deadline tick, as the firmware takes it.
@@ -34,6 +36,10 @@ pub struct InProcess {
     config: MissionConfig,
     /// The sticks steered the payload at the last tick.
     steered: bool,
+    /// Steps taken, and the pack's voltage as the firmware holds it between two of the HIL
+    /// plant's `BATTERY_STATUS` (sent every [`BATTERY_EVERY`] steps from the first).
+    steps: u64,
+    battery_volts: Option<f32>,
 }
 
 impl InProcess {
@@ -51,6 +57,8 @@ impl InProcess {
             log: None,
             config,
             steered: false,
+            steps: 0,
+            battery_volts: None,
         })
     }
 
@@ -62,6 +70,10 @@ impl InProcess {
 
 impl Autopilot for InProcess {
     fn step(&mut self, sensed: &Sensed) -> Result<Commanded> {
+        if self.steps.is_multiple_of(BATTERY_EVERY) {
+            self.battery_volts = Some(carried_volts(sensed.battery_volts));
+        }
+        self.steps += 1;
         let input = TickInput {
             time_us: sensed.time_us,
             imu: sensed.imu,
@@ -71,7 +83,7 @@ impl Autopilot for InProcess {
             esc_rpm: sensed.esc_rpm,
             supervision: Supervision {
                 gcs_heartbeat: sensed.gcs_heartbeat,
-                battery_volts: Some(sensed.battery_volts),
+                battery_volts: self.battery_volts,
             },
             manual: crate::pilot_script::samples(sensed.pilot.as_ref(), &self.config),
         };
