@@ -1,6 +1,6 @@
-//! What an ESC protocol is (docs/hardware.md#escs): the one type every crate uses for the
-//! `ESC_PROTOCOL` parameter's choices. Its values, names and the parameter's range derive from
-//! [`EscProtocol::ALL`]; how many rotors a board drives with each is
+//! What an ESC protocol is (docs/hardware.md#robots-a-board-drives): the one type every crate
+//! uses for the `ESC_PROTOCOL` parameter's choices. Its values, names and the parameter's range
+//! derive from [`EscProtocol::ALL`]; how many rotors a board drives with each is
 //! [`super::drives::BoardDrives`]'s, the pulses on the FMU outputs `drivers::pulse`'s, the
 //! frames on the CAN bus `drivers::dronecan`'s.
 
