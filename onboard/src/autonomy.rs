@@ -503,7 +503,7 @@ impl Autonomy {
                 Reason::LiftRead(Measurement::CouldNotLift) => {
                     report.value("lift_N", Value::Float(-1.0));
                 }
-                Reason::Converged(theta) => {
+                Reason::Converged(theta) | Reason::Settled { theta, .. } => {
                     report.value("est_x", Value::Float(theta[0]));
                     report.value("est_y", Value::Float(theta[1]));
                     report.value("est_m", Value::Float(theta[2]));

@@ -89,6 +89,7 @@ impl Figure for StepFigure<'_> {
             Status::Measuring => "measuring".to_string(),
             Status::Converged => "converged".to_string(),
             Status::NotConverged => "stopped, not converged".to_string(),
+            Status::Settled => "settled: out of lifts, spread within bounds".to_string(),
             Status::OutsideGrid(_) => "outside the grid".to_string(),
         };
         let font = ("sans-serif", 14).into_font();

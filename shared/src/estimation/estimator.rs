@@ -143,7 +143,12 @@ pub enum Status {
     /// The posterior mass near the MAP passed the threshold (after at least one lift that
     /// lifted: censored readings alone bound the payload, they never locate it).
     Converged,
-    /// `max_measurements` lifts were taken without converging.
+    /// `max_measurements` lifts were taken without passing the threshold, but the posterior
+    /// is tight enough to fly on: each axis's spread within one grid resolution or, if larger,
+    /// [`SETTLED_COM_SPREAD`] (COM) and [`SETTLED_MASS_SPREAD`] of the estimate (mass), nothing
+    /// piled up against the grid. The flight plans for the spread left ([`Estimate::spread`]).
+    Settled,
+    /// `max_measurements` lifts were taken without converging or settling.
     NotConverged,
     /// The readings say the payload lies outside the grid: no estimate can be trusted.
     OutsideGrid(OutsideGrid),
@@ -198,6 +203,19 @@ pub const BEYOND_EDGE_LN_RATIO: f32 = 4.6;
 /// convergence then): twenty times. Axes the lifts barely observe (the narrow plate's COM y)
 /// put a few times the grid's mass just beyond it by noise alone, with the truth inside.
 pub const PILED_UP_LN_RATIO: f32 = 3.0;
+
+/// The standard deviation of either COM axis, m, that an estimate which ran out of lifts may
+/// have and still be flown on a grid finer than it ([`Status::Settled`]): a fine grid's
+/// 3 x 3 x 3 block can be narrower than lifts resolve within their noise. Twice the spread
+/// left, times the payload's weight, is then the roll or pitch torque the formation must hold
+/// besides the disturbance ([`crate::mission::jobs::design_torque`]).
+pub const SETTLED_COM_SPREAD: f32 = 0.025;
+
+/// The standard deviation of the mass, as a share of the estimated mass, that an estimate
+/// which ran out of lifts may have and still be flown on a grid finer than it
+/// ([`Status::Settled`]): the take-off's feed-forward 15 % off at worst, which its
+/// integrators absorb.
+pub const SETTLED_MASS_SPREAD: f32 = 0.15;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct GroupGeometry {
@@ -415,8 +433,8 @@ impl Estimator {
     }
 
     /// Bayes update with the reading of group `group`; returns the new status. Once the
-    /// status is [`Status::OutsideGrid`], [`Status::NotConverged`] or [`Status::Converged`]
-    /// further readings are refused ([`EstimationError::Finished`]).
+    /// status is [`Status::OutsideGrid`], [`Status::NotConverged`], [`Status::Settled`] or
+    /// [`Status::Converged`] further readings are refused ([`EstimationError::Finished`]).
     pub fn update(
         &mut self,
         group: usize,
@@ -431,7 +449,10 @@ impl Estimator {
             .groups
             .get(group)
             .ok_or(EstimationError::UnknownGroup(group))?;
-        if matches!(self.status(), Status::OutsideGrid(_) | Status::NotConverged) {
+        if matches!(
+            self.status(),
+            Status::OutsideGrid(_) | Status::NotConverged | Status::Settled
+        ) {
             return Err(EstimationError::Finished);
         }
         let cell = CellModel {
@@ -516,18 +537,34 @@ impl Estimator {
     /// Where the estimation stands: outside the grid once the readings say so; converged once
     /// the mass near the MAP exceeds the threshold, after at least one lift that lifted and
     /// with the posterior not piled up against an edge of the grid
-    /// ([`PILED_UP_LN_RATIO`]); not converged once
-    /// `max_measurements` lifts were taken without it.
+    /// ([`PILED_UP_LN_RATIO`]); once `max_measurements` lifts were taken without it, settled
+    /// when the posterior is tight enough to fly on, not converged otherwise.
     pub fn status(&self) -> Status {
         if let GridVerdict::Outside(why) = self.outside {
             Status::OutsideGrid(why)
         } else if self.lifted > 0 && !self.piled_up && self.summary.mass_near_map > self.threshold {
             Status::Converged
         } else if self.measurements >= self.max_measurements {
-            Status::NotConverged
+            if self.lifted > 0 && !self.piled_up && self.is_tight() {
+                Status::Settled
+            } else {
+                Status::NotConverged
+            }
         } else {
             Status::Measuring
         }
+    }
+
+    /// Whether the posterior's spread is tight enough to fly on: each COM axis within one
+    /// grid resolution or [`SETTLED_COM_SPREAD`], whichever is larger, and the mass within
+    /// one resolution or [`SETTLED_MASS_SPREAD`] of the estimated mass.
+    fn is_tight(&self) -> bool {
+        let [x, y, m] = self.summary.spread;
+        let res = self.grid.resolution();
+        let mass = self.summary.local_mean[2];
+        x <= math::max(res[0], SETTLED_COM_SPREAD)
+            && y <= math::max(res[1], SETTLED_COM_SPREAD)
+            && m <= math::max(res[2], SETTLED_MASS_SPREAD * mass)
     }
 
     /// The current estimate.

@@ -14,7 +14,7 @@ use heapless::Vec;
 
 use crate::control::allocation::MixerKind;
 use crate::estimation::groups::lift_group;
-use crate::estimation::{Estimate, Estimator, Measurement};
+use crate::estimation::{Estimate, Estimator, Measurement, Status};
 use crate::flight::FlightModel;
 use crate::formation::{FormationProblem, solve};
 use crate::geometry::{ConvexHull, Rail, Vec2};
@@ -342,7 +342,9 @@ impl MissionPlanner {
             .map_err(AbortReason::Uncontrollable)?;
         let weight = (heaviest + r.count() as f32 * r.mass) * GRAVITY;
         let available = model.mixer.authority(weight).to_array();
-        let needed = design_torque(&self.scenario, weight).to_array();
+        let e = self.estimator.estimate();
+        let needed =
+            design_torque(&self.scenario, weight, com_error(&self.scenario, &e)).to_array();
         for axis in 0..3 {
             if available[axis] < needed[axis] {
                 return Err(AbortReason::FormationTooWeak {
@@ -377,17 +379,37 @@ impl MissionPlanner {
 /// within 10 % of its model; the campaign's plants spread theirs by up to 8 %).
 pub const THRUST_SPREAD: f32 = 0.1;
 
+/// How far the payload's COM may lie from `estimate` on each axis (x, y), m, for the design
+/// torque: half a grid cell when the stopping rule passed (it leaves the truth within the
+/// MAP's cell), twice the posterior's spread when the lifts ran out and the estimate settled
+/// (docs/models.md#grid-posterior-and-stopping-rule).
+pub fn com_error(scenario: &Scenario, estimate: &Estimate) -> [f32; 2] {
+    let res = scenario.estimation.resolution;
+    let half = [0.5 * res[0], 0.5 * res[1]];
+    if estimate.status == Status::Settled {
+        [
+            math::max(half[0], 2.0 * estimate.spread[0]),
+            math::max(half[1], 2.0 * estimate.spread[1]),
+        ]
+    } else {
+        half
+    }
+}
+
 /// The torque a formation must be able to add about each body axis (roll, pitch, yaw), N m, on
 /// top of the hover of `weight`, N (docs/failures.md#refused-before-take-off): on roll and
 /// pitch the scenario's disturbance torque (which acts on those axes) and the torque of a COM
-/// half a grid cell from the estimate (the stopping rule leaves the truth within the MAP's
-/// cell); on yaw the drag torque of the rotors of one spin all [`THRUST_SPREAD`] strong.
-pub fn design_torque(scenario: &Scenario, weight: f32) -> crate::control::vector::Vec3 {
+/// `com_error` (x, y, m: [`com_error`]) from the estimate; on yaw the drag torque of the rotors
+/// of one spin all [`THRUST_SPREAD`] strong.
+pub fn design_torque(
+    scenario: &Scenario,
+    weight: f32,
+    com_error: [f32; 2],
+) -> crate::control::vector::Vec3 {
     let disturbance = scenario.flight.map_or(0.0, |f| f.disturbance_torque);
-    let res = scenario.estimation.resolution;
     crate::control::vector::Vec3::new(
-        disturbance + 0.5 * weight * res[1],
-        disturbance + 0.5 * weight * res[0],
+        disturbance + weight * com_error[1],
+        disturbance + weight * com_error[0],
         THRUST_SPREAD * 0.5 * weight * scenario.robots.torque_per_thrust,
     )
 }

@@ -8,6 +8,7 @@ use crate::control::trajectory::FlightPhase;
 use crate::estimation::estimator::OutsideGrid;
 use crate::estimation::{EstimationError, Measurement};
 use crate::formation::FormationError;
+use crate::math;
 use crate::numbers::{Fixed, Sci};
 use crate::rail::moves::MoveError;
 
@@ -296,6 +297,14 @@ pub enum Reason {
     NeedMoreLifts,
     /// The posterior is concentrated enough: [COM x, COM y, mass].
     Converged([f32; 3]),
+    /// The lifts ran out with the posterior tight enough to fly on (not past the threshold):
+    /// the estimate [COM x, COM y, mass] and its spread on each axis.
+    Settled {
+        /// The estimate: COM x, COM y (m), mass (kg).
+        theta: [f32; 3],
+        /// Its standard deviation on each axis.
+        spread: [f32; 3],
+    },
     /// The flight formation was chosen; its `det(B B^T)`.
     FormationChosen(f32),
     /// The flight's model and mixer are built.
@@ -338,6 +347,15 @@ impl core::fmt::Display for Reason {
                 Fixed(t[0], 3),
                 Fixed(t[1], 3),
                 Fixed(t[2], 2)
+            ),
+            Self::Settled { theta, spread } => write!(
+                f,
+                "estimate COM ({}, {}) m, mass {} kg, settled at +-{} m, +-{} kg: the lifts cannot narrow it",
+                Fixed(theta[0], 3),
+                Fixed(theta[1], 3),
+                Fixed(theta[2], 2),
+                Fixed(math::max(spread[0], spread[1]), 3),
+                Fixed(spread[2], 2)
             ),
             Self::FormationChosen(det) => write!(f, "formation det(BB^T) {}", Sci(det, 3)),
             Self::FlightReady => write!(f, "mixer built"),

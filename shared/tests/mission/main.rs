@@ -268,6 +268,34 @@ fn estimation_that_does_not_converge_never_flies() {
 }
 
 #[test]
+fn an_estimate_that_ran_out_of_lifts_tight_flies_and_says_it_settled() {
+    // A threshold no posterior passes: after the allowed lifts the posterior is tight, so the
+    // mission decides the formation on it, saying so, and flies.
+    let mut s = straight_up_scenario(3.5);
+    s.estimation.max_measurements = 8;
+    s.estimation.threshold = 1.0;
+    let mut world = World::new(&s);
+    let r = run(&s, &mut world, &[]);
+    assert_eq!(r.mission.abort_reason(), None);
+    assert_eq!(r.mission.measurements(), 8);
+    let settled = r
+        .transitions
+        .iter()
+        .find_map(|(_, reason, to)| match reason {
+            Reason::Settled { spread, .. } => Some((*spread, *to)),
+            _ => None,
+        })
+        .expect("a settled estimate");
+    assert_eq!(settled.1, Phase::DecidingFormation);
+    assert!(
+        r.transitions
+            .iter()
+            .any(|(_, reason, _)| matches!(reason, Reason::Armed)),
+        "armed"
+    );
+}
+
+#[test]
 fn a_thin_thrust_margin_never_flies() {
     let s = straight_up_scenario(3.5);
     let mut world = World::new(&s);

@@ -326,3 +326,40 @@ fn bad_input_is_an_error_not_a_panic() {
         Err(EstimationError::Grid(_))
     ));
 }
+
+/// Runs noiseless lifts of `scenario`'s truth until the estimation ends; its estimate.
+fn lift_until_done(scenario: &Scenario) -> Estimate {
+    let mut e = Estimator::new(scenario, EstimatorOptions::default()).expect("estimator");
+    while e.status() == Status::Measuring {
+        let choice = e.select_group().expect("a group");
+        e.update(choice.group, true_reading(scenario, choice.group, 1.0))
+            .expect("update");
+    }
+    e.estimate()
+}
+
+#[test]
+fn out_of_lifts_a_tight_posterior_settles_and_a_loose_one_does_not_converge() {
+    // A threshold no posterior reaches: the lifts run out every time. After eight exact lifts
+    // the posterior is tight (each axis's spread within a cell): settled, the estimate within
+    // a cell of the truth. After one lift it is not: not converged.
+    let mut scenario = checked(rect_sim1());
+    scenario.estimation.threshold = 1.0;
+    scenario.estimation.max_measurements = 8;
+    let settled = lift_until_done(&scenario);
+    assert_eq!(settled.status, Status::Settled, "{settled:?}");
+    let res = scenario.estimation.resolution;
+    for (a, (spread, res)) in settled.spread.iter().zip(res).enumerate() {
+        assert!(*spread <= res, "axis {a}: {settled:?}");
+    }
+    let truth = scenario.truth.unwrap();
+    let truth = [truth.com.x, truth.com.y, truth.mass];
+    for a in 0..3 {
+        let err = (settled.theta[a] - truth[a]).abs() / scenario.estimation.resolution[a];
+        assert!(err <= 1.0, "axis {a}: {settled:?} vs {truth:?}");
+    }
+    scenario.estimation.max_measurements = 1;
+    let loose = lift_until_done(&scenario);
+    assert_eq!(loose.status, Status::NotConverged, "{loose:?}");
+    assert!((0..3).any(|a| loose.spread[a] > res[a]), "{loose:?}");
+}

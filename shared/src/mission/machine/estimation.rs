@@ -205,6 +205,19 @@ impl Mission {
                 });
                 self.enter(Phase::DecidingFormation, Reason::Converged(estimate.theta))
             }
+            Status::Settled => {
+                self.estimate = Some(estimate);
+                self.request(JobRequest::DecideFormation {
+                    robots: self.robots.clone(),
+                });
+                self.enter(
+                    Phase::DecidingFormation,
+                    Reason::Settled {
+                        theta: estimate.theta,
+                        spread: estimate.spread,
+                    },
+                )
+            }
             Status::Converged | Status::Measuring => {
                 self.request(JobRequest::SelectPair {
                     robots: self.robots.clone(),
