@@ -251,6 +251,19 @@ fn main() -> ! {
         ..layout
     };
     let long_mixer = Mixer::build(MixerKind::Allocation, &long_layout);
+    // A rotor found stopped: the step flies the interim mixer from the next tick (in the step,
+    // within the budget's room) and the full one comes from a job (off the step).
+    for (label, m) in [("8 rotors", &mixer), ("16 rotors", &long_mixer)] {
+        if let Ok(m) = m {
+            for (which, out) in [("rotor 2", 1u16 << 2), ("rotors 0 and 5", 0b10_0001)] {
+                let (n, _) = timer.instructions(|| m.interim_without(out));
+                hprintln!("mixer without {}, {}:", which, label);
+                report_against("  interim (in the step)", n, 3_000);
+                let (n, _) = timer.instructions(|| m.without(out));
+                hprintln!("  full (a job): {} instructions", n);
+            }
+        }
+    }
     rotor_monitor_ticks(
         &mut timer,
         &long_mixer,

@@ -224,6 +224,33 @@ fn product<const R: usize>(
     p
 }
 
+/// The inverse of `k` by cofactors, or `None` when `k` is singular for `f32` (its determinant
+/// below 1e-6 of the product of its rows' norms).
+fn inverse_3x3(k: &[[f32; 3]; 3]) -> Option<[[f32; 3]; 3]> {
+    let cof =
+        |r0: usize, r1: usize, c0: usize, c1: usize| k[r0][c0] * k[r1][c1] - k[r0][c1] * k[r1][c0];
+    let c = [
+        [cof(1, 2, 1, 2), -cof(1, 2, 0, 2), cof(1, 2, 0, 1)],
+        [-cof(0, 2, 1, 2), cof(0, 2, 0, 2), -cof(0, 2, 0, 1)],
+        [cof(0, 1, 1, 2), -cof(0, 1, 0, 2), cof(0, 1, 0, 1)],
+    ];
+    let det = k[0][0] * c[0][0] + k[0][1] * c[0][1] + k[0][2] * c[0][2];
+    let scale: f32 = k
+        .iter()
+        .map(|row| math::sqrt(row.iter().map(|v| v * v).sum::<f32>()))
+        .product();
+    if !det.is_finite() || math::abs(det) <= 1e-6 * scale {
+        return None;
+    }
+    let inv = 1.0 / det;
+    // The inverse is the transposed cofactors over the determinant.
+    Some([
+        [c[0][0] * inv, c[1][0] * inv, c[2][0] * inv],
+        [c[0][1] * inv, c[1][1] * inv, c[2][1] * inv],
+        [c[0][2] * inv, c[1][2] * inv, c[2][2] * inv],
+    ])
+}
+
 /// The pseudo-inverse `a^T (a a^T)^-1` of thrust, roll and pitch rows of `count` rotors, if
 /// they are independent.
 fn right_inverse(a: &Rows3, count: usize) -> Option<MixColumns<3>> {
@@ -458,6 +485,59 @@ impl Mixer {
             effectiveness: a,
             columns,
         })
+    }
+
+    /// The mixer for the ticks between a rotor found stopped and [`Self::without`]'s answer
+    /// (a matrix inverse per rotor left out, too long for the control step: the mission asks
+    /// for it as a job): this mixer's thrust, roll and pitch columns with the rotors `out`
+    /// given no share, corrected by one 3 x 3 inverse so that they make exactly the thrust,
+    /// roll and pitch asked again (`A' M0 K^-1 = I` with `K = A' M0`); yaw is not flown for
+    /// those few ticks. `Uncontrollable` when the columns left cannot make the three axes.
+    pub fn interim_without(&self, out: u16) -> Result<Self, AllocationError> {
+        let count = self.count;
+        let mut mixer = self.clone();
+        for i in (0..count).filter(|i| out & (1 << i) != 0) {
+            mixer.effectiveness.column_mut(i).fill(0.0);
+            for column in &mut mixer.columns {
+                column[i] = 0.0;
+            }
+        }
+        // K = A' M0 over thrust, roll and pitch: what the columns left make.
+        let mut k = [[0.0f32; 3]; 3];
+        for (i, col) in used_columns(&mixer.effectiveness, count).iter().enumerate() {
+            for (c, column) in mixer.columns.iter().take(3).enumerate() {
+                let share = column[i];
+                for (r, row) in k.iter_mut().enumerate() {
+                    row[c] += col[r] * share;
+                }
+            }
+        }
+        let inverse = inverse_3x3(&k).ok_or(AllocationError::Uncontrollable)?;
+        let [collective, roll, pitch, yaw] = &mut mixer.columns;
+        for i in 0..count {
+            let m0 = [collective[i], roll[i], pitch[i]];
+            let mut m = [0.0f32; 3];
+            for (c, v) in m.iter_mut().enumerate() {
+                *v = m0[0] * inverse[0][c] + m0[1] * inverse[1][c] + m0[2] * inverse[2][c];
+            }
+            [collective[i], roll[i], pitch[i]] = m;
+            yaw[i] = 0.0;
+        }
+        if !all_finite(&mixer.columns, count) {
+            return Err(AllocationError::Uncontrollable);
+        }
+        mixer.kind = MixerKind::Allocation;
+        mixer.torque_scale = torque_scale(&mixer.effectiveness, count);
+        Ok(mixer)
+    }
+
+    /// Whether `other` flies the same rotors from the same places about the same COM as this
+    /// mixer (the same effectiveness matrix, rotors left out alike): a mixer built for an
+    /// earlier layout is not taken in place of this one.
+    pub fn same_rotors(&self, other: &Self) -> bool {
+        self.count == other.count
+            && self.max_thrust == other.max_thrust
+            && self.effectiveness == other.effectiveness
     }
 
     /// The torque the mixer can add about each body axis (roll, pitch, yaw), N m, on top of a

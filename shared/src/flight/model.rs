@@ -49,14 +49,7 @@ impl FlightModel {
             return Err(AllocationError::BadLayout);
         }
         let points: Vec<Vec2, MAX_ROBOTS> = positions.iter().map(|&s| rail.point_at(s)).collect();
-        let layout = RotorLayout {
-            points: &points,
-            spin: &robots.spin,
-            com,
-            torque_per_thrust: robots.torque_per_thrust,
-            max_thrust: robots.max_thrust,
-        };
-        let mixer = Mixer::build(kind, &layout)?;
+        let mixer = mixer_at(scenario, &points, com, kind)?;
         let vehicle = VehicleModel::from_payload(
             &scenario.payload.footprint,
             com,
@@ -76,4 +69,37 @@ impl FlightModel {
             reach,
         })
     }
+}
+
+/// The mixer of `kind` for the robots of `scenario` at rail positions `positions`, about `com`
+/// (the mixer [`FlightModel::build`] builds, without the vehicle model).
+pub fn mixer_for(
+    scenario: &Scenario,
+    positions: &[f32],
+    com: Vec2,
+    kind: MixerKind,
+) -> Result<Mixer, AllocationError> {
+    if positions.len() != scenario.robots.count() {
+        return Err(AllocationError::BadLayout);
+    }
+    let rail = &scenario.payload.rail;
+    let points: Vec<Vec2, MAX_ROBOTS> = positions.iter().map(|&s| rail.point_at(s)).collect();
+    mixer_at(scenario, &points, com, kind)
+}
+
+fn mixer_at(
+    scenario: &Scenario,
+    points: &[Vec2],
+    com: Vec2,
+    kind: MixerKind,
+) -> Result<Mixer, AllocationError> {
+    let robots = &scenario.robots;
+    let layout = RotorLayout {
+        points,
+        spin: &robots.spin,
+        com,
+        torque_per_thrust: robots.torque_per_thrust,
+        max_thrust: robots.max_thrust,
+    };
+    Mixer::build(kind, &layout)
 }

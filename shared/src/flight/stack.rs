@@ -217,6 +217,9 @@ pub struct FlightStack {
     rotors_lost: heapless::Vec<RotorOut, MAX_ROTORS_OUT>,
     /// A rotor found stopped whose landing has not begun yet.
     rotor_landing: Option<u8>,
+    /// The mixer flown is the interim one ([`Mixer::interim_without`]): the full mixer
+    /// without the rotors out is wanted ([`Self::mixer_wanted`]).
+    interim_mixer: bool,
     /// Position mode: the setpoint the sticks steer and what they ask this tick.
     manual: Option<(ManualSetpoint, ManualVelocity)>,
 }
@@ -252,6 +255,7 @@ impl FlightStack {
             monitor: RotorMonitor::new(),
             rotors_lost: heapless::Vec::new(),
             rotor_landing: None,
+            interim_mixer: false,
             manual: None,
         }
     }
@@ -276,11 +280,49 @@ impl FlightStack {
         self.controller.set_model(model.vehicle);
         self.com = model.com;
         let out = self.monitor.out();
-        self.mixer = if out == 0 {
-            model.mixer
-        } else {
-            model.mixer.without(out).unwrap_or(model.mixer)
-        };
+        self.mixer = model.mixer;
+        if out != 0 {
+            self.fly_without(out);
+        }
+    }
+
+    /// Flies without rotors `out` from the next step: on the interim mixer
+    /// ([`Mixer::interim_without`]) until the full one comes ([`Self::take_mixer`]). Returns
+    /// false, the mixer left as it was, when the rotors left cannot make thrust, roll and
+    /// pitch.
+    fn fly_without(&mut self, out: u16) -> bool {
+        match self.mixer.interim_without(out) {
+            Ok(mixer) => {
+                self.mixer = mixer;
+                self.interim_mixer = true;
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    /// The rotors out, while the step flies the interim mixer without them and wants the full
+    /// one ([`Mixer::without`], a job: [`crate::mission::JobRequest::MixerWithout`]).
+    pub fn mixer_wanted(&self) -> Option<u16> {
+        self.interim_mixer.then(|| self.monitor.out())
+    }
+
+    /// Flies on with the interim mixer, wanting no other (no mixer of the rotors left makes
+    /// thrust, roll and pitch).
+    pub fn keep_interim_mixer(&mut self) {
+        self.interim_mixer = false;
+    }
+
+    /// Takes `mixer`, the full mixer without the rotors out, in place of the interim one, if
+    /// it flies the same rotors from the same places (not one built for an earlier layout);
+    /// whether it was taken.
+    pub fn take_mixer(&mut self, mixer: Mixer) -> bool {
+        let fits = self.interim_mixer && self.mixer.same_rotors(&mixer);
+        if fits {
+            self.mixer = mixer;
+            self.interim_mixer = false;
+        }
+        fits
     }
 
     /// Rotors found stopped in flight, in the order found (the first two).
@@ -293,6 +335,11 @@ impl FlightStack {
         &self.monitor
     }
 
+    /// The COM the mixer's torques are about (body frame), m.
+    pub fn com(&self) -> Vec2 {
+        self.com
+    }
+
     /// Rotors flown without, bit `i` for rotor `i`.
     pub fn rotors_out(&self) -> u16 {
         self.monitor.out()
@@ -303,7 +350,8 @@ impl FlightStack {
     /// ESCs tell, `esc` (each rotor's RPM, the rotors they report stopped). The monitor judges
     /// the vehicle's response only in the air, clear of the ground and not resting on an edge
     /// ([`LandDetector::settling`]), and the RPM in the air.
-    /// Rotors found stopped are flown without from the next tick, and the next tick begins
+    /// Rotors found stopped are flown without from the next tick (on the interim mixer until
+    /// the full one is taken, [`Self::mixer_wanted`]), and the next tick begins
     /// the landing ([`LandingCause::RotorOut`]; under a descent without position, that descent
     /// goes on). With `imu_trusted` false (the IMU failed: its samples explain nothing) only
     /// the ESCs count. Returns what this tick found, if anything.
@@ -351,13 +399,7 @@ impl FlightStack {
             .mark_out(newly, &self.mixer, &RotorMonitorConfig::DEFAULT);
         // Not even thrust, roll and pitch left: fly on with the mixer there is (the lost
         // rotor's share is lost) and land; the rotors left hold nothing level then.
-        let rebuilt = match self.mixer.without(self.monitor.out()) {
-            Ok(mixer) => {
-                self.mixer = mixer;
-                true
-            }
-            Err(_) => false,
-        };
+        let rebuilt = self.fly_without(self.monitor.out());
         let mut first = None;
         for robot in (0..n).filter(|&i| newly & (1 << i) != 0) {
             let event = RotorOut {
@@ -371,17 +413,27 @@ impl FlightStack {
         }
         self.rotor_landing = first.map(|e| e.robot);
         let out = self.monitor.out();
-        let hover = self.mixer.allocate(&Wrench {
-            thrust: vehicle.mass * GRAVITY,
-            torque: Vec3::ZERO,
-        });
         first.map(|first| RotorFinding {
             first,
             newly,
             out,
             left: (n as u32 - (out & all).count_ones()) as u8,
-            holdable: rebuilt && !hover.saturation.collective && !hover.saturation.roll_pitch,
+            // Whether the rotors left hold the hover is the full mixer's to say
+            // ([`Self::holds_level`] once [`Self::take_mixer`] took it); without a mixer
+            // of them, nothing is held level.
+            holdable: rebuilt,
         })
+    }
+
+    /// Whether the mixer flown allocates the hover (the vehicle's weight, no torque) within
+    /// every rotor's range ([`RotorFinding::holdable`]).
+    pub fn holds_level(&self) -> bool {
+        let vehicle = self.controller.model();
+        let hover = self.mixer.allocate(&Wrench {
+            thrust: vehicle.mass * GRAVITY,
+            torque: Vec3::ZERO,
+        });
+        !hover.saturation.collective && !hover.saturation.roll_pitch
     }
 
     /// Holds the hover past its planned time while `hold` is set (the plan then goes on from

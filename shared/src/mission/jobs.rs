@@ -12,10 +12,11 @@
 
 use heapless::Vec;
 
-use crate::control::allocation::MixerKind;
+use crate::control::allocation::{AllocationError, Mixer, MixerKind};
 use crate::estimation::groups::lift_group;
 use crate::estimation::{Estimate, Estimator, Measurement, Status};
 use crate::flight::FlightModel;
+use crate::flight::model::mixer_for;
 use crate::formation::{FormationProblem, solve};
 use crate::geometry::{ConvexHull, Rail, Vec2};
 use crate::math;
@@ -59,6 +60,17 @@ pub enum JobRequest {
         /// The measured COM, m.
         com: Vec2,
     },
+    /// In flight, rotors were found stopped: the mixer of the robots where they are, about
+    /// the COM flown, without those rotors ([`Mixer::without`]); the step flies the interim
+    /// mixer until it comes ([`Mixer::interim_without`]).
+    MixerWithout {
+        /// Where the robots are.
+        robots: Positions,
+        /// The COM the flight's mixer is about, m.
+        com: Vec2,
+        /// The rotors left out, bit `i` for rotor `i`.
+        out: u16,
+    },
 }
 
 /// Ticks at 400 Hz.
@@ -70,13 +82,14 @@ impl JobRequest {
     /// Ticks after the request at which the tick side takes the result. Worst cases on the
     /// Cortex-M7 (`.ci/target-bench`, instructions at 480 MHz): pair selection 1.5 M
     /// (~3.2 ms), update with the grid's guard band 2.1 M (~4.5 ms), formation 6.2 M
-    /// (~13 ms, L-sim1), mixer 3.6 k; each deadline leaves about three times that for the
-    /// control loop's share of the processor and the link.
+    /// (~13 ms, L-sim1), mixer 3.6 k, a mixer without rotors 15 k at 16 rotors; each deadline
+    /// leaves about three times that for the control loop's share of the processor and the
+    /// link.
     pub fn deadline_ticks(&self) -> u32 {
         match self {
             Self::SelectPair { .. } | Self::Update { .. } => ticks_of_ms(20),
             Self::DecideFormation { .. } | Self::Reform { .. } => ticks_of_ms(40),
-            Self::BuildFlight { .. } => ticks_of_ms(5),
+            Self::BuildFlight { .. } | Self::MixerWithout { .. } => ticks_of_ms(5),
         }
     }
 
@@ -88,6 +101,7 @@ impl JobRequest {
             Self::DecideFormation { .. } => "decide-formation",
             Self::BuildFlight { .. } => "build-flight",
             Self::Reform { .. } => "reform",
+            Self::MixerWithout { .. } => "mixer-without",
         }
     }
 }
@@ -134,6 +148,8 @@ pub enum JobResult {
     Flight(Result<FlightModel, AbortReason>),
     /// Answer to [`JobRequest::Reform`]: the new formation's positions and `det(B B^T)`.
     Reformed(Result<(Positions, f32), AbortReason>),
+    /// Answer to [`JobRequest::MixerWithout`].
+    MixerWithout(Result<Mixer, AllocationError>),
 }
 
 /// What of the mission's configuration the job side uses.
@@ -263,6 +279,10 @@ impl MissionPlanner {
             }
             JobRequest::BuildFlight { robots } => JobResult::Flight(self.build_flight(robots)),
             JobRequest::Reform { robots, com } => JobResult::Reformed(self.reform(robots, *com)),
+            JobRequest::MixerWithout { robots, com, out } => JobResult::MixerWithout(
+                mixer_for(&self.scenario, robots, *com, self.config.mixer)
+                    .and_then(|m| m.without(*out)),
+            ),
         }
     }
 

@@ -67,6 +67,9 @@ pub use estimation::{SET_DOWN_CUT_TILT, SET_DOWN_TIME};
 struct PendingJob {
     due: u64,
     result: Option<JobResult>,
+    /// A mixer without rotors found stopped ([`JobRequest::MixerWithout`]): the flight takes
+    /// it, not the estimation or the adaptation.
+    mixer: bool,
 }
 
 /// The tick side of the mission.
@@ -97,6 +100,9 @@ pub struct Mission {
     flight: Option<FlightStack>,
     adapter: Option<Adapter>,
     adaptation: Option<AdaptEvent>,
+    /// Rotors found stopped, said once the full mixer without them flies (whether the rotors
+    /// left hold the hover is that mixer's to tell).
+    rotors_notice: Option<Notice>,
     abort: Option<AbortReason>,
     imu_monitor: ImuMonitor,
     imu_detection: Option<ImuDetection>,
@@ -180,6 +186,7 @@ impl Mission {
             flight: None,
             adapter: None,
             adaptation: None,
+            rotors_notice: None,
             abort: None,
             imu_monitor: ImuMonitor::new(),
             imu_detection: None,
@@ -238,6 +245,7 @@ impl Mission {
         self.flight = None;
         self.adapter = None;
         self.adaptation = None;
+        self.rotors_notice = None;
         self.abort = None;
         self.imu_detection = None;
         self.navigator.restore_imu();
@@ -404,6 +412,7 @@ impl Mission {
         self.pending = Some(PendingJob {
             due: self.tick + u64::from(job.deadline_ticks()),
             result: None,
+            mixer: matches!(job, JobRequest::MixerWithout { .. }),
         });
         self.outgoing = Some(job);
     }

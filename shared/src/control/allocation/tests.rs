@@ -320,3 +320,37 @@ fn the_authority_at_hover_is_the_largest_torque_each_axis_takes_within_the_rotor
     // At full thrust nothing is left.
     assert_eq!(m.authority(8.0 * 14.2), Vec3::ZERO);
 }
+
+#[test]
+fn the_interim_mixer_without_a_rotor_gives_it_nothing_and_keeps_the_thrust() {
+    let m = mixer(MixerKind::Allocation, Vec2::new(0.12, 0.01));
+    for out in [0b100u16, 0b1000_0001] {
+        let interim = m.interim_without(out).expect("rotors left");
+        let full = m.without(out).expect("rotors left");
+        // The full mixer comes for the same rotors, and is recognised as such.
+        assert!(interim.same_rotors(&full), "{out:#b}");
+        assert!(!m.same_rotors(&full), "{out:#b}: the mixer before differs");
+        let w = Wrench {
+            thrust: 38.0,
+            torque: Vec3::new(0.2, -0.1, 0.0),
+        };
+        let a = interim.allocate(&w);
+        for i in (0..8).filter(|i| out & (1 << i) != 0) {
+            assert_eq!(a.thrusts[i], 0.0, "{out:#b}: rotor {i}");
+        }
+        // The thrust, roll and pitch asked, exactly; no yaw until the full mixer comes.
+        assert!(
+            (a.achieved.thrust - w.thrust).abs() < 0.01
+                && (a.achieved.torque.x - w.torque.x).abs() < 0.01
+                && (a.achieved.torque.y - w.torque.y).abs() < 0.01,
+            "{out:#b}: {:?}",
+            a.achieved
+        );
+        assert!(!interim.flies_yaw());
+    }
+    // No rotor left with a share of the collective: nothing to fly.
+    assert_eq!(
+        m.interim_without(0xff),
+        Err(AllocationError::Uncontrollable)
+    );
+}

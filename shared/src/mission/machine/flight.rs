@@ -14,6 +14,7 @@ use crate::flight::{
 use crate::geometry::Vec2;
 use crate::mission::jobs::{JobRequest, JobResult};
 use crate::mission::phases::{AbortReason, Phase, Reason, Transition};
+use crate::mission::supervision::Notice;
 use crate::scenario::MAX_ROBOTS;
 
 impl Mission {
@@ -97,6 +98,7 @@ impl Mission {
         thrusts: &mut [f32; MAX_ROBOTS],
         cascade: &mut Option<CascadeSetpoints>,
     ) -> Option<Transition> {
+        self.fly_full_mixer();
         let flight = self.flight.as_mut()?;
         if let Some(item) = self.jump.take() {
             flight.follow_route(nav.position.position, &self.route, usize::from(item));
@@ -169,6 +171,56 @@ impl Mission {
         Some(self.enter(to, reason))
     }
 
+    /// After rotors were found stopped: takes the full mixer without them at its job's tick
+    /// (the step flew the interim one until then), says what was found and whether the rotors
+    /// left hold the hover, and asks again while the flight still wants a mixer (a result
+    /// missing or built for an earlier layout).
+    fn fly_full_mixer(&mut self) {
+        let Some(flight) = self.flight.as_mut() else {
+            return;
+        };
+        if self
+            .pending
+            .as_ref()
+            .is_some_and(|p| p.mixer && self.tick >= p.due)
+        {
+            let held = match self.pending.take().and_then(|p| p.result) {
+                Some(JobResult::MixerWithout(Ok(mixer))) => {
+                    flight.take_mixer(mixer).then(|| flight.holds_level())
+                }
+                // The rotors left cannot make thrust, roll and pitch: fly on with the interim
+                // mixer and land; nothing is held level.
+                Some(JobResult::MixerWithout(Err(_))) => {
+                    flight.keep_interim_mixer();
+                    Some(false)
+                }
+                _ => None,
+            };
+            if let Some(held) = held
+                && let Some(mut notice) = self.rotors_notice.take()
+            {
+                if let Notice::RotorsOut { holdable, .. } = &mut notice {
+                    *holdable = held;
+                }
+                // Out with the next tick's (this one's notice was taken at its start).
+                if self.notices.is_full() {
+                    self.notices.pop_front();
+                }
+                let _ = self.notices.push_back(notice);
+            }
+        }
+        if self.pending.is_none()
+            && let Some(out) = flight.mixer_wanted()
+        {
+            let job = JobRequest::MixerWithout {
+                robots: self.robots.clone(),
+                com: flight.com(),
+                out,
+            };
+            self.request(job);
+        }
+    }
+
     /// The in-flight adaptation after this tick's flight step: measure in the hover, ask for a
     /// new formation when the load has shifted, take it at its deadline, move the robots and
     /// fly every tick with the mixer of where they are.
@@ -191,7 +243,7 @@ impl Mission {
                     event = Some(AdaptEvent::GaveUp);
                 }
             }
-        } else if self.pending.is_some() {
+        } else if self.pending.as_ref().is_some_and(|p| !p.mixer) {
             let taken = match &mut self.pending {
                 Some(p) if self.tick >= p.due => {
                     let result = p.result.take();
@@ -212,7 +264,7 @@ impl Mission {
                     self.scenario.robots.min_spacing,
                 ));
             }
-        } else if flight.airborne() && flight.landing_cause().is_none() {
+        } else if self.pending.is_none() && flight.airborne() && flight.landing_cause().is_none() {
             let phase = flight.phase();
             let cruising = matches!(phase, FlightPhase::Transit | FlightPhase::Hover);
             if cruising {
@@ -227,6 +279,7 @@ impl Mission {
                         self.pending = Some(PendingJob {
                             due: self.tick + u64::from(job.deadline_ticks()),
                             result: None,
+                            mixer: false,
                         });
                         self.outgoing = Some(job);
                     }

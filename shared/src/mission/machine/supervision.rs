@@ -8,6 +8,7 @@ use super::Mission;
 use crate::control::navigator::NavState;
 use crate::flight::EscTelemetry;
 use crate::mission::interface::TickInput;
+use crate::mission::jobs::JobRequest;
 use crate::mission::phases::{AbortReason, Phase, Transition};
 use crate::mission::supervision::{
     BatteryLevel, FenceAction, GcsLossAction, LinkChange, LinkResponse, Notice,
@@ -189,12 +190,26 @@ impl Mission {
             adapter.give_up();
         }
         self.pending = None;
-        Some(Notice::RotorsOut {
+        self.outgoing = None;
+        let notice = Notice::RotorsOut {
             newly: found.newly,
             earlier: found.out & !found.newly,
             left: found.left,
             holdable: found.holdable,
-        })
+        };
+        // The full mixer without them is a job; said once it flies (it tells whether the
+        // rotors left hold the hover). Without any mixer of them, said now.
+        let Some(out) = flight.mixer_wanted() else {
+            return Some(notice);
+        };
+        let com = flight.com();
+        self.rotors_notice = Some(notice);
+        self.request(JobRequest::MixerWithout {
+            robots: self.robots.clone(),
+            com,
+            out,
+        });
+        None
     }
 
     /// Raises the rotors' thrusts for a pack that sags below the thrust map's
