@@ -11,7 +11,7 @@ use link::MessageData;
 use link::command::{CommandWire, MotorTestRequest, OperatorCommand, command_long};
 use link::frame::{Encoder, Frame};
 use link::ftp::{FtpMessage, Opcode, PAYLOAD_PATH, Progress, Server, Upload};
-use link::hil::{ImuSample, MocapFix};
+use link::hil::{ImuSample, MocapFix, PlantSample, mocap_message};
 use link::msg::{
     ATT_POS_MOCAP_DATA, COMMAND_LONG_DATA, HEARTBEAT_DATA, MANUAL_CONTROL_DATA,
     MISSION_REQUEST_LIST_DATA, MavEstimatorType, MavFrame, MavParamType, ODOMETRY_DATA,
@@ -20,6 +20,7 @@ use link::msg::{
 };
 use link::signing::Signing;
 use link::vehicle::crc_extra;
+use shared::control::vector::{Quat, Vec3};
 use shared::scenario_wire::{MAX_ENCODED_LEN, encode_scenario};
 
 use crate::vehicle::{Options, SEED_KEY, SEED_KEY_TIMESTAMP, TICK_US};
@@ -119,18 +120,20 @@ impl Ground {
     pub fn hil_steps(&mut self, start_us: u64, n: u64) -> &mut Self {
         for i in 0..n {
             let time_us = start_us + i * TICK_US;
-            let imu = ImuSample {
+            let imu = PlantSample {
                 time_us,
-                gyro: [0.0, 0.0, crate::rest_noise(time_us)],
-                accel: [0.0, 0.0, -shared::scenario::GRAVITY],
+                imu: ImuSample {
+                    gyro: Vec3::new(0.0, 0.0, crate::rest_noise(time_us)),
+                    accel: Vec3::new(0.0, 0.0, -shared::scenario::GRAVITY),
+                },
             };
             self.send(&imu.to_message());
             let fix = MocapFix {
                 stamp_us: time_us,
-                position: [0.0; 3],
-                attitude: [1.0, 0.0, 0.0, 0.0],
+                position: Vec3::ZERO,
+                attitude: Quat::IDENTITY,
             };
-            self.send(&fix.to_message());
+            self.send(&mocap_message(&fix));
         }
         self
     }
@@ -317,7 +320,7 @@ pub fn link_inputs() -> Vec<(String, Vec<u8>)> {
         ),
         ("timesync-request", one(&TIMESYNC_DATA { tc1: 0, ts1: 42 })),
         ("timesync-answer", one(&TIMESYNC_DATA { tc1: 5, ts1: 0 })),
-        ("hil-sensor", one(&ImuSample::default().to_message())),
+        ("hil-sensor", one(&PlantSample::AT_REST.to_message())),
         (
             "att-pos-mocap",
             one(&ATT_POS_MOCAP_DATA {

@@ -7,8 +7,9 @@
 use link::command::ack;
 use link::hil::{ImuSample, MAX_ROBOTS, MocapFix};
 use link::status::{MissionState, PHASE_PREFIX};
-use onboard::autonomy::{CommandResult, ImuReading, Severity, TickInput, TickOutput};
+use onboard::autonomy::{CommandResult, Severity, TickInput, TickOutput};
 use onboard::link_service::mav_result;
+use shared::control::vector::{Quat, Vec3};
 use shared::mission::{HardwareFaults, Supervision};
 
 use crate::vehicle::{TICK_US, Vehicle};
@@ -54,24 +55,23 @@ impl Vehicle {
         if self.options.mocap {
             self.io.mocap = Some(MocapFix {
                 stamp_us: self.io.now_us,
-                position: [0.0; 3],
-                attitude: [1.0, 0.0, 0.0, 0.0],
+                position: Vec3::ZERO,
+                attitude: Quat::IDENTITY,
             });
         }
         let imu = ImuSample {
-            time_us: self.io.now_us,
             // A real sensor never repeats itself: the mission's IMU monitor stops on one that
             // does (shared::control::imu_monitor), so the driver's rest has a little noise.
-            gyro: [0.0, 0.0, crate::rest_noise(self.driver_steps)],
-            accel: [0.0, 0.0, -shared::scenario::GRAVITY],
+            gyro: Vec3::new(0.0, 0.0, crate::rest_noise(self.driver_steps)),
+            accel: Vec3::new(0.0, 0.0, -shared::scenario::GRAVITY),
         };
-        self.control_step(imu, false);
+        self.control_step(self.io.now_us, imu, false);
         self.heartbeat_due();
     }
 
     /// control.rs: one step of the autonomy on an IMU sample.
-    pub(crate) fn control_step(&mut self, imu: ImuSample, hil: bool) {
-        let Ok(step) = self.clock.on_sensor(imu.time_us) else {
+    pub(crate) fn control_step(&mut self, time_us: u64, imu: ImuSample, hil: bool) {
+        let Ok(step) = self.clock.on_sensor(time_us) else {
             self.report_text(Severity::Error, "sensor refused");
             return;
         };
@@ -103,10 +103,7 @@ impl Vehicle {
         let input = TickInput {
             time_us: step.time_us,
             step: step.index,
-            imu: ImuReading {
-                gyro: imu.gyro,
-                accel: imu.accel,
-            },
+            imu,
             mocap: self.io.mocap.take(),
             command: pending.map(|p| p.command),
             faults: if hil {

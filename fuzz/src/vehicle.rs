@@ -293,7 +293,7 @@ impl Vehicle {
     pub(crate) fn other_tasks(&mut self) {
         // The control task: a step on each sample the plant sent.
         while let Some(sample) = self.io.sensors.pop_front() {
-            self.control_step(sample.imu, sample.hil);
+            self.control_step(sample.time_us, sample.imu, sample.hil);
         }
         // The receive task's poll after each read: an upload's timeout, a calibration's
         // offsets to store.

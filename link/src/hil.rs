@@ -33,8 +33,8 @@ use crate::msg::{
     HilActuatorControlsFlags, HilSensorUpdatedFlags, MavModeFlag,
 };
 
-/// Most robots the link carries (as `shared::scenario::MAX_ROBOTS`).
-pub const MAX_ROBOTS: usize = 16;
+/// Most robots the link carries: every robot the software takes.
+pub use shared::scenario::MAX_ROBOTS;
 /// Robots that fit `HIL_ACTUATOR_CONTROLS` alone.
 pub const ROBOTS_IN_CONTROLS: usize = 8;
 
@@ -90,15 +90,16 @@ impl core::fmt::Display for HilError {
     }
 }
 
-/// One IMU sample from the plant.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ImuSample {
+pub use shared::control::navigator::{ImuSample, MocapFix};
+use shared::control::vector::{Quat, Vec3};
+
+/// One IMU sample from the plant (`HIL_SENSOR`): the sample and the plant's time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlantSample {
     /// Simulated time, us.
     pub time_us: u64,
-    /// Body rates (FRD), rad/s.
-    pub gyro: [f32; 3],
-    /// Specific force (FRD), m/s^2; `[0, 0, -9.81]` at rest.
-    pub accel: [f32; 3],
+    /// The sample (body FRD).
+    pub imu: ImuSample,
 }
 
 fn accel_gyro_bits() -> HilSensorUpdatedFlags {
@@ -110,17 +111,27 @@ fn accel_gyro_bits() -> HilSensorUpdatedFlags {
         | HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_ZGYRO
 }
 
-impl ImuSample {
+impl PlantSample {
+    /// A level vehicle at rest at time 0: no rotation, gravity's specific force.
+    pub const AT_REST: Self = Self {
+        time_us: 0,
+        imu: ImuSample {
+            gyro: Vec3::ZERO,
+            accel: Vec3::new(0.0, 0.0, -9.81),
+        },
+    };
+
     /// As `HIL_SENSOR` (IMU 0, accelerometer and gyro updated).
     pub fn to_message(&self) -> HIL_SENSOR_DATA {
+        let (g, a) = (self.imu.gyro, self.imu.accel);
         HIL_SENSOR_DATA {
             time_usec: self.time_us,
-            xacc: self.accel[0],
-            yacc: self.accel[1],
-            zacc: self.accel[2],
-            xgyro: self.gyro[0],
-            ygyro: self.gyro[1],
-            zgyro: self.gyro[2],
+            xacc: a.x,
+            yacc: a.y,
+            zacc: a.z,
+            xgyro: g.x,
+            ygyro: g.y,
+            zgyro: g.z,
             fields_updated: accel_gyro_bits(),
             // The extension field `id` (IMU 0) is zero, which MAVLink 2 leaves out anyway.
             ..Default::default()
@@ -146,49 +157,52 @@ impl ImuSample {
         }
         Ok(Self {
             time_us: m.time_usec,
-            gyro,
-            accel,
+            imu: ImuSample {
+                gyro: Vec3::new(gyro[0], gyro[1], gyro[2]),
+                accel: Vec3::new(accel[0], accel[1], accel[2]),
+            },
         })
     }
 }
 
-/// One motion-capture fix.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct MocapFix {
-    /// When it was taken (simulated time), us.
-    pub stamp_us: u64,
-    /// Position, NED, m.
-    pub position: [f32; 3],
-    /// Attitude quaternion (w, x, y, z), body FRD to NED.
-    pub attitude: [f32; 4],
+/// `fix` as `ATT_POS_MOCAP`.
+pub fn mocap_message(fix: &MocapFix) -> ATT_POS_MOCAP_DATA {
+    let (p, q) = (fix.position, fix.attitude);
+    ATT_POS_MOCAP_DATA {
+        time_usec: fix.stamp_us,
+        q: [q.w, q.x, q.y, q.z],
+        x: p.x,
+        y: p.y,
+        z: p.z,
+    }
 }
 
-impl MocapFix {
-    /// As `ATT_POS_MOCAP`.
-    pub fn to_message(&self) -> ATT_POS_MOCAP_DATA {
-        ATT_POS_MOCAP_DATA {
-            time_usec: self.stamp_us,
-            q: self.attitude,
-            x: self.position[0],
-            y: self.position[1],
-            z: self.position[2],
-        }
+/// A fix from position `position` (NED, m), attitude `q` (w, x, y, z, body FRD to NED) and
+/// time `stamp_us`, checked (every number finite); `message` names the message for the error.
+pub fn mocap_fix_of(
+    position: [f32; 3],
+    q: [f32; 4],
+    stamp_us: u64,
+    message: &'static str,
+) -> Result<MocapFix, HilError> {
+    if position.iter().chain(&q).any(|v| !v.is_finite()) {
+        return Err(HilError::NotFinite { message });
     }
+    Ok(MocapFix {
+        position: Vec3::new(position[0], position[1], position[2]),
+        attitude: Quat {
+            w: q[0],
+            x: q[1],
+            y: q[2],
+            z: q[3],
+        },
+        stamp_us,
+    })
+}
 
-    /// From `ATT_POS_MOCAP`, checked.
-    pub fn from_message(m: &ATT_POS_MOCAP_DATA) -> Result<Self, HilError> {
-        let position = [m.x, m.y, m.z];
-        if position.iter().chain(&m.q).any(|v| !v.is_finite()) {
-            return Err(HilError::NotFinite {
-                message: "ATT_POS_MOCAP",
-            });
-        }
-        Ok(Self {
-            stamp_us: m.time_usec,
-            position,
-            attitude: m.q,
-        })
-    }
+/// A fix from `ATT_POS_MOCAP`, checked.
+pub fn mocap_from_message(m: &ATT_POS_MOCAP_DATA) -> Result<MocapFix, HilError> {
+    mocap_fix_of([m.x, m.y, m.z], m.q, m.time_usec, "ATT_POS_MOCAP")
 }
 
 /// The vehicle's actuator commands of one control step.
@@ -566,34 +580,44 @@ mod tests {
 
     #[test]
     fn sensor_messages_round_trip_and_bad_ones_are_named() {
-        let s = ImuSample {
+        let s = PlantSample {
             time_us: 42,
-            gyro: [0.1, -0.2, 0.3],
-            accel: [0.0, 0.0, -9.81],
+            imu: ImuSample {
+                gyro: Vec3::new(0.1, -0.2, 0.3),
+                accel: Vec3::new(0.0, 0.0, -9.81),
+            },
         };
-        assert_eq!(ImuSample::from_message(&s.to_message(), 0), Ok(s));
+        assert_eq!(PlantSample::from_message(&s.to_message(), 0), Ok(s));
         let mut m = s.to_message();
         m.fields_updated = HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_XACC;
         assert!(matches!(
-            ImuSample::from_message(&m, 0),
+            PlantSample::from_message(&m, 0),
             Err(HilError::SensorFieldsMissing { .. })
         ));
         let mut m = s.to_message();
         m.zgyro = f32::NAN;
         assert!(matches!(
-            ImuSample::from_message(&m, 0),
+            PlantSample::from_message(&m, 0),
             Err(HilError::NotFinite { .. })
         ));
         assert_eq!(
-            ImuSample::from_message(&s.to_message(), 1),
+            PlantSample::from_message(&s.to_message(), 1),
             Err(HilError::OtherSensor { id: 1 })
         );
         let fix = MocapFix {
             stamp_us: 10_000,
-            position: [1.0, 2.0, -0.5],
-            attitude: [1.0, 0.0, 0.0, 0.0],
+            position: Vec3::new(1.0, 2.0, -0.5),
+            attitude: Quat::IDENTITY,
         };
-        assert_eq!(MocapFix::from_message(&fix.to_message()), Ok(fix));
+        assert_eq!(mocap_from_message(&mocap_message(&fix)), Ok(fix));
+        let mut bad = mocap_message(&fix);
+        bad.q[2] = f32::NAN;
+        assert!(matches!(
+            mocap_from_message(&bad),
+            Err(HilError::NotFinite {
+                message: "ATT_POS_MOCAP"
+            })
+        ));
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! vehicle does not use (0.6 KiB of the firmware's flash); this reads the same wire layout at
 //! fixed offsets, checked against the crate's encoding in the tests.
 
-use crate::hil::{HilError, MocapFix};
+use crate::hil::{HilError, MocapFix, mocap_fix_of};
 use crate::msg::{MavEstimatorType, MavFrame, ODOMETRY_DATA};
 
 /// Bytes of the base fields.
@@ -40,18 +40,9 @@ pub fn mocap_fix(payload: &[u8]) -> Result<Option<MocapFix>, HilError> {
         f32_at(ATTITUDE + 8),
         f32_at(ATTITUDE + 12),
     ];
-    if position.iter().chain(&attitude).any(|v| !v.is_finite()) {
-        return Err(HilError::NotFinite {
-            message: "ODOMETRY",
-        });
-    }
     let mut stamp = [0u8; 8];
     stamp.copy_from_slice(&bytes[TIME_USEC..TIME_USEC + 8]);
-    Ok(Some(MocapFix {
-        stamp_us: u64::from_le_bytes(stamp),
-        position,
-        attitude,
-    }))
+    mocap_fix_of(position, attitude, u64::from_le_bytes(stamp), "ODOMETRY").map(Some)
 }
 
 #[cfg(test)]
@@ -91,8 +82,9 @@ mod tests {
                 .expect("valid")
                 .expect("motion capture");
             assert_eq!(fix.stamp_us, m.time_usec);
-            assert_eq!(fix.position, [m.x, m.y, m.z]);
-            assert_eq!(fix.attitude, m.q);
+            let (p, q) = (fix.position, fix.attitude);
+            assert_eq!([p.x, p.y, p.z], [m.x, m.y, m.z]);
+            assert_eq!([q.w, q.x, q.y, q.z], m.q);
         }
     }
 

@@ -13,7 +13,7 @@ use crate::command::{Request, classify};
 use crate::command_wire::{CommandId, CommandInt, CommandLong};
 use crate::frame::{Frame, Integrity};
 use crate::ftp::{FtpMessage, PAYLOAD_LEN};
-use crate::hil::{HilError, ImuSample, MocapFix};
+use crate::hil::{HilError, MocapFix, PlantSample, mocap_from_message};
 use crate::log_transfer::LogRequest;
 use crate::mission::wire::MissionMessage;
 use crate::msg::{
@@ -58,7 +58,7 @@ pub struct Sender {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Inbound {
     /// `HIL_SENSOR`: a control step in lockstep.
-    Sensor(ImuSample),
+    Sensor(PlantSample),
     /// A motion-capture fix: `ATT_POS_MOCAP`, or `ODOMETRY` from motion capture, stamped
     /// with the sender's clock.
     Mocap(MocapFix),
@@ -197,17 +197,19 @@ pub fn dispatch(frame: &Frame, integrity: Integrity) -> Inbound {
                 .get(HIL_SENSOR_DATA::ENCODED_LEN)
                 .copied()
                 .unwrap_or(0);
-            match ImuSample::from_message(&m, sensor_id) {
+            match PlantSample::from_message(&m, sensor_id) {
                 Ok(s) => Inbound::Sensor(s),
                 Err(e) => Inbound::Invalid(e),
             }
         }),
-        ATT_POS_MOCAP_DATA::ID => frame.decode::<ATT_POS_MOCAP_DATA>().map_or(ignored, |m| {
-            match MocapFix::from_message(&m) {
-                Ok(f) => Inbound::Mocap(f),
-                Err(e) => Inbound::Invalid(e),
-            }
-        }),
+        ATT_POS_MOCAP_DATA::ID => {
+            frame
+                .decode::<ATT_POS_MOCAP_DATA>()
+                .map_or(ignored, |m| match mocap_from_message(&m) {
+                    Ok(f) => Inbound::Mocap(f),
+                    Err(e) => Inbound::Invalid(e),
+                })
+        }
         COMMAND_LONG_DATA::ID => match frame.decode::<CommandLong>() {
             Some(c) if for_us(c.target_system, c.target_component) => Inbound::Command {
                 command: CommandId(c.command),

@@ -23,7 +23,7 @@ use flight_log::stream::{LogRing, NoRing};
 use flight_log::ulog::LogLevel;
 use heapless::Vec;
 pub use link::command::OperatorCommand;
-pub use link::hil::{MAX_ROBOTS, MocapFix};
+pub use link::hil::{ImuSample, MAX_ROBOTS, MocapFix};
 use link::mission::wire::MissionProgress;
 use link::modes::FlightMode;
 use link::msg::MavLandedState;
@@ -31,9 +31,7 @@ pub use link::status::MissionState;
 use link::status::Text;
 use link::telemetry::RouteStatus;
 use link::telemetry::VehicleSnapshot;
-use shared::control::navigator::{ImuSample, MocapFix as Fix};
 use shared::control::trajectory::FlightPhase;
-use shared::control::vector::{Quat, Vec3};
 use shared::estimation::Measurement;
 use shared::flight::Route;
 use shared::manual::ManualSamples;
@@ -47,15 +45,6 @@ use shared::mission::{
 use shared::numbers::Fixed;
 use shared::scenario::Scenario;
 
-/// One IMU sample, body frame (FRD).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ImuReading {
-    /// Body rates, rad/s.
-    pub gyro: [f32; 3],
-    /// Specific force, m/s^2 (`[0, 0, -9.81]` at rest).
-    pub accel: [f32; 3],
-}
-
 /// What one control step gets.
 #[derive(Clone, Debug)]
 pub struct TickInput<'a> {
@@ -64,7 +53,7 @@ pub struct TickInput<'a> {
     /// Control steps before this one.
     pub step: u64,
     /// The IMU sample of this step.
-    pub imu: ImuReading,
+    pub imu: ImuSample,
     /// A motion-capture fix received since the last step (NED; stamped when taken).
     pub mocap: Option<MocapFix>,
     /// An operator command received since the last step.
@@ -287,15 +276,6 @@ fn level(severity: Severity) -> LogLevel {
     }
 }
 
-fn fix(f: &MocapFix) -> Fix {
-    let [w, x, y, z] = f.attitude;
-    Fix {
-        position: Vec3::new(f.position[0], f.position[1], f.position[2]),
-        attitude: Quat { w, x, y, z },
-        stamp_us: f.stamp_us,
-    }
-}
-
 impl Autonomy {
     /// Idle, no payload description, built at run time (see [`Mission::unloaded`]).
     pub fn new() -> Self {
@@ -451,11 +431,8 @@ impl Autonomy {
         let command = input.command.filter(|_| !held_back);
         let mission_input = MissionInput {
             time_us: input.time_us,
-            imu: ImuSample {
-                gyro: Vec3::new(input.imu.gyro[0], input.imu.gyro[1], input.imu.gyro[2]),
-                accel: Vec3::new(input.imu.accel[0], input.imu.accel[1], input.imu.accel[2]),
-            },
-            mocap: input.mocap.as_ref().map(fix),
+            imu: input.imu,
+            mocap: input.mocap,
             command,
             faults: input.faults,
             esc_rpm: input.esc_rpm,

@@ -22,7 +22,7 @@ use host_sim::hil::transport::Link;
 use host_sim::inject::Injection;
 use host_sim::mission_run::{self, MissionSetup};
 use host_sim::scenario_file;
-use link::hil::ImuSample;
+use link::hil::PlantSample;
 use link::msg::{MavCmd, MavResult};
 use link::status::MissionState;
 use shared::scenario_wire::{MAX_ENCODED_LEN, encode};
@@ -212,11 +212,7 @@ fn a_bad_payload_is_refused_naming_its_key_and_the_start_denied() {
     session
         .send_command(link::command::OperatorCommand::Start)
         .expect("sent");
-    let at_rest = ImuSample {
-        time_us: 0,
-        gyro: [0.0; 3],
-        accel: [0.0, 0.0, -9.81],
-    };
+    let at_rest = PlantSample::AT_REST;
     session
         .step(&at_rest, &[], 8, Duration::from_secs(10))
         .unwrap_or_else(|e| panic!("{e:#}: {}", qemu.output()));
@@ -241,11 +237,7 @@ fn a_stalled_firmware_is_a_clear_lockstep_error() {
     let _slot = qemu_slot();
     let (qemu, mut session) = qemu_session(&elf);
     session.identify(Duration::from_secs(20)).expect("board");
-    let mut sample = ImuSample {
-        time_us: 0,
-        gyro: [0.0; 3],
-        accel: [0.0, 0.0, -9.81],
-    };
+    let mut sample = PlantSample::AT_REST;
     for _ in 0..20 {
         session
             .step(&sample, &[], 8, Duration::from_secs(10))

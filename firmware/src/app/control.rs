@@ -65,7 +65,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             log_ring.wait_for_room().await;
         }
         let start = <Selected as Board>::cycle_count();
-        let step = match clock.on_sensor(sample.imu.time_us) {
+        let step = match clock.on_sensor(sample.time_us) {
             Ok(step) => step,
             Err(e) => {
                 let mut out = idle_output();
@@ -125,7 +125,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             let input = TickInput {
                 time_us: step.time_us,
                 step: step.index,
-                imu: sample.reading(),
+                imu: sample.imu,
                 mocap: MOCAP.try_take(),
                 command: pending.map(|p| p.command),
                 faults: if sample.hil {

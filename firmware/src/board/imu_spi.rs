@@ -23,6 +23,7 @@ use embassy_stm32::spi::Spi;
 use embassy_stm32::spi::mode::Master;
 use embassy_time::{Duration, Instant, Ticker, Timer};
 use link::hil::ImuSample;
+use shared::control::vector::Vec3;
 
 use crate::app::autonomy::Severity;
 use crate::app::comms::{SensorSample, report};
@@ -145,11 +146,13 @@ pub async fn imu(mut bus: ImuBus) {
                 // On a fault the step still runs (on the last sample): the mission sees the
                 // fault and lands, and the watchdog stays fed.
                 if let Some(tick) = front.latest() {
+                    let [gx, gy, gz] = tick.gyro;
+                    let [ax, ay, az] = tick.accel;
                     let sample = SensorSample {
+                        time_us: Instant::now().as_micros(),
                         imu: ImuSample {
-                            time_us: Instant::now().as_micros(),
-                            gyro: tick.gyro,
-                            accel: tick.accel,
+                            gyro: Vec3::new(gx, gy, gz),
+                            accel: Vec3::new(ax, ay, az),
                         },
                         hil: false,
                     };

@@ -255,7 +255,7 @@ mod tests {
         // Ground to firmware: a HIL_SENSOR (dropped) then a heartbeat (passed).
         let mut gcs = Encoder::new(255, 190);
         let mut sensor = Frame::default();
-        gcs.encode(&link::hil::ImuSample::default().to_message(), &mut sensor);
+        gcs.encode(&link::hil::PlantSample::AT_REST.to_message(), &mut sensor);
         let mut beat = Frame::default();
         gcs.encode(&link::msg::HEARTBEAT_DATA::default(), &mut beat);
         let mut datagram = sensor.bytes().to_vec();

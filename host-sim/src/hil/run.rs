@@ -29,7 +29,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Result, bail};
 use link::command::CommandWire;
-use link::hil::{ImuSample, MocapFix};
+use link::hil::PlantSample;
 use link::msg::{MavCmd, MavResult, MavSeverity};
 use link::status::{MissionState, PHASE_PREFIX};
 use shared::mission::OperatorCommand;
@@ -373,24 +373,16 @@ impl Autopilot for Firmware {
             }
             self.session.send_command(command)?;
         }
-        let fixes: Vec<MocapFix> = sensed
-            .mocap
-            .iter()
-            .map(|f| MocapFix {
-                stamp_us: f.stamp_us,
-                position: [f.position.x, f.position.y, f.position.z],
-                attitude: [f.attitude.w, f.attitude.x, f.attitude.y, f.attitude.z],
-            })
-            .collect();
-        let (g, a) = (sensed.imu.gyro, sensed.imu.accel);
-        let sample = ImuSample {
+        let sample = PlantSample {
             time_us: sensed.time_us,
-            gyro: [g.x, g.y, g.z],
-            accel: [a.x, a.y, a.z],
+            imu: sensed.imu,
         };
-        let reply = self
-            .session
-            .step(&sample, &fixes, self.robots, self.reply_timeout)?;
+        let reply = self.session.step(
+            &sample,
+            sensed.mocap.as_slice(),
+            self.robots,
+            self.reply_timeout,
+        )?;
         let accepted = match self.awaited.take() {
             Some(awaited) => Some((awaited, self.check_accepted(awaited)?)),
             None => None,

@@ -16,7 +16,7 @@ use link::MessageData;
 use link::command::{CommandWire, OperatorCommand, command_long};
 use link::frame::{Frame, Integrity};
 use link::ftp::{FtpMessage, PAYLOAD_PATH, Progress, Upload};
-use link::hil::{Actuators, ImuSample, MocapFix, Reply, ReplyMatcher};
+use link::hil::{Actuators, MocapFix, PlantSample, Reply, ReplyMatcher, mocap_message};
 use link::msg::{
     ACTUATOR_OUTPUT_STATUS_DATA, AUTOPILOT_VERSION_DATA, COMMAND_ACK_DATA,
     FILE_TRANSFER_PROTOCOL_DATA, HEARTBEAT_DATA, HIL_ACTUATOR_CONTROLS_DATA, MavCmd, MavResult,
@@ -546,14 +546,14 @@ impl Session {
     /// most `timeout`) for the `HIL_ACTUATOR_CONTROLS` stamped with the sample's time.
     pub fn step(
         &mut self,
-        imu: &ImuSample,
+        imu: &PlantSample,
         fixes: &[MocapFix],
         robots: usize,
         timeout: Duration,
     ) -> Result<Actuators> {
         // One write: one Ethernet frame for the step's input.
         for fix in fixes {
-            self.link.batch(&fix.to_message());
+            self.link.batch(&mocap_message(fix));
         }
         self.link.batch(&imu.to_message());
         self.link.send_batch()?;
@@ -576,7 +576,7 @@ impl Session {
             let now = Instant::now();
             if rebooting && now >= resend_at && now < end {
                 for fix in fixes {
-                    self.link.batch(&fix.to_message());
+                    self.link.batch(&mocap_message(fix));
                 }
                 self.link.batch(&imu.to_message());
                 self.link.send_batch()?;

@@ -253,8 +253,8 @@ fn time_sync_and_motion_capture_odometry_reach_the_vehicle() {
         got,
         Some(Inbound::Mocap(MocapFix {
             stamp_us: 77,
-            position: [1.0, 0.0, 0.0],
-            attitude: [1.0, 0.0, 0.0, 0.0],
+            position: shared::control::vector::Vec3::new(1.0, 0.0, 0.0),
+            attitude: shared::control::vector::Quat::IDENTITY,
         }))
     );
 }
@@ -262,10 +262,9 @@ fn time_sync_and_motion_capture_odometry_reach_the_vehicle() {
 #[test]
 #[allow(deprecated)] // SET_GPS_GLOBAL_ORIGIN's fields
 fn each_service_gets_its_messages() {
-    let s = ImuSample {
+    let s = PlantSample {
         time_us: 2500,
-        gyro: [0.0; 3],
-        accel: [0.0, 0.0, -9.81],
+        ..PlantSample::AT_REST
     };
     assert_eq!(through_the_wire(&s.to_message()), Inbound::Sensor(s));
     let start = command_long(MavCmd::MAV_CMD_MISSION_START, 0.0, 0.0);
@@ -506,13 +505,13 @@ fn commands_for_other_vehicles_and_bad_sensor_data_are_not_acted_on() {
     let mut start = command_long(MavCmd::MAV_CMD_MISSION_START, 0.0, 0.0);
     start.target_system = 42;
     assert!(matches!(through_the_wire(&start), Inbound::Ignored { .. }));
-    let mut bad = ImuSample::default().to_message();
+    let mut bad = PlantSample::AT_REST.to_message();
     bad.xacc = f32::INFINITY;
     assert!(matches!(through_the_wire(&bad), Inbound::Invalid(_)));
     // A second IMU (extension field id = 1) is not the one the vehicle steps on.
     let mut enc = Encoder::new(crate::PLANT_SYSTEM_ID, crate::PLANT_COMPONENT_ID);
     let mut f = Frame::default();
-    enc.encode_extended(&ImuSample::default().to_message(), &[1], &mut f);
+    enc.encode_extended(&PlantSample::AT_REST.to_message(), &[1], &mut f);
     let mut p = Parser::new(crc_extra);
     let got = f
         .bytes()

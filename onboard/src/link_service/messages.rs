@@ -15,25 +15,17 @@ use link::vehicle::Sender;
 use shared::scenario::Scenario;
 use shared::scenario_wire::MAX_NAME_LEN;
 
-use crate::autonomy::{CommandResult, ImuReading, OperatorCommand, Report, Severity};
+use crate::autonomy::{CommandResult, OperatorCommand, Report, Severity};
 
 /// An IMU sample for the control task.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SensorSample {
-    /// The sample, stamped with the vehicle's time.
+    /// The vehicle's time of the sample, us (in HIL the plant's).
+    pub time_us: u64,
+    /// The sample.
     pub imu: ImuSample,
     /// It came from the HIL plant (the step's reply goes back to it).
     pub hil: bool,
-}
-
-impl SensorSample {
-    /// The sample as the autonomy takes it.
-    pub fn reading(&self) -> ImuReading {
-        ImuReading {
-            gyro: self.imu.gyro,
-            accel: self.imu.accel,
-        }
-    }
 }
 
 /// An operator command waiting for the autonomy, with what its acknowledgement needs.

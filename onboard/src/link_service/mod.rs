@@ -142,8 +142,13 @@ impl<F: NorFlash> LinkService<F> {
     /// One frame's handling.
     pub async fn handle(&mut self, inbound: Inbound, verdict: Verdict, io: &mut impl VehiclePorts) {
         match inbound {
-            Inbound::Sensor(imu) => {
-                if !io.sensor(SensorSample { imu, hil: true }) {
+            Inbound::Sensor(sample) => {
+                let sample = SensorSample {
+                    time_us: sample.time_us,
+                    imu: sample.imu,
+                    hil: true,
+                };
+                if !io.sensor(sample) {
                     io.reply(report(
                         Severity::Warning,
                         format_args!("HIL_SENSOR dropped: the control step is behind"),
