@@ -213,35 +213,40 @@ impl LiftoffDetector {
         let direction = tilt_vector.normalized();
         // Walk back from the newest sample, projecting as it goes and smoothing with a
         // trailing moving average kept as a running sum over the window: only the samples
-        // since the tilt rose are touched (this runs inside a control tick).
-        let mut older = self
-            .history
+        // since the tilt rose are touched (this runs inside a control tick). The window is a
+        // ring of SMOOTHING slots, its newest sample at `head`.
+        let (front, back) = self.history.as_slices();
+        let mut older = back
             .iter()
             .rev()
+            .chain(front.iter().rev())
             .map(|&(t, v)| (t, v.dot(direction)));
-        // Samples i, i - 1, ..., i - SMOOTHING + 1: the window of the smoothed value at i.
-        let mut window: heapless::Deque<(f32, f32), SMOOTHING> = heapless::Deque::new();
+        let mut window = [(0.0f32, 0.0f32); SMOOTHING];
+        let (mut head, mut len) = (0usize, 0usize);
         let mut sum = 0.0f32;
         for sample in older.by_ref().take(SMOOTHING) {
             sum += sample.1;
-            // At most SMOOTHING samples were taken.
-            let _ = window.push_back(sample);
+            window[len] = sample;
+            len += 1;
         }
         let floor = self.config.onset_fraction * self.config.tilt_threshold;
         let t2 = self.clock;
-        let tilt2 = sum / math::max(window.len() as f32, 1.0);
+        let tilt2 = sum / math::max(len as f32, 1.0);
         let mut first = (t2, tilt2);
-        while let Some(&(t_i, raw_i)) = window.front() {
-            let smoothed = sum / window.len() as f32;
+        while len > 0 {
+            let (t_i, raw_i) = window[head];
+            let smoothed = sum / len as f32;
             if smoothed <= floor {
                 break;
             }
             first = (t_i, smoothed);
-            let _ = window.pop_front();
+            head = (head + 1) % SMOOTHING;
+            len -= 1;
             sum -= raw_i;
             if let Some(sample) = older.next() {
                 sum += sample.1;
-                let _ = window.push_back(sample);
+                window[(head + len) % SMOOTHING] = sample;
+                len += 1;
             }
         }
         // Cubic growth through (t1, tilt1) and (t2, tilt2): the onset t0.
