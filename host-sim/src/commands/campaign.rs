@@ -180,7 +180,11 @@ fn write_output(
         ),
     };
     let mut written = canvas::write(dir, "campaign-outcomes", &figure);
-    for r in results.iter().filter(|r| r.outcome != "delivered") {
+    // Each trial not delivered, and each fault missed (delivered on a fault never found).
+    for r in results
+        .iter()
+        .filter(|r| r.outcome != "delivered" || r.fault_found == Some(false))
+    {
         let path = dir.join(format!("trial-{}.toml", r.trial));
         let text = campaign::trial_file(setup, r.trial)?;
         std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
