@@ -7,7 +7,7 @@
 use link::command::ack;
 use link::hil::{ImuSample, MAX_ROBOTS, MocapFix};
 use link::status::{MissionState, PHASE_PREFIX};
-use onboard::autonomy::{CommandResult, Severity, TickInput, TickOutput};
+use onboard::autonomy::{CommandResult, Severity, StepInput, StepOutput, TickInput};
 use onboard::link_service::mav_result;
 use shared::control::vector::{Quat, Vec3};
 use shared::mission::{HardwareFaults, Supervision};
@@ -100,9 +100,8 @@ impl Vehicle {
         }
         let pending = self.io.commands.pop_front();
         let route = self.io.routes.pop_front();
-        let input = TickInput {
+        let tick = TickInput {
             time_us: step.time_us,
-            step: step.index,
             imu,
             mocap: self.io.mocap.take(),
             command: pending.map(|p| p.command),
@@ -111,22 +110,11 @@ impl Vehicle {
             } else {
                 self.faults()
             },
-            // The job task runs each load to the end before the next frame here.
-            loading: false,
-            route: route.as_ref(),
             // The plant's RPM in HIL; no ESC telemetry off HIL (no board here).
             esc_rpm: if hil {
                 self.io.esc_rpm.rpm_at(step.time_us)
             } else {
                 None
-            },
-            // The parameters' IMU offsets and hardware settings, as the firmware's control
-            // task hands them over after a change.
-            // (Not in a step that loads a payload: the settings go in the next.)
-            bench: if loads_payload {
-                None
-            } else {
-                core::mem::take(&mut self.io.config_changed).then(|| (&self.io.config).into())
             },
             supervision: Supervision {
                 gcs_heartbeat: core::mem::take(&mut self.io.gcs_heartbeat),
@@ -141,6 +129,21 @@ impl Vehicle {
             manual: shared::manual::ManualSamples {
                 rc: None,
                 joystick: self.io.manual.take(),
+            },
+        };
+        let input = StepInput {
+            tick,
+            step: step.index,
+            // The job task runs each load to the end before the next frame here.
+            loading: false,
+            route: route.as_ref(),
+            // The parameters' IMU offsets and hardware settings, as the firmware's control
+            // task hands them over after a change.
+            // (Not in a step that loads a payload: the settings go in the next.)
+            bench: if loads_payload {
+                None
+            } else {
+                core::mem::take(&mut self.io.config_changed).then(|| (&self.io.config).into())
             },
         };
         let mut out = self.autonomy.tick(&input);
@@ -211,7 +214,7 @@ impl Vehicle {
         }
     }
 
-    fn check_output(&self, out: &TickOutput) {
+    fn check_output(&self, out: &StepOutput) {
         assert!(out.robots <= MAX_ROBOTS);
         for j in 0..MAX_ROBOTS {
             let (t, r) = (out.thrust[j], out.rail[j]);

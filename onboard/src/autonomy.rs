@@ -1,11 +1,11 @@
 //! The one seam between the firmware and the autonomy: the
 //! mission of `shared`, exactly the code the simulator flies.
 //!
-//! The control task calls [`Autonomy::tick`] once per IMU sample (400 Hz) with a [`TickInput`]
-//! and applies the [`TickOutput`]: rotor thrusts and rail positions to the actuators (or, in
+//! The control task calls [`Autonomy::tick`] once per IMU sample (400 Hz) with a [`StepInput`]
+//! and applies the [`StepOutput`]: rotor thrusts and rail positions to the actuators (or, in
 //! HIL, to the plant over MAVLink), texts and values to the link, the command's
 //! acknowledgement, and a job to start. The job task runs [`run_job`] on the
-//! [`MissionPlanner`] in thread mode and hands its [`JobResult`] back in the `TickInput` of the
+//! [`MissionPlanner`] in thread mode and hands its [`JobResult`] back in the `StepInput` of the
 //! step at the request's deadline, exactly that step and no other, so runs are deterministic
 //! (in lockstep HIL the control task holds that step's reply until the job is done).
 //!
@@ -34,44 +34,30 @@ use link::telemetry::VehicleSnapshot;
 use shared::control::trajectory::FlightPhase;
 use shared::estimation::Measurement;
 use shared::flight::Route;
-use shared::manual::ManualSamples;
 use shared::manual::source::Manual;
+/// The mission's input of one step ([`StepInput::tick`]).
+pub use shared::mission::TickInput;
 use shared::mission::bringup::{BenchConfig, CalibrationFailure, CalibrationKind};
 use shared::mission::supervision::BatteryLevel;
-use shared::mission::{
-    CommandRefusal, EscRpm, HardwareFaults, Mission, MissionConfig, MissionPlanner, Phase, Reason,
-    Supervision, TickInput as MissionInput,
-};
+use shared::mission::{CommandRefusal, Mission, MissionConfig, MissionPlanner, Phase, Reason};
 use shared::numbers::Fixed;
 use shared::scenario::Scenario;
 
-/// What one control step gets.
+/// What one control step gets: the mission's tick input and what the tasks around the
+/// autonomy add to it.
 #[derive(Clone, Debug)]
-pub struct TickInput<'a> {
-    /// The vehicle's time, us (in HIL: the plant's `HIL_SENSOR` time).
-    pub time_us: u64,
+pub struct StepInput<'a> {
+    /// The mission's input (the vehicle's time, in HIL the plant's `HIL_SENSOR` time; the IMU
+    /// sample; a fix, an operator command, the ESCs' RPM received since the last step; the
+    /// drivers' faults; the supervision's heartbeat and pack voltage; manual control).
+    pub tick: TickInput,
     /// Control steps before this one.
     pub step: u64,
-    /// The IMU sample of this step.
-    pub imu: ImuSample,
-    /// A motion-capture fix received since the last step (NED; stamped when taken).
-    pub mocap: Option<MocapFix>,
-    /// An operator command received since the last step.
-    pub command: Option<OperatorCommand>,
-    /// What the board's drivers report failed.
-    pub faults: HardwareFaults,
-    /// A ground station's heartbeat since the last step, and the pack's voltage.
-    pub supervision: Supervision,
-    /// The RC receiver's and the joystick's newest samples since the last step.
-    pub manual: ManualSamples,
     /// The job task is loading the planner with a description or new parameters (`LOADING`):
     /// a start now is refused as temporarily rejected (the ground tries again).
     pub loading: bool,
     /// A change of the ground station's route since the last step.
     pub route: Option<&'a RouteChange>,
-    /// Each rotor's RPM from its ESC this step (NaN: no answer), `None` without ESC
-    /// telemetry (docs/firmware.md#esc-telemetry).
-    pub esc_rpm: Option<EscRpm>,
     /// The parameters changed since the last step: the IMU's offsets and the hardware
     /// settings go in force now, with or without a payload.
     pub bench: Option<BenchConfig>,
@@ -192,7 +178,7 @@ pub type Offsets = (CalibrationKind, [f32; 3]);
 
 /// What one control step commands and reports.
 #[derive(Clone, Debug, PartialEq)]
-pub struct TickOutput {
+pub struct StepOutput {
     /// Robots in use.
     pub robots: usize,
     /// Rotor thrust of each robot, fraction of its maximum, `[0, 1]`.
@@ -406,12 +392,12 @@ impl Autonomy {
     }
 
     /// One control step, keeping no log.
-    pub fn tick(&mut self, input: &TickInput<'_>) -> TickOutput {
+    pub fn tick(&mut self, input: &StepInput<'_>) -> StepOutput {
         self.tick_logged(input, &mut NoRing)
     }
 
     /// One control step, its flight log (from the mission's start to its end) into `ring`.
-    pub fn tick_logged(&mut self, input: &TickInput<'_>, ring: &mut impl LogRing) -> TickOutput {
+    pub fn tick_logged(&mut self, input: &StepInput<'_>, ring: &mut impl LogRing) -> StepOutput {
         let mut report = Report::default();
         if core::mem::take(&mut self.payload_ignored) {
             report.text(
@@ -427,17 +413,11 @@ impl Autonomy {
         }
         // A start while the planner is being loaded would fly a mission the planner no longer
         // matches: refused for now, the mission never sees it.
-        let held_back = input.loading && input.command == Some(OperatorCommand::Start);
-        let command = input.command.filter(|_| !held_back);
-        let mission_input = MissionInput {
-            time_us: input.time_us,
-            imu: input.imu,
-            mocap: input.mocap,
+        let held_back = input.loading && input.tick.command == Some(OperatorCommand::Start);
+        let command = input.tick.command.filter(|_| !held_back);
+        let mission_input = TickInput {
             command,
-            faults: input.faults,
-            esc_rpm: input.esc_rpm,
-            supervision: input.supervision,
-            manual: input.manual,
+            ..input.tick
         };
         let out = self.mission.step(&mission_input);
         // Its COMMAND_ACK says TEMPORARILY_REJECTED, and a text says why and what to do.
@@ -501,7 +481,7 @@ impl Autonomy {
             |log| {
                 for line in texts {
                     let level = level(line.severity);
-                    log.text_str(level, input.time_us, &line.text);
+                    log.text_str(level, input.tick.time_us, &line.text);
                 }
             },
         );
@@ -577,7 +557,7 @@ impl Autonomy {
             manual_valid: manual == ManualState::Valid,
             ..VehicleSnapshot::START
         };
-        TickOutput {
+        StepOutput {
             robots,
             thrust,
             rail,

@@ -19,7 +19,7 @@ use shared::manual::ManualSamples;
 
 use link::hil::{Actuators, JobDeadline, VehicleClock};
 
-use super::autonomy::{Autonomy, CommandResult, Severity, TickInput, TickOutput, Value};
+use super::autonomy::{Autonomy, CommandResult, Severity, StepInput, StepOutput, TickInput, Value};
 use super::comms::{Outbound, SensorSample, StepMessages};
 use super::logger::RingEnd;
 use super::{
@@ -122,9 +122,8 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
             } else {
                 None
             };
-            let input = TickInput {
+            let tick = TickInput {
                 time_us: step.time_us,
-                step: step.index,
                 imu: sample.imu,
                 mocap: MOCAP.try_take(),
                 command: pending.map(|p| p.command),
@@ -132,17 +131,6 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                     HardwareFaults::NONE
                 } else {
                     <Selected as Board>::hardware_faults()
-                },
-                loading,
-                route: route.as_ref(),
-                // The flag first: parameters set after it are in the configuration read. Not
-                // in a step that loads a payload (at boot both wait): the two in one step
-                // exceed its budget, and the settings go in the next.
-                bench: if !loads_payload && CONFIG_CHANGED.load(Ordering::Acquire) {
-                    CONFIG_CHANGED.store(false, Ordering::Release);
-                    Some(BENCH_CONFIG.lock(|c| c.get()))
-                } else {
-                    None
                 },
                 // In HIL the plant's RPM; on a board its ESCs' (bidirectional DShot).
                 esc_rpm: if sample.hil {
@@ -169,13 +157,28 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                     joystick: super::MANUAL.try_take(),
                 },
             };
+            let input = StepInput {
+                tick,
+                step: step.index,
+                loading,
+                route: route.as_ref(),
+                // The flag first: parameters set after it are in the configuration read. Not
+                // in a step that loads a payload (at boot both wait): the two in one step
+                // exceed its budget, and the settings go in the next.
+                bench: if !loads_payload && CONFIG_CHANGED.load(Ordering::Acquire) {
+                    CONFIG_CHANGED.store(false, Ordering::Release);
+                    Some(BENCH_CONFIG.lock(|c| c.get()))
+                } else {
+                    None
+                },
+            };
             // The RPM for the ground station: written only while there is some, and once
             // when it ends (a vehicle without ESC telemetry pays nothing).
-            if input.esc_rpm.is_some() || had_esc_rpm {
-                super::ESC_RPM.lock(|r| r.set(input.esc_rpm));
-                had_esc_rpm = input.esc_rpm.is_some();
+            if input.tick.esc_rpm.is_some() || had_esc_rpm {
+                super::ESC_RPM.lock(|r| r.set(input.tick.esc_rpm));
+                had_esc_rpm = input.tick.esc_rpm.is_some();
             }
-            let imu_failed = input.faults.imu;
+            let imu_failed = input.tick.faults.imu;
             let mut out = autonomy.tick_logged(&input, &mut log_ring);
             if late {
                 out.report
@@ -312,8 +315,8 @@ fn deliver_result(id: u32, autonomy: &mut Autonomy) -> bool {
     false
 }
 
-fn idle_output() -> TickOutput {
-    TickOutput {
+fn idle_output() -> StepOutput {
+    StepOutput {
         robots: 0,
         thrust: [0.0; link::hil::MAX_ROBOTS],
         rail: [0.0; link::hil::MAX_ROBOTS],
