@@ -203,22 +203,28 @@ impl Mission {
                     *holdable = held;
                 }
                 // Out with the next tick's (this one's notice was taken at its start).
-                if self.notices.is_full() {
-                    self.notices.pop_front();
-                }
-                let _ = self.notices.push_back(notice);
+                self.queue_notice(notice);
             }
         }
-        if self.pending.is_none()
-            && let Some(out) = flight.mixer_wanted()
-        {
-            let job = JobRequest::MixerWithout {
-                robots: self.robots.clone(),
-                com: flight.com(),
-                out,
-            };
-            self.request(job);
-        }
+        self.ask_for_mixer();
+    }
+
+    /// Asks the job side for the full mixer without the rotors out while the flight flies
+    /// the interim one and no job is pending; whether it asked.
+    pub(super) fn ask_for_mixer(&mut self) -> bool {
+        let Some(flight) = self.flight.as_ref() else {
+            return false;
+        };
+        let Some(out) = flight.mixer_wanted().filter(|_| self.pending.is_none()) else {
+            return false;
+        };
+        let job = JobRequest::MixerWithout {
+            robots: self.robots.clone(),
+            com: flight.com(),
+            out,
+        };
+        self.request(job);
+        true
     }
 
     /// The in-flight adaptation after this tick's flight step: measure in the hover, ask for a

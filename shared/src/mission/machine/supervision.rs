@@ -8,7 +8,6 @@ use super::Mission;
 use crate::control::navigator::NavState;
 use crate::flight::EscTelemetry;
 use crate::mission::interface::TickInput;
-use crate::mission::jobs::JobRequest;
 use crate::mission::phases::{AbortReason, Phase, Transition};
 use crate::mission::supervision::{
     BatteryLevel, FenceAction, GcsLossAction, LinkChange, LinkResponse, Notice,
@@ -199,17 +198,12 @@ impl Mission {
         };
         // The full mixer without them is a job; said once it flies (it tells whether the
         // rotors left hold the hover). Without any mixer of them, said now.
-        let Some(out) = flight.mixer_wanted() else {
-            return Some(notice);
-        };
-        let com = flight.com();
-        self.rotors_notice = Some(notice);
-        self.request(JobRequest::MixerWithout {
-            robots: self.robots.clone(),
-            com,
-            out,
-        });
-        None
+        if self.ask_for_mixer() {
+            self.rotors_notice = Some(notice);
+            None
+        } else {
+            Some(notice)
+        }
     }
 
     /// Raises the rotors' thrusts for a pack that sags below the thrust map's

@@ -214,11 +214,17 @@ impl Mission {
         if notice.is_none() {
             *notice = Some(n);
         } else {
-            if self.notices.is_full() {
-                self.notices.pop_front();
-            }
-            let _ = self.notices.push_back(n);
+            self.queue_notice(n);
         }
+    }
+
+    /// `n` goes out in a later tick, after those already waiting (the oldest is dropped when
+    /// the queue is full).
+    pub(super) fn queue_notice(&mut self, n: crate::mission::supervision::Notice) {
+        if self.notices.is_full() {
+            self.notices.pop_front();
+        }
+        let _ = self.notices.push_back(n);
     }
 
     /// The phase's step of this tick; an abort when it fails.
