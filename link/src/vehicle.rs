@@ -30,7 +30,7 @@ mod crc_extras;
 #[cfg(test)]
 mod tests;
 
-pub use battery::{battery_status, battery_volts};
+pub use battery::{battery_status, battery_volts, millivolts_of, pack_millivolts, volts_of};
 pub use crc_extras::crc_extra;
 
 /// `SET_GPS_GLOBAL_ORIGIN`: superseded (2025) by `MAV_CMD_DO_SET_GLOBAL_ORIGIN`, which needs

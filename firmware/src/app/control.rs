@@ -144,7 +144,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                     battery_volts: if sample.hil {
                         match LINK_BATTERY_MV.load(Ordering::Relaxed) {
                             u32::MAX => None,
-                            mv => Some(mv as f32 * 1e-3),
+                            mv => Some(link::vehicle::volts_of(mv)),
                         }
                     } else {
                         <Selected as Board>::battery_volts()

@@ -654,13 +654,7 @@ fn is_payload_verdict(text: &str) -> bool {
 /// the link service's millivolts, cut again; volts in the step): what the in-process vehicle
 /// is given, so that `mission` and `hil` agree to the bit.
 pub fn carried_volts(volts: f32) -> f32 {
-    let mv = volts * 1000.0;
-    let sent = if mv.is_nan() {
-        0
-    } else {
-        mv.min(65_534.0) as u16
-    };
-    let received = f32::from(sent) * 1e-3;
-    let held = (received * 1000.0) as u32;
-    held as f32 * 1e-3
+    use link::vehicle::{millivolts_of, pack_millivolts, volts_of};
+    let received = volts_of(u32::from(pack_millivolts(volts)));
+    volts_of(millivolts_of(received))
 }

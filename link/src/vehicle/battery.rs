@@ -31,21 +31,36 @@ pub fn battery_volts(payload: &[u8]) -> Option<f32> {
         }
         millivolts += u32::from(c);
     }
-    Some(millivolts as f32 * 1e-3)
+    Some(volts_of(millivolts))
+}
+
+/// The whole millivolts `BATTERY_STATUS` carries for a pack at `volts` (not a number or below
+/// zero: 0; above 65,534 mV: 65,534, the largest single entry).
+pub fn pack_millivolts(volts: f32) -> u16 {
+    let mv = volts * 1000.0;
+    if mv.is_nan() {
+        0
+    } else {
+        mv.min(65_534.0) as u16
+    }
+}
+
+/// A voltage as the vehicle hands it between its tasks: whole millivolts, cut (below zero or
+/// not a number: 0).
+pub fn millivolts_of(volts: f32) -> u32 {
+    (volts * 1000.0) as u32
+}
+
+/// Volts of `millivolts`.
+pub fn volts_of(millivolts: u32) -> f32 {
+    millivolts as f32 * 1e-3
 }
 
 /// `BATTERY_STATUS` of a pack at `volts` whose cells are not measured (the whole pack in
 /// `voltages[0]`, the others unused), as the HIL plant reports its simulated pack.
 pub fn battery_status(volts: f32) -> BATTERY_STATUS_DATA {
-    let mv = volts * 1000.0;
-    // Not a number: 0; below zero: 0 (`as` saturates); above: the largest pack entry.
-    let millivolts = if mv.is_nan() {
-        0
-    } else {
-        mv.min(65_534.0) as u16
-    };
     let mut voltages = [u16::MAX; 10];
-    voltages[0] = millivolts;
+    voltages[0] = pack_millivolts(volts);
     BATTERY_STATUS_DATA {
         voltages,
         current_consumed: -1,

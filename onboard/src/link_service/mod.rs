@@ -205,7 +205,7 @@ impl<F: NorFlash> LinkService<F> {
             }
             // The ground link is up: the next control step takes it.
             Inbound::GcsHeartbeat(_) => io.gcs_heartbeat(),
-            Inbound::Battery { volts, .. } => io.battery_mv((volts * 1000.0) as u32),
+            Inbound::Battery { volts, .. } => io.battery_mv(link::vehicle::millivolts_of(volts)),
             // The plant's RPM, in HIL only (on a board the ESCs answer over DShot).
             Inbound::EscStatus(rpm) if io.in_hil() => {
                 if let Err(e) = io.esc_rpm(&rpm) {
