@@ -207,6 +207,32 @@ pub struct StepOutput {
     pub calibrated: Option<(CommandResult, Option<Offsets>)>,
 }
 
+impl StepOutput {
+    /// A step's output before a step fills it: no robots, nothing said.
+    pub fn new() -> Self {
+        Self {
+            robots: 0,
+            thrust: [0.0; MAX_ROBOTS],
+            rail: [0.0; MAX_ROBOTS],
+            armed: false,
+            motor_test: false,
+            state: MissionState::Idle,
+            ack: None,
+            job: None,
+            report: Report::default(),
+            telemetry: VehicleSnapshot::START,
+            status_changed: false,
+            calibrated: None,
+        }
+    }
+}
+
+impl Default for StepOutput {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// The autonomy: the mission's tick side. Its job side, the [`MissionPlanner`], lives with
 /// the job task; it is loaded with the payload description before the description reaches
 /// the mission (see `super::jobs`).
@@ -398,7 +424,24 @@ impl Autonomy {
 
     /// One control step, its flight log (from the mission's start to its end) into `ring`.
     pub fn tick_logged(&mut self, input: &StepInput<'_>, ring: &mut impl LogRing) -> StepOutput {
-        let mut report = Report::default();
+        let mut step = StepOutput::new();
+        self.tick_into(input, ring, &mut step);
+        step
+    }
+
+    /// One control step written into `step` (every field: what it held before is gone), its
+    /// flight log into `ring`. For the firmware's control step: its texts and telemetry (about
+    /// 1.3 KB) are written where the caller keeps them, never copied on return (a copy costs
+    /// the step about 1,000 instructions).
+    pub fn tick_into(
+        &mut self,
+        input: &StepInput<'_>,
+        ring: &mut impl LogRing,
+        step: &mut StepOutput,
+    ) {
+        step.report.texts.clear();
+        step.report.values.clear();
+        let report = &mut step.report;
         if core::mem::take(&mut self.payload_ignored) {
             report.text(
                 Severity::Warning,
@@ -406,7 +449,7 @@ impl Autonomy {
             );
         }
         if let Some(change) = input.route {
-            self.change_route(change, &mut report);
+            self.change_route(change, report);
         }
         if let Some(config) = &input.bench {
             self.mission.configure_bench(config);
@@ -448,7 +491,7 @@ impl Autonomy {
         step_texts(&out, &mut |level, text| report.text(severity(level), text));
         let calibrated = out
             .calibrated
-            .map(|(kind, result)| calibration_report(kind, result, &mut report));
+            .map(|(kind, result)| calibration_report(kind, result, report));
         if let Some(t) = out.transition {
             match t.reason {
                 Reason::PairChosen { group, .. } => {
@@ -525,7 +568,7 @@ impl Autonomy {
             Manual::Valid(..) => ManualState::Valid,
             Manual::Lost(_) => ManualState::Lost,
         };
-        let telemetry = VehicleSnapshot {
+        step.telemetry = VehicleSnapshot {
             attitude: [q.w, q.x, q.y, q.z],
             rates: [attitude.rate.x, attitude.rate.y, attitude.rate.z],
             position: [
@@ -557,23 +600,19 @@ impl Autonomy {
             manual_valid: manual == ManualState::Valid,
             ..VehicleSnapshot::START
         };
-        StepOutput {
-            robots,
-            thrust,
-            rail,
-            armed: out.armed,
-            motor_test: out.motor_test,
-            telemetry,
-            status_changed,
-            calibrated,
-            state: self.state(),
-            ack,
-            job: out.job.map(|work| JobRequest {
-                deadline_steps: work.deadline_ticks(),
-                work,
-            }),
-            report,
-        }
+        step.robots = robots;
+        step.thrust = thrust;
+        step.rail = rail;
+        step.armed = out.armed;
+        step.motor_test = out.motor_test;
+        step.status_changed = status_changed;
+        step.calibrated = calibrated;
+        step.state = self.state();
+        step.ack = ack;
+        step.job = out.job.map(|work| JobRequest {
+            deadline_steps: work.deadline_ticks(),
+            work,
+        });
     }
 }
 

@@ -256,7 +256,8 @@ fn main() -> ! {
     for (label, m) in [("8 rotors", &mixer), ("16 rotors", &long_mixer)] {
         if let Ok(m) = m {
             for (which, out) in [("rotor 2", 1u16 << 2), ("rotors 0 and 5", 0b10_0001)] {
-                let (n, _) = timer.instructions(|| m.interim_without(out));
+                let mut interim = m.clone();
+                let (n, _) = timer.instructions(|| interim.leave_out(out));
                 hprintln!("mixer without {}, {}:", which, label);
                 report_against("  interim (in the step)", n, 3_000);
                 let (n, _) = timer.instructions(|| m.without(out));
@@ -362,7 +363,9 @@ fn rotor_monitor_ticks(
     // One judgement of a change against the rotors' columns: one rotor's loss, then two
     // rotors' (the pairs searched when the collective shows two rotors' loss).
     {
-        use shared::flight::rotor_isolation::{Columns, Judging, explain};
+        use shared::flight::rotor_isolation::{
+            Columns, Judging, PAIRS_PER_TICK, PairSweep, explain, explain_swept,
+        };
         let expected = [hover; shared::scenario::MAX_ROBOTS];
         let columns = Columns::new(
             n,
@@ -401,6 +404,23 @@ fn rotor_monitor_ticks(
                 named,
                 count
             );
+            if pairs {
+                // The step's search: the pairs a few a tick; its worst tick over a sweep.
+                let mut sweep = PairSweep::new();
+                let (mut worst, mut named) = (0, 0);
+                for _ in 0..(n * n / 2).div_ceil(PAIRS_PER_TICK) + 1 {
+                    let (count, found) = timer
+                        .instructions(|| explain_swept(&d, &columns, &config, how, &mut sweep));
+                    worst = worst.max(count);
+                    named = found;
+                }
+                hprintln!(
+                    "    in the step, {} pairs a tick (named {:#b}): worst tick {} instructions",
+                    PAIRS_PER_TICK,
+                    named,
+                    worst
+                );
+            }
         }
     }
     for (label, lost) in [

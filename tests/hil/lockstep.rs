@@ -518,10 +518,13 @@ fn the_firmware_answers_a_stopped_rotor_and_a_low_battery_in_the_loop() {
         fw.final_position_error_m,
         host.final_position_error_m
     );
-    // The tick that finds the rotor rebuilds the mixer without it (a few small inverses) and
-    // writes the reason: once per rotor lost, about 40,000 instructions (85 us at 480 MHz, 3 %
-    // of the 2.5 ms period); the normal flight's budget of 12,000 is the main test's.
-    assert!(worst < 50_000.0, "worst control tick {worst} instructions");
+    // The steps that confirm and name the rotor stay within the step's budget as every other
+    // does: the pairs searched a few a step, the rotor left out of the mixer the step after it
+    // is named, the full mixer (and whether the rotors left hold the hover) a job.
+    assert!(
+        worst <= 12_000.0,
+        "worst control tick {worst} instructions, over the budget of 12,000"
+    );
 }
 
 /// Two rotors stopped at once, 11 s after take-off began, on rect-ex1 (a pair the vehicle's

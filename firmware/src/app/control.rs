@@ -68,7 +68,7 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
         let step = match clock.on_sensor(sample.time_us) {
             Ok(step) => step,
             Err(e) => {
-                let mut out = idle_output();
+                let mut out = StepOutput::new();
                 out.report
                     .text(Severity::Error, format_args!("sensor refused: {e}"));
                 let _ = OUTBOX.try_send(Outbound::Report(out.report));
@@ -179,7 +179,9 @@ pub async fn control(autonomy: &'static mut Autonomy, mut outputs: <Selected as 
                 had_esc_rpm = input.tick.esc_rpm.is_some();
             }
             let imu_failed = input.tick.faults.imu;
-            let mut out = autonomy.tick_logged(&input, &mut log_ring);
+            // Written in place: its texts and telemetry are never copied on a return.
+            let mut out = StepOutput::new();
+            autonomy.tick_into(&input, &mut log_ring, &mut out);
             if late {
                 out.report
                     .text(Severity::Critical, format_args!("job late at its deadline"));
@@ -313,21 +315,4 @@ fn deliver_result(id: u32, autonomy: &mut Autonomy) -> bool {
         }
     }
     false
-}
-
-fn idle_output() -> StepOutput {
-    StepOutput {
-        robots: 0,
-        thrust: [0.0; link::hil::MAX_ROBOTS],
-        rail: [0.0; link::hil::MAX_ROBOTS],
-        armed: false,
-        motor_test: false,
-        state: super::autonomy::MissionState::Idle,
-        ack: None,
-        job: None,
-        report: Default::default(),
-        telemetry: link::telemetry::VehicleSnapshot::START,
-        status_changed: false,
-        calibrated: None,
-    }
 }

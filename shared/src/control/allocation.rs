@@ -487,35 +487,41 @@ impl Mixer {
         })
     }
 
-    /// The mixer for the ticks between a rotor found stopped and [`Self::without`]'s answer
-    /// (a matrix inverse per rotor left out, too long for the control step: the mission asks
-    /// for it as a job): this mixer's thrust, roll and pitch columns with the rotors `out`
-    /// given no share, corrected by one 3 x 3 inverse so that they make exactly the thrust,
-    /// roll and pitch asked again (`A' M0 K^-1 = I` with `K = A' M0`); yaw is not flown for
-    /// those few ticks. `Uncontrollable` when the columns left cannot make the three axes.
-    pub fn interim_without(&self, out: u16) -> Result<Self, AllocationError> {
-        let count = self.count;
-        let mut mixer = self.clone();
-        for i in (0..count).filter(|i| out & (1 << i) != 0) {
-            mixer.effectiveness.column_mut(i).fill(0.0);
-            for column in &mut mixer.columns {
-                column[i] = 0.0;
-            }
-        }
+    /// Leaves the rotors `out` out of this mixer, in place, for the ticks between a rotor
+    /// found stopped and [`Self::without`]'s answer (a matrix inverse per rotor left out, too
+    /// long for the control step: the mission asks for it as a job): the thrust, roll and
+    /// pitch columns with the rotors `out` given no share, corrected by one 3 x 3 inverse so
+    /// that they make exactly the thrust, roll and pitch asked again (`A' M0 K^-1 = I` with
+    /// `K = A' M0`); yaw is not flown for those few ticks. `Uncontrollable`, the mixer left as
+    /// it was, when the columns left cannot make the three axes. No copy of the mixer: this
+    /// runs in the control step.
+    pub fn leave_out(&mut self, out: u16) -> Result<(), AllocationError> {
+        let count = self.count.min(MAX_ROBOTS);
+        let kept = |i: usize| out & (1 << i) == 0;
         // K = A' M0 over thrust, roll and pitch: what the columns left make.
         let mut k = [[0.0f32; 3]; 3];
-        for (i, col) in used_columns(&mixer.effectiveness, count).iter().enumerate() {
-            for (c, column) in mixer.columns.iter().take(3).enumerate() {
+        for (i, col) in used_columns(&self.effectiveness, count).iter().enumerate() {
+            if !kept(i) {
+                continue;
+            }
+            for (c, column) in self.columns.iter().take(3).enumerate() {
                 let share = column[i];
                 for (r, row) in k.iter_mut().enumerate() {
                     row[c] += col[r] * share;
                 }
             }
         }
-        let inverse = inverse_3x3(&k).ok_or(AllocationError::Uncontrollable)?;
-        let [collective, roll, pitch, yaw] = &mut mixer.columns;
+        let inverse = inverse_3x3(&k)
+            .filter(|m| m.iter().flatten().all(|v| v.is_finite()))
+            .ok_or(AllocationError::Uncontrollable)?;
+        let [collective, roll, pitch, yaw] = &mut self.columns;
         for i in 0..count {
-            let m0 = [collective[i], roll[i], pitch[i]];
+            let m0 = if kept(i) {
+                [collective[i], roll[i], pitch[i]]
+            } else {
+                self.effectiveness.column_mut(i).fill(0.0);
+                [0.0; 3]
+            };
             let mut m = [0.0f32; 3];
             for (c, v) in m.iter_mut().enumerate() {
                 *v = m0[0] * inverse[0][c] + m0[1] * inverse[1][c] + m0[2] * inverse[2][c];
@@ -523,21 +529,36 @@ impl Mixer {
             [collective[i], roll[i], pitch[i]] = m;
             yaw[i] = 0.0;
         }
-        if !all_finite(&mixer.columns, count) {
-            return Err(AllocationError::Uncontrollable);
-        }
-        mixer.kind = MixerKind::Allocation;
-        mixer.torque_scale = torque_scale(&mixer.effectiveness, count);
-        Ok(mixer)
+        self.kind = MixerKind::Allocation;
+        self.torque_scale = torque_scale(&self.effectiveness, count);
+        Ok(())
     }
 
-    /// Whether `other` flies the same rotors from the same places about the same COM as this
-    /// mixer (the same effectiveness matrix, rotors left out alike): a mixer built for an
-    /// earlier layout is not taken in place of this one.
-    pub fn same_rotors(&self, other: &Self) -> bool {
+    /// Whether this mixer allocates a level hover of collective `thrust`, N (the vehicle's
+    /// weight, no torque), within every rotor's range.
+    pub fn holds_hover(&self, thrust: f32) -> bool {
+        let hover = self.allocate(&Wrench {
+            thrust,
+            torque: Vec3::ZERO,
+        });
+        !hover.saturation.collective && !hover.saturation.roll_pitch
+    }
+
+    /// Whether `other` flies this mixer's rotors but `out` from the same places about the same
+    /// COM, and none of `out` (their columns zero): the mixer without `out` built for this
+    /// layout, whether or not this one has left them out yet.
+    pub fn same_rotors_except(&self, other: &Self, out: u16) -> bool {
+        let count = self.count.min(MAX_ROBOTS);
         self.count == other.count
             && self.max_thrust == other.max_thrust
-            && self.effectiveness == other.effectiveness
+            && (0..count).all(|i| {
+                let theirs = other.effectiveness.column(i);
+                if out & (1 << i) != 0 {
+                    theirs.iter().all(|v| *v == 0.0)
+                } else {
+                    theirs == self.effectiveness.column(i)
+                }
+            })
     }
 
     /// The torque the mixer can add about each body axis (roll, pitch, yaw), N m, on top of a

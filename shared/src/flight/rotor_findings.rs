@@ -24,8 +24,9 @@ pub struct RotorOut {
     pub reported: bool,
 }
 
-/// What one tick found of the rotors: the rotors newly found stopped, and whether the rotors
-/// left hold a level hover.
+/// What one tick found of the rotors: the rotors newly found stopped. Whether the rotors left
+/// hold a level hover is the full mixer's to say ([`crate::control::allocation::Mixer::holds_hover`],
+/// with the job that builds it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RotorFinding {
     /// The first rotor newly found.
@@ -36,11 +37,6 @@ pub struct RotorFinding {
     pub out: u16,
     /// Rotors left turning.
     pub left: u8,
-    /// The mixer of the rotors left allocates the hover (the vehicle's weight, no torque)
-    /// within every rotor's range. When it cannot, the allocation keeps the payload level
-    /// and gives up collective thrust (docs/failures.md#rotors-that-stop-in-flight): the
-    /// vehicle comes down faster than planned.
-    pub holdable: bool,
 }
 
 /// Rotors found stopped that a flight records (the first two: a third is flown without as

@@ -116,23 +116,73 @@ pub struct Judging {
     pub decisive: bool,
 }
 
+/// How many pairs a swept search ([`explain_swept`]) judges anew in one tick.
+pub const PAIRS_PER_TICK: usize = 10;
+
+/// A search of the pairs of rotors spread over ticks ([`explain_swept`]): each tick judges
+/// [`PAIRS_PER_TICK`] pairs more, and the best pair of the sweep under way and of the last
+/// whole sweep again (against that tick's change). A whole sweep takes 3 ticks at eight
+/// rotors and 12 at sixteen (120 pairs), well within the time a finding is confirmed; a tick
+/// costs a bounded number of pairs however many rotors fly.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PairSweep {
+    /// The next pair to judge, rotors (j, k) with j < k.
+    next: (u8, u8),
+    /// The best pair of the sweep under way.
+    current: Option<(u8, u8)>,
+    /// The best pair of the last whole sweep.
+    last: Option<(u8, u8)>,
+}
+
+impl PairSweep {
+    /// A sweep that starts afresh, no pair judged yet.
+    pub const fn new() -> Self {
+        Self {
+            next: (0, 1),
+            current: None,
+            last: None,
+        }
+    }
+}
+
 /// The stopped rotors that explain a change `d` (thrust N, roll and pitch torque times the
-/// columns' scale), bit `i` for rotor `i`, if one or two do.
+/// columns' scale), bit `i` for rotor `i`, if one or two do: every pair judged.
 pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how: Judging) -> u16 {
+    judge(d, columns, config, how, None)
+}
+
+/// As [`explain`], the pairs judged a few a tick (`sweep` carries the search from tick to
+/// tick): the control tick's budget at sixteen rotors. Single rotors are all judged each tick.
+pub fn explain_swept(
+    d: &[f32; 3],
+    columns: &Columns,
+    config: &RotorMonitorConfig,
+    how: Judging,
+    sweep: &mut PairSweep,
+) -> u16 {
+    judge(d, columns, config, how, Some(sweep))
+}
+
+fn judge(
+    d: &[f32; 3],
+    columns: &Columns,
+    config: &RotorMonitorConfig,
+    how: Judging,
+    sweep: Option<&mut PairSweep>,
+) -> u16 {
     let dd = dot(d, d);
     // Zero, or NaN from a non-finite input: nothing to explain.
     if dd.is_nan() || dd <= 0.0 {
         return 0;
     }
     // The control tick's budget: no division in the loops (ratios are compared crosswise)
-    // and each column read once. Per eligible rotor: its column a_j, |a_j|^2, and
+    // and each column read once. Per eligible rotor `j`: its column a_j, |a_j|^2, and
     // b_j = -d . a_j, the loss's projection on it.
     let (min, max) = (config.min_fraction, config.max_fraction);
     let lost_collective = -d[0];
-    let mut rotors = [0u8; MAX_ROBOTS];
-    let mut ta = [[0.0f32; 3]; MAX_ROBOTS];
-    let mut tb = [0.0f32; MAX_ROBOTS];
-    let mut m = 0;
+    let mut candidates = 0u16;
+    // Per rotor: its loss's direction T_j a_j, the change's projection T_j b_j, and T_j.
+    let mut lost = [[0.0f32; 5]; MAX_ROBOTS];
     let mut lightest = f32::INFINITY;
     // The best single rotor: its b_j^2 and |a_j|^2 (explained = b^2 / (|a|^2 dd)); and the
     // next best's.
@@ -147,10 +197,8 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
             continue;
         }
         let b = -dot(d, &a);
-        rotors[m] = j as u8;
-        ta[m] = [t * a[0], t * a[1], t * a[2]];
-        tb[m] = t * b;
-        m += 1;
+        candidates |= 1 << j;
+        lost[j] = [t * a[0], t * a[1], t * a[2], t * b, t];
         lightest = math::min(lightest, t);
         // Its loss b / |a|^2 within the bounds (sized: at least `min_fraction` of `t`), and
         // the collective showing `min_fraction` of it when that is asked.
@@ -169,30 +217,82 @@ pub fn explain(d: &[f32; 3], columns: &Columns, config: &RotorMonitorConfig, how
     }
     // Two rotors stopped together lose `mu (T_j a_j + T_k a_k)` as the change rises: one
     // direction per pair, judged as a single rotor's (two free sizes would fit almost any
-    // change with two rotors on the same side). The collective must show at least
-    // `min_fraction` of half the least two rotors' thrust: most ticks of a flight spare the
-    // pairs' search here.
+    // change with two rotors on the same side). Pair (j, k)'s -d . v squared and |v|^2, if
+    // it is a candidate: `mu` within the bounds, and its loss, mu (T_j + T_k), shown in the
+    // collective.
+    let pair_fit = |j: usize, k: usize| -> Option<(f32, f32)> {
+        if (candidates >> j) & (candidates >> k) & 1 == 0 {
+            return None;
+        }
+        let (p, q) = (lost.get(j)?, lost.get(k)?);
+        let v = [p[0] + q[0], p[1] + q[1], p[2] + q[2]];
+        let vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+        let along = p[3] + q[3];
+        if vv <= 0.0 || along <= min * vv || along > max * vv {
+            return None;
+        }
+        if lost_collective * vv < min * along * (p[4] + q[4]) {
+            return None;
+        }
+        Some((along * along, vv))
+    };
+    // The better of two fits, compared crosswise (along^2 / vv).
+    let better = |fit: (f32, f32), than: Option<(usize, usize, f32, f32)>| {
+        than.is_none_or(|(_, _, best, vv0)| fit.0 * vv0 > best * fit.1)
+    };
+    // The collective must show at least `min_fraction` of half the least two rotors' thrust:
+    // most ticks of a flight spare the pairs' search here.
     let mut pair: Option<(usize, usize, f32, f32)> = None;
     if how.pairs && lost_collective >= min * min * 2.0 * lightest {
-        for x in 0..m {
-            for y in x + 1..m {
-                let (p, q) = (&ta[x], &ta[y]);
-                let v = [p[0] + q[0], p[1] + q[1], p[2] + q[2]];
-                let vv = dot(&v, &v);
-                // -d . v, and mu = along / vv within the bounds.
-                let along = tb[x] + tb[y];
-                if vv <= 0.0 || along <= min * vv || along > max * vv {
-                    continue;
+        let n = columns.count;
+        match sweep {
+            None => {
+                for j in 0..n {
+                    for k in j + 1..n {
+                        if let Some(fit) = pair_fit(j, k)
+                            && better(fit, pair)
+                        {
+                            pair = Some((j, k, fit.0, fit.1));
+                        }
+                    }
                 }
-                // Two rotors' loss, mu (T_j + T_k), always shows in the collective.
-                let (j, k) = (usize::from(rotors[x]), usize::from(rotors[y]));
-                let lost = along * (columns.thrust[j] + columns.thrust[k]);
-                if lost_collective * vv < min * lost {
-                    continue;
+            }
+            Some(sweep) => {
+                let consider = |pair: &mut Option<(usize, usize, f32, f32)>, j, k| {
+                    if let Some(fit) = pair_fit(j, k)
+                        && better(fit, *pair)
+                    {
+                        *pair = Some((j, k, fit.0, fit.1));
+                    }
+                };
+                // The sweep's best so far, again against this change; then new pairs.
+                let mut current = None;
+                if let Some((j, k)) = sweep.current {
+                    consider(&mut current, usize::from(j), usize::from(k));
                 }
-                let aa2 = along * along;
-                if pair.is_none_or(|(_, _, best, vv0)| aa2 * vv0 > best * vv) {
-                    pair = Some((j, k, aa2, vv));
+                let (mut j, mut k) = (usize::from(sweep.next.0), usize::from(sweep.next.1));
+                let mut judged = 0;
+                while judged < PAIRS_PER_TICK {
+                    if k >= n {
+                        j += 1;
+                        k = j + 1;
+                    }
+                    if k >= n {
+                        // A whole sweep: its best is the last sweep's from now on.
+                        sweep.last = current.map(|(j, k, _, _)| (j as u8, k as u8));
+                        current = None;
+                        (j, k) = (0, 1);
+                        break;
+                    }
+                    consider(&mut current, j, k);
+                    judged += 1;
+                    k += 1;
+                }
+                sweep.next = (j as u8, k as u8);
+                sweep.current = current.map(|(j, k, _, _)| (j as u8, k as u8));
+                pair = current;
+                if let Some((j, k)) = sweep.last {
+                    consider(&mut pair, usize::from(j), usize::from(k));
                 }
             }
         }
@@ -319,6 +419,35 @@ mod tests {
         }
         // Of the 28 pairs, those the layout makes alike are few.
         assert!(exact >= 24, "{exact} of 28 named exactly");
+    }
+
+    #[test]
+    fn a_swept_search_names_what_the_whole_search_does_within_a_sweep() {
+        let r = rect();
+        let c = columns(&r, &FIVE);
+        let config = RotorMonitorConfig::DEFAULT;
+        // 28 pairs, PAIRS_PER_TICK a tick: a whole sweep and the tick that judges its best.
+        let ticks = 28usize.div_ceil(PAIRS_PER_TICK) + 1;
+        for j in 0..8 {
+            for k in j + 1..8 {
+                let d = loss(&c, &[(j, 5.0), (k, 5.0)]);
+                let whole = explain(&d, &c, &config, SIZED);
+                let mut sweep = PairSweep::new();
+                let mut named = 0;
+                for _ in 0..ticks {
+                    named = explain_swept(&d, &c, &config, SIZED, &mut sweep);
+                }
+                assert_eq!(named, whole, "rotors {j} and {k}");
+                // And it stays so as the sweep goes on.
+                for _ in 0..ticks {
+                    assert_eq!(explain_swept(&d, &c, &config, SIZED, &mut sweep), whole);
+                }
+            }
+            // One rotor: named from the first tick.
+            let d = loss(&c, &[(j, 5.0)]);
+            let mut sweep = PairSweep::new();
+            assert_eq!(explain_swept(&d, &c, &config, SIZED, &mut sweep), 1 << j);
+        }
     }
 
     #[test]

@@ -29,8 +29,9 @@
 //!   stopped together, must explain the change in size and direction for
 //!   [`RotorMonitorConfig::confirm_time`]; on the next tick the rotors named are those that
 //!   explain the change averaged over the last 10 ms (neighbours' columns are close, and one
-//!   tick's noise can favour either). A tick judges or names, never both (each is a search of
-//!   the pairs: 120 at sixteen rotors).
+//!   tick's noise can favour either). A tick judges or names, never both; the pairs (120 at
+//!   sixteen rotors) are searched a few a tick ([`crate::flight::rotor_isolation::PairSweep`]),
+//!   the best found so far judged again each tick.
 //! - After a finding the monitor goes on: what the rotors found put into the residuals is
 //!   taken out ([`RotorMonitor::mark_out`]), the baseline from before is kept, and a rotor
 //!   that stopped with them still shows after [`RotorMonitorConfig::blind_time`]; until
@@ -59,14 +60,14 @@
 //! The monitor watches the response only while the caller says the vehicle is clear of the
 //! ground (contact forces are no rotor's), and starts afresh
 //! ([`RotorMonitorConfig::settle_time`]) after take-off.
-//! State: about 310 bytes (the flight controller keeps it in its static mission); the tuning,
+//! State: about 320 bytes (the flight controller keeps it in its static mission); the tuning,
 //! [`RotorMonitorConfig`], comes with each tick's input (the flight stack passes the
 //! defaults, a constant in flash).
 
 use crate::control::allocation::Mixer;
 use crate::control::vector::Vec3;
 use crate::control::vehicle::VehicleModel;
-use crate::flight::rotor_isolation::{Columns, Judging, dot, explain};
+use crate::flight::rotor_isolation::{Columns, Judging, PairSweep, dot, explain, explain_swept};
 use crate::geometry::Vec2;
 use crate::math;
 use crate::scenario::MAX_ROBOTS;
@@ -233,6 +234,8 @@ pub struct RotorMonitor {
     /// Each rotor's expected thrust when the reference was taken, N: a fading rotor's loss
     /// is sized against it (the controller raises a fading rotor's command as it fades).
     reference_thrust: [f32; MAX_ROBOTS],
+    /// The search of the pairs under way (a few a tick).
+    sweep: PairSweep,
 }
 
 impl Default for RotorMonitor {
@@ -265,6 +268,7 @@ impl RotorMonitor {
             rpm_learned: 0.0,
             rpm_low: [0; MAX_ROBOTS],
             reference_thrust: [0.0; MAX_ROBOTS],
+            sweep: PairSweep::new(),
         }
     }
 
@@ -306,6 +310,7 @@ impl RotorMonitor {
         self.drifting = 0.0;
         self.loud = 0.0;
         self.smoothed = [0.0; 3];
+        self.sweep = PairSweep::new();
         self.guard = config.resettle_time;
     }
 
@@ -351,6 +356,7 @@ impl RotorMonitor {
         self.confirming = 0.0;
         self.drifting = 0.0;
         self.smoothed = [0.0; 3];
+        self.sweep = PairSweep::new();
     }
 
     /// One tick; the rotors (bit `i` for rotor `i`) newly found stopped, 0 if none. The
@@ -505,9 +511,8 @@ impl RotorMonitor {
         if self.confirming >= config.confirm_time {
             // Confirmed by the last tick: name the rotors that explain the recent change
             // (neighbours' columns are close; one tick's noise can pick either). A tick judges
-            // the change or names the rotors, never both: at sixteen rotors each is a search
-            // of 120 pairs, and the two together took twice the control tick's budget.
-            let named = explain(
+            // the change or names the rotors, never both (the control tick's budget).
+            let named = explain_swept(
                 &scaled(&self.smoothed),
                 &columns,
                 config,
@@ -517,6 +522,7 @@ impl RotorMonitor {
                     pairs: true,
                     decisive: false,
                 },
+                &mut self.sweep,
             );
             if named == 0 {
                 // Judged again on the next tick, named on the one after if it still holds.
@@ -535,7 +541,7 @@ impl RotorMonitor {
             pairs: true,
             decisive: false,
         };
-        let found = explain(&d, &columns, config, judged);
+        let found = explain_swept(&d, &columns, config, judged, &mut self.sweep);
         if found == 0 {
             self.confirming = 0.0;
             if self.loud >= config.rebase_time {

@@ -49,6 +49,7 @@ use crate::math;
 use crate::scenario::MAX_ROBOTS;
 
 mod rotors;
+use rotors::RotorsMixer;
 
 /// Tuning of a flight beyond the cascade's gains.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -220,9 +221,8 @@ pub struct FlightStack {
     rotors_lost: heapless::Vec<RotorOut, MAX_ROTORS_OUT>,
     /// A rotor found stopped whose landing has not begun yet.
     rotor_landing: Option<u8>,
-    /// The mixer flown is the interim one ([`Mixer::interim_without`]): the full mixer
-    /// without the rotors out is wanted ([`Self::mixer_wanted`]).
-    interim_mixer: bool,
+    /// Where the mixer stands with the rotors found stopped.
+    rotors_mixer: RotorsMixer,
     /// Position mode: the setpoint the sticks steer and what they ask this tick.
     manual: Option<(ManualSetpoint, ManualVelocity)>,
 }
@@ -258,7 +258,7 @@ impl FlightStack {
             monitor: RotorMonitor::new(),
             rotors_lost: heapless::Vec::new(),
             rotor_landing: None,
-            interim_mixer: false,
+            rotors_mixer: RotorsMixer::Whole,
             manual: None,
         }
     }
@@ -462,6 +462,7 @@ impl FlightStack {
             None
         } else {
             self.clock += dt;
+            self.leave_out_found();
             self.advance(nav, command, dt)
         };
         let setpoint = self.setpoint(nav);

@@ -62,7 +62,7 @@ pub enum JobRequest {
     },
     /// In flight, rotors were found stopped: the mixer of the robots where they are, about
     /// the COM flown, without those rotors ([`Mixer::without`]); the step flies the interim
-    /// mixer until it comes ([`Mixer::interim_without`]).
+    /// mixer until it comes ([`Mixer::leave_out`]).
     MixerWithout {
         /// Where the robots are.
         robots: Positions,
@@ -70,6 +70,9 @@ pub enum JobRequest {
         com: Vec2,
         /// The rotors left out, bit `i` for rotor `i`.
         out: u16,
+        /// The thrust that holds the vehicle as the flight believes it, N: whether the rotors
+        /// left hold it level ([`MixerLeft::holds_level`]).
+        weight: f32,
     },
 }
 
@@ -149,7 +152,20 @@ pub enum JobResult {
     /// Answer to [`JobRequest::Reform`]: the new formation's positions and `det(B B^T)`.
     Reformed(Result<(Positions, f32), AbortReason>),
     /// Answer to [`JobRequest::MixerWithout`].
-    MixerWithout(Result<Mixer, AllocationError>),
+    MixerWithout(Result<MixerLeft, AllocationError>),
+}
+
+/// The full mixer without rotors found stopped ([`JobRequest::MixerWithout`]), and what it
+/// can do: both worked out off the control step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MixerLeft {
+    /// The mixer of the rotors left.
+    pub mixer: Mixer,
+    /// It allocates the hover (the vehicle's weight, no torque) within every rotor's range.
+    /// When it cannot, the allocation keeps the payload level and gives up collective thrust
+    /// (docs/failures.md#rotors-that-stop-in-flight): the vehicle comes down faster than
+    /// planned.
+    pub holds_level: bool,
 }
 
 /// What of the mission's configuration the job side uses.
@@ -279,9 +295,18 @@ impl MissionPlanner {
             }
             JobRequest::BuildFlight { robots } => JobResult::Flight(self.build_flight(robots)),
             JobRequest::Reform { robots, com } => JobResult::Reformed(self.reform(robots, *com)),
-            JobRequest::MixerWithout { robots, com, out } => JobResult::MixerWithout(
+            JobRequest::MixerWithout {
+                robots,
+                com,
+                out,
+                weight,
+            } => JobResult::MixerWithout(
                 mixer_for(&self.scenario, robots, *com, self.config.mixer)
-                    .and_then(|m| m.without(*out)),
+                    .and_then(|m| m.without(*out))
+                    .map(|mixer| MixerLeft {
+                        holds_level: mixer.holds_hover(*weight),
+                        mixer,
+                    }),
             ),
         }
     }

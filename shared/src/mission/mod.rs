@@ -25,7 +25,7 @@ pub mod supervision;
 
 pub use config::{DETECTOR_SIGMA, MissionConfig};
 pub use hardware::HardwareConfig;
-pub use jobs::{FormationPlan, JobRequest, JobResult, LiftPlan, MissionPlanner};
+pub use jobs::{FormationPlan, JobRequest, JobResult, LiftPlan, MissionPlanner, MixerLeft};
 pub use machine::{
     CommandRefusal, CommandReply, EscRpm, HardwareFaults, ImuDetection, Mission, OperatorCommand,
     SET_DOWN_CUT_TILT, SET_DOWN_TIME, TickInput, TickOutput,

@@ -325,11 +325,21 @@ fn the_authority_at_hover_is_the_largest_torque_each_axis_takes_within_the_rotor
 fn the_interim_mixer_without_a_rotor_gives_it_nothing_and_keeps_the_thrust() {
     let m = mixer(MixerKind::Allocation, Vec2::new(0.12, 0.01));
     for out in [0b100u16, 0b1000_0001] {
-        let interim = m.interim_without(out).expect("rotors left");
+        let mut interim = m.clone();
+        interim.leave_out(out).expect("rotors left");
         let full = m.without(out).expect("rotors left");
-        // The full mixer comes for the same rotors, and is recognised as such.
-        assert!(interim.same_rotors(&full), "{out:#b}");
-        assert!(!m.same_rotors(&full), "{out:#b}: the mixer before differs");
+        // The full mixer comes for the same rotors, and is recognised as such, whether or not
+        // the mixer flown has left them out yet; not for other rotors left out.
+        assert!(interim.same_rotors_except(&full, out), "{out:#b}");
+        assert!(m.same_rotors_except(&full, out), "{out:#b}");
+        assert!(
+            !m.same_rotors_except(&full, 0),
+            "{out:#b}: nothing left out"
+        );
+        assert!(
+            !m.same_rotors_except(&full, out | 0b10),
+            "{out:#b}: another rotor"
+        );
         let w = Wrench {
             thrust: 38.0,
             torque: Vec3::new(0.2, -0.1, 0.0),
@@ -347,10 +357,15 @@ fn the_interim_mixer_without_a_rotor_gives_it_nothing_and_keeps_the_thrust() {
             a.achieved
         );
         assert!(!interim.flies_yaw());
+        // Seven rotors of 14.2 N hold 38 N level; not more than they make.
+        assert!(full.holds_hover(38.0), "{out:#b}");
+        assert!(!full.holds_hover(7.0 * 14.2 + 1.0), "{out:#b}");
     }
-    // No rotor left with a share of the collective: nothing to fly.
+    // No rotor left with a share of the collective: nothing to fly, the mixer as it was.
+    let mut all_out = m.clone();
     assert_eq!(
-        m.interim_without(0xff),
+        all_out.leave_out(0xff),
         Err(AllocationError::Uncontrollable)
     );
+    assert_eq!(all_out, m);
 }

@@ -5,53 +5,75 @@
 use super::FlightStack;
 #[cfg(doc)]
 use super::LandingCause;
-use crate::control::allocation::{Mixer, Wrench};
+use crate::control::allocation::Mixer;
 use crate::control::land_detector::LandDetector;
 use crate::control::navigator::NavState;
 use crate::control::vector::Vec3;
 use crate::flight::rotor_findings::{EscTelemetry, RotorFinding, RotorOut};
 use crate::flight::rotor_monitor::{MonitorInput, RotorMonitor, RotorMonitorConfig};
 use crate::geometry::Vec2;
-use crate::scenario::GRAVITY;
+
+/// Where the mixer stands with the rotors found stopped: the tick that finds them judges
+/// (the monitor's busiest tick), the next leaves them out of the mixer, and the one after
+/// asks for the full mixer without them (each within the control step's budget).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum RotorsMixer {
+    /// The mixer flown is built for every rotor not out.
+    Whole,
+    /// Rotors were found this tick: the next step leaves them out ([`Mixer::leave_out`]).
+    LeaveOutNext,
+    /// The step flies the interim mixer (or the mixer before, if none of the rotors left
+    /// makes thrust, roll and pitch): the full mixer without them is wanted.
+    Interim,
+}
 
 impl FlightStack {
-    /// Flies without rotors `out` from the next step: on the interim mixer
-    /// ([`Mixer::interim_without`]) until the full one comes ([`Self::take_mixer`]). Returns
-    /// false, the mixer left as it was, when the rotors left cannot make thrust, roll and
-    /// pitch.
-    pub(super) fn fly_without(&mut self, out: u16) -> bool {
-        match self.mixer.interim_without(out) {
-            Ok(mixer) => {
-                self.mixer = mixer;
-                self.interim_mixer = true;
-                true
-            }
-            Err(_) => false,
+    /// Flies without rotors `out` from this step: on the interim mixer
+    /// ([`Mixer::leave_out`]) until the full one comes ([`Self::take_mixer`]). When the
+    /// rotors left cannot make thrust, roll and pitch, the mixer flies on as it was (the lost
+    /// rotors' share is lost) and the full one is still asked for (it says so).
+    pub(super) fn fly_without(&mut self, out: u16) {
+        let _ = self.mixer.leave_out(out);
+        self.rotors_mixer = RotorsMixer::Interim;
+    }
+
+    /// Leaves the rotors found stopped on the last tick out of the mixer, before this step's
+    /// allocation.
+    pub(super) fn leave_out_found(&mut self) {
+        if self.rotors_mixer == RotorsMixer::LeaveOutNext {
+            self.fly_without(self.monitor.out());
         }
     }
 
     /// The rotors out, while the step flies the interim mixer without them and wants the full
     /// one ([`Mixer::without`], a job: [`crate::mission::JobRequest::MixerWithout`]).
     pub fn mixer_wanted(&self) -> Option<u16> {
-        self.interim_mixer.then(|| self.monitor.out())
+        (self.rotors_mixer == RotorsMixer::Interim).then(|| self.monitor.out())
     }
 
     /// Flies on with the interim mixer, wanting no other (no mixer of the rotors left makes
     /// thrust, roll and pitch).
     pub fn keep_interim_mixer(&mut self) {
-        self.interim_mixer = false;
+        self.rotors_mixer = RotorsMixer::Whole;
     }
 
     /// Takes `mixer`, the full mixer without the rotors out, in place of the interim one, if
-    /// it flies the same rotors from the same places (not one built for an earlier layout);
-    /// whether it was taken.
-    pub fn take_mixer(&mut self, mixer: Mixer) -> bool {
-        let fits = self.interim_mixer && self.mixer.same_rotors(&mixer);
+    /// it flies the rotors left from the same places (not one built for an earlier layout or
+    /// other rotors); whether it was taken. One copy: this runs in the control step.
+    pub fn take_mixer(&mut self, mixer: &Mixer) -> bool {
+        let fits = self.rotors_mixer == RotorsMixer::Interim
+            && self.mixer.same_rotors_except(mixer, self.monitor.out());
         if fits {
-            self.mixer = mixer;
-            self.interim_mixer = false;
+            self.mixer.clone_from(mixer);
+            self.rotors_mixer = RotorsMixer::Whole;
         }
         fits
+    }
+
+    /// The thrust that holds the vehicle as the controller believes it, N (for the full
+    /// mixer's check that the rotors left hold a level hover, [`Mixer::holds_hover`]).
+    pub fn hover_thrust(&self) -> f32 {
+        self.controller.model().hover_thrust()
     }
 
     /// Rotors found stopped in flight, in the order found (the first two).
@@ -126,9 +148,9 @@ impl FlightStack {
         }
         self.monitor
             .mark_out(newly, &self.mixer, &RotorMonitorConfig::DEFAULT);
-        // Not even thrust, roll and pitch left: fly on with the mixer there is (the lost
-        // rotor's share is lost) and land; the rotors left hold nothing level then.
-        let rebuilt = self.fly_without(self.monitor.out());
+        // Left out of the mixer by the next step, before its allocation: the first commands
+        // after this tick's already fly without them.
+        self.rotors_mixer = RotorsMixer::LeaveOutNext;
         let mut first = None;
         for robot in (0..n).filter(|&i| newly & (1 << i) != 0) {
             let event = RotorOut {
@@ -147,21 +169,6 @@ impl FlightStack {
             newly,
             out,
             left: (n as u32 - (out & all).count_ones()) as u8,
-            // Whether the rotors left hold the hover is the full mixer's to say
-            // ([`Self::holds_level`] once [`Self::take_mixer`] took it); without a mixer
-            // of them, nothing is held level.
-            holdable: rebuilt,
         })
-    }
-
-    /// Whether the mixer flown allocates the hover (the vehicle's weight, no torque) within
-    /// every rotor's range ([`RotorFinding::holdable`]).
-    pub fn holds_level(&self) -> bool {
-        let vehicle = self.controller.model();
-        let hover = self.mixer.allocate(&Wrench {
-            thrust: vehicle.mass * GRAVITY,
-            torque: Vec3::ZERO,
-        });
-        !hover.saturation.collective && !hover.saturation.roll_pitch
     }
 }

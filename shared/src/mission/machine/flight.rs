@@ -184,9 +184,11 @@ impl Mission {
             .as_ref()
             .is_some_and(|p| p.mixer && self.tick >= p.due)
         {
-            let held = match self.pending.take().and_then(|p| p.result) {
-                Some(JobResult::MixerWithout(Ok(mixer))) => {
-                    flight.take_mixer(mixer).then(|| flight.holds_level())
+            // Read where it lies: a job's result is up to the flight model's 2.8 KB, and a
+            // copy of it costs the control step over 1,000 instructions.
+            let held = match self.pending.as_ref().and_then(|p| p.result.as_ref()) {
+                Some(JobResult::MixerWithout(Ok(left))) => {
+                    flight.take_mixer(&left.mixer).then_some(left.holds_level)
                 }
                 // The rotors left cannot make thrust, roll and pitch: fly on with the interim
                 // mixer and land; nothing is held level.
@@ -196,6 +198,7 @@ impl Mission {
                 }
                 _ => None,
             };
+            self.pending = None;
             if let Some(held) = held
                 && let Some(mut notice) = self.rotors_notice.take()
             {
@@ -222,6 +225,7 @@ impl Mission {
             robots: self.robots.clone(),
             com: flight.com(),
             out,
+            weight: flight.hover_thrust(),
         };
         self.request(job);
         true

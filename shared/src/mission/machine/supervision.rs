@@ -158,22 +158,25 @@ impl Mission {
     /// After this tick's flight step: a rotor found stopped (or reported by its ESC) is flown
     /// without from the next tick and the flight lands; the formation is not re-solved for
     /// the rotors left (the adaptation gives up, a re-formation asked for is dropped).
-    /// Says which rotors were found and whether the rotors left hold a level hover.
+    /// Says which rotors were found and whether the rotors left hold a level hover once the
+    /// full mixer without them flies.
     pub(super) fn watch_rotors(
         &mut self,
         input: &TickInput,
         nav: &NavState,
         thrusts: &[f32; MAX_ROBOTS],
         dt: f32,
-    ) -> Option<Notice> {
-        let flight = self.flight.as_mut()?;
+    ) {
+        let Some(flight) = self.flight.as_mut() else {
+            return;
+        };
         let n = self.scenario.robots.count();
         let reported = input.faults.rotors_out;
         // A frozen or noisy IMU makes a residual no rotor caused: once it is found, only the
         // ESCs' word counts.
         let imu_trusted =
             !input.faults.imu && self.imu_detection.is_none() && !self.navigator.imu_dropped();
-        let found = flight.watch_rotors(
+        let Some(found) = flight.watch_rotors(
             nav,
             input.imu.accel,
             &thrusts[..n],
@@ -184,26 +187,28 @@ impl Mission {
             },
             imu_trusted,
             dt,
-        )?;
+        ) else {
+            return;
+        };
         if let Some(adapter) = self.adapter.as_mut() {
             adapter.give_up();
         }
         self.pending = None;
         self.outgoing = None;
-        let notice = Notice::RotorsOut {
-            newly: found.newly,
-            earlier: found.out & !found.newly,
-            left: found.left,
-            holdable: found.holdable,
+        // Said once the full mixer without them flies (its job tells whether the rotors left
+        // hold the hover): the next tick leaves them out of the mixer, the one after asks for
+        // it. Rotors found before and not said yet are said with these.
+        let unsaid = match self.rotors_notice {
+            Some(Notice::RotorsOut { newly, .. }) => newly,
+            _ => 0,
         };
-        // The full mixer without them is a job; said once it flies (it tells whether the
-        // rotors left hold the hover). Without any mixer of them, said now.
-        if self.ask_for_mixer() {
-            self.rotors_notice = Some(notice);
-            None
-        } else {
-            Some(notice)
-        }
+        let newly = found.newly | unsaid;
+        self.rotors_notice = Some(Notice::RotorsOut {
+            newly,
+            earlier: found.out & !newly,
+            left: found.left,
+            holdable: false,
+        });
     }
 
     /// Raises the rotors' thrusts for a pack that sags below the thrust map's

@@ -146,16 +146,8 @@ impl Mission {
             }
             transition = self.advance(&nav, dt, flight_command, &mut thrusts, &mut cascade);
         }
-        if matches!(self.phase, Phase::Flying(_))
-            && let Some(found) = self.watch_rotors(input, &nav, &thrusts, dt)
-        {
-            // Said this tick; the one it displaces goes out next.
-            if let Some(other) = notice.replace(found) {
-                if self.notices.is_full() {
-                    self.notices.pop_back();
-                }
-                let _ = self.notices.push_front(other);
-            }
+        if matches!(self.phase, Phase::Flying(_)) {
+            self.watch_rotors(input, &nav, &thrusts, dt);
         }
         let setting_down = self.setting_down();
         let mut armed = setting_down
