@@ -288,6 +288,10 @@ pub struct TrialResult {
     pub fault: Option<String>,
     /// Whether the vehicle stopped or landed for that fault's reason.
     pub fault_found: Option<bool>,
+    /// Whether the fault's time came before the flight ended ([`fault_reached`]): one timed
+    /// after a take-off that never came, or after the landing, met nothing to find.
+    #[serde(default)]
+    pub fault_reached: Option<bool>,
     /// `delivered`, `not delivered`, `dropped`, `refused` (the vehicle refused to take off
     /// for want of margin: [`refused`]) or `aborted`.
     pub outcome: String,
@@ -406,6 +410,31 @@ fn outcome_of(o: &mission_run::MissionOutcome) -> &'static str {
     }
 }
 
+/// Whether `injection`'s time came before the flight ended: a fault timed from a take-off that
+/// never came (`takeoff_at` none: the mission stopped before it), or due after the vehicle had
+/// landed and disarmed (the first `disarmed` or `aborted` of `phases`, each a name and its
+/// time, after the take-off; `simulated_s` if none), was never met.
+pub fn fault_reached(
+    injection: &Injection,
+    takeoff_at: Option<f32>,
+    phases: &[(String, f32)],
+    simulated_s: f32,
+) -> bool {
+    let at = match injection.since {
+        inject::Since::Takeoff => match takeoff_at {
+            Some(t) => t + injection.after,
+            None => return false,
+        },
+        inject::Since::Start => injection.after,
+    };
+    let began = takeoff_at.unwrap_or(0.0);
+    let ended = phases
+        .iter()
+        .find(|(name, t)| (name == "disarmed" || name == "aborted") && *t > began)
+        .map_or(simulated_s, |&(_, t)| t);
+    at < ended
+}
+
 /// Runs trial `trial`; a refused one is flown again with the refusals off.
 pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
     let t = trial_of(setup, trial)?;
@@ -420,9 +449,14 @@ pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
         None => mission_setup,
     };
     let (o, _) = mission_run::run(&loaded.scenario, &mission_setup, &mut |_, _, _| {})?;
-    let fault_found = t
+    let fault_found = t.fault.map(|f| {
+        !o.dropped
+            && (o.aborted.is_some_and(|r| faults::found(&f.fault, &r))
+                || o.notices.iter().any(|(_, n)| faults::said(&f.fault, n)))
+    });
+    let fault_reached = t
         .fault
-        .map(|f| !o.dropped && o.aborted.is_some_and(|r| faults::found(&f.fault, &r)));
+        .map(|f| fault_reached(&f, o.takeoff_at, &o.phases, o.simulated_s));
     let outcome = outcome_of(&o);
     let flown_anyway = if outcome == "refused" {
         let mut anyway = mission_setup.clone();
@@ -443,6 +477,7 @@ pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
         mission_seed: t.mission_seed,
         fault: t.fault.map(|f| f.to_string()),
         fault_found,
+        fault_reached,
         outcome: outcome.to_string(),
         flown_anyway,
         aborted: o.aborted.map(|r| r.to_string()),
@@ -602,6 +637,37 @@ mod tests {
     }
 
     #[test]
+    fn a_fault_timed_after_the_flight_or_before_a_take_off_that_never_came_is_not_met() {
+        let injection = Injection::parse("rotor-out:3@4.5").expect("valid");
+        let phases = vec![
+            ("takeoff".to_string(), 30.0),
+            ("landing".to_string(), 44.0),
+            ("disarmed".to_string(), 47.0),
+        ];
+        // 34.5 s, in the flight.
+        assert!(fault_reached(&injection, Some(30.0), &phases, 48.0));
+        // 47.5 s: disarmed at 47 s.
+        assert!(!fault_reached(&injection, Some(43.0), &phases, 48.0));
+        // No take-off: the mission stopped before it.
+        let refused = vec![("aborted".to_string(), 12.0)];
+        assert!(!fault_reached(&injection, None, &refused, 12.0));
+        // Still flying when the run ended.
+        assert!(fault_reached(&injection, Some(30.0), &phases[..1], 40.0));
+    }
+
+    #[test]
+    fn a_lost_link_or_pack_said_while_landing_is_found() {
+        let gcs = Injection::parse("gcs-loss@9.5").expect("valid").fault;
+        assert!(faults::said(
+            &gcs,
+            "ground link lost: no ground-station heartbeat for 5.0 s"
+        ));
+        assert!(!faults::said(&gcs, "battery critical: 13.19 V"));
+        let rotor = Injection::parse("rotor-out:2@3").expect("valid").fault;
+        assert!(!faults::said(&rotor, "ground link lost"));
+    }
+
+    #[test]
     fn percentiles_are_nearest_rank_and_outcomes_are_counted() {
         let r = |trial, outcome: &str, e| TrialResult {
             trial,
@@ -613,6 +679,7 @@ mod tests {
             mission_seed: 1,
             fault: None,
             fault_found: None,
+            fault_reached: None,
             outcome: outcome.into(),
             flown_anyway: (outcome == "refused").then(|| "dropped".into()),
             aborted: match outcome {

@@ -194,7 +194,7 @@ fn two_shards_merged_give_exactly_the_unsharded_campaigns_report() {
     for (kind, t) in whole["faults"].as_object().expect("faults") {
         assert!(faults::KINDS.contains(&kind.as_str()), "{kind}");
         assert_eq!(
-            n(&t["found"]) + n(&t["dropped"]) + n(&t["missed"]),
+            n(&t["found"]) + n(&t["dropped"]) + n(&t["missed"]) + n(&t["not_reached"]),
             n(&t["trials"]),
             "{kind}"
         );

@@ -1,7 +1,8 @@
 //! Faults for `campaign --faults` (docs/commands.md#campaign): about half the trials get one
 //! fault, drawn from the injections `mission --inject` has (docs/failures.md#failures), and
 //! what the vehicle must answer it with. A faulted trial that stops or lands for its fault's
-//! reason has found it; one that aborts for another reason, or not at all, has missed it.
+//! reason has found it, as has one that said it met the fault while it already landed; one
+//! that aborts for another reason, or not at all, has missed it.
 
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -90,5 +91,16 @@ pub fn found(fault: &Fault, reason: &AbortReason) -> bool {
         Fault::StepperStall(_) => matches!(reason, AbortReason::RobotStalled { .. }),
         // A shifted load is answered by re-forming in flight, not by stopping.
         Fault::LoadShift(_) => false,
+    }
+}
+
+/// Whether the vehicle said it met `fault` in `notice` (a text it sent): a ground link or a
+/// pack lost while the vehicle already lands is said, and the landing goes on (no abort: the
+/// failsafe's answer is the landing under way).
+pub fn said(fault: &Fault, notice: &str) -> bool {
+    match fault {
+        Fault::GcsLoss => notice.starts_with("ground link lost"),
+        Fault::Battery(_) => notice.starts_with("battery critical"),
+        _ => false,
     }
 }

@@ -29,6 +29,10 @@ pub struct FaultTally {
     pub dropped: usize,
     /// Neither: flew on, or aborted for another reason.
     pub missed: usize,
+    /// Neither, and never met: the mission stopped before the take-off it was timed from, or
+    /// the vehicle had landed before its time came.
+    #[serde(default)]
+    pub not_reached: usize,
 }
 
 /// The kind of a fault as a trial records it (`rotor-out:3@4.5`: `rotor-out`).
@@ -145,6 +149,8 @@ pub fn report(results: &[TrialResult]) -> Report {
             tally.dropped += 1;
         } else if r.fault_found == Some(true) {
             tally.found += 1;
+        } else if r.fault_reached == Some(false) {
+            tally.not_reached += 1;
         } else {
             tally.missed += 1;
         }

@@ -124,10 +124,18 @@ fn show(out: &CampaignOutput, json: bool) -> Result<Outcome> {
                 r.faulted
             )?;
             for (kind, t) in &r.faults {
+                let unmet = if t.not_reached > 0 {
+                    format!(
+                        " ({} more never met: the flight had ended, or never began, by its time)",
+                        t.not_reached
+                    )
+                } else {
+                    String::new()
+                };
                 say!(
-                    "  {kind}: {} of {} found, {} dropped, {} missed",
+                    "  {kind}: {} of {} found, {} dropped, {} missed{unmet}",
                     t.found,
-                    t.trials,
+                    t.trials - t.not_reached,
                     t.dropped,
                     t.missed
                 )?;
