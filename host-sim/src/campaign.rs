@@ -26,6 +26,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::inject::{self, Injection};
 use crate::mission_run::{self, MissionSetup};
+use crate::rotor_faults;
 use crate::scenario_file::{self, LoadedScenario, PlantDepartures};
 use shared::mission::AbortReason;
 
@@ -292,6 +293,10 @@ pub struct TrialResult {
     /// after a take-off that never came, or after the landing, met nothing to find.
     #[serde(default)]
     pub fault_reached: Option<bool>,
+    /// For a rotor stopped: whether the rotors left can hold the payload in a level hover at
+    /// all (`rotor_faults::holdable_without`, the formation flown, the true COM and mass).
+    #[serde(default)]
+    pub fault_holdable: Option<bool>,
     /// `delivered`, `not delivered`, `dropped`, `refused` (the vehicle refused to take off
     /// for want of margin: [`refused`]) or `aborted`.
     pub outcome: String,
@@ -457,6 +462,12 @@ pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
     let fault_reached = t
         .fault
         .map(|f| fault_reached(&f, o.takeoff_at, &o.phases, o.simulated_s));
+    let fault_holdable = match (t.fault.map(|f| f.fault), &o.positions) {
+        (Some(inject::Fault::RotorOut(robot)), Some(positions)) => {
+            rotor_faults::holdable_without(&loaded.scenario, positions, &[robot]).ok()
+        }
+        _ => None,
+    };
     let outcome = outcome_of(&o);
     let flown_anyway = if outcome == "refused" {
         let mut anyway = mission_setup.clone();
@@ -478,6 +489,7 @@ pub fn run_trial(setup: &CampaignSetup, trial: usize) -> Result<TrialResult> {
         fault: t.fault.map(|f| f.to_string()),
         fault_found,
         fault_reached,
+        fault_holdable,
         outcome: outcome.to_string(),
         flown_anyway,
         aborted: o.aborted.map(|r| r.to_string()),
@@ -680,6 +692,7 @@ mod tests {
             fault: None,
             fault_found: None,
             fault_reached: None,
+            fault_holdable: None,
             outcome: outcome.into(),
             flown_anyway: (outcome == "refused").then(|| "dropped".into()),
             aborted: match outcome {

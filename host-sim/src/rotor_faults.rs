@@ -129,6 +129,25 @@ fn formation(scenario: &Scenario, positions: &[f32]) -> Result<(Vec<Vec2>, Vec2,
     Ok((points, moment * (1.0 / total), total))
 }
 
+/// Whether a static hover exists ([`static_hover_exists`], thrusts up to [`HOVER_CEILING`])
+/// on the rotors of `scenario`'s robots at rail `positions` but those of robots `out` (from
+/// 0), about the true COM with the true mass.
+pub fn holdable_without(scenario: &Scenario, positions: &[f32], out: &[usize]) -> Result<bool> {
+    let (points, com, mass) = formation(scenario, positions)?;
+    let left: Vec<Vec2> = points
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !out.contains(i))
+        .map(|(_, &p)| p)
+        .collect();
+    Ok(static_hover_exists(
+        &left,
+        com,
+        mass * GRAVITY,
+        HOVER_CEILING * scenario.robots.max_thrust,
+    ))
+}
+
 /// Where the rotor monitor reads each rotor's RPM from, if anywhere.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RpmSource {
@@ -190,19 +209,7 @@ pub fn pair(
         .positions
         .clone()
         .ok_or_else(|| anyhow!("the mission chose no formation"))?;
-    let (points, com, mass) = formation(scenario, &positions)?;
-    let left: Vec<Vec2> = points
-        .iter()
-        .enumerate()
-        .filter(|&(i, _)| i != a - 1 && i != b - 1)
-        .map(|(_, &p)| p)
-        .collect();
-    let holdable = static_hover_exists(
-        &left,
-        com,
-        mass * GRAVITY,
-        HOVER_CEILING * scenario.robots.max_thrust,
-    );
+    let holdable = holdable_without(scenario, &positions, &[a - 1, b - 1])?;
     Ok(PairCase {
         robots: (a, b),
         holdable,

@@ -27,6 +27,10 @@ pub struct FaultTally {
     pub found: usize,
     /// Dropped.
     pub dropped: usize,
+    /// Of those dropped, a rotor stopped whose robots left cannot hold the payload in a level
+    /// hover at all (no thrusts within their range make its weight with no torque).
+    #[serde(default)]
+    pub dropped_unholdable: usize,
     /// Neither: flew on, or aborted for another reason.
     pub missed: usize,
     /// Neither, and never met: the mission stopped before the take-off it was timed from, or
@@ -147,6 +151,7 @@ pub fn report(results: &[TrialResult]) -> Report {
         tally.trials += 1;
         if r.outcome == "dropped" {
             tally.dropped += 1;
+            tally.dropped_unholdable += usize::from(r.fault_holdable == Some(false));
         } else if r.fault_found == Some(true) {
             tally.found += 1;
         } else if r.fault_reached == Some(false) {

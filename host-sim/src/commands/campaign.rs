@@ -132,8 +132,16 @@ fn show(out: &CampaignOutput, json: bool) -> Result<Outcome> {
                 } else {
                     String::new()
                 };
+                let unholdable = if t.dropped_unholdable > 0 {
+                    format!(
+                        " ({} where the robots left cannot hold it level at all)",
+                        t.dropped_unholdable
+                    )
+                } else {
+                    String::new()
+                };
                 say!(
-                    "  {kind}: {} of {} found, {} dropped, {} missed{unmet}",
+                    "  {kind}: {} of {} found, {} dropped{unholdable}, {} missed{unmet}",
                     t.found,
                     t.trials - t.not_reached,
                     t.dropped,

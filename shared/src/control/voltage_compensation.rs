@@ -51,12 +51,24 @@ impl Default for PackModel {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct VoltageCompensation {
     load: Option<f32>,
+    /// The last scale asked for more than [`MAX_SCALE`]: the pack cannot make up the rotors'
+    /// thrust.
+    short: bool,
 }
 
 impl VoltageCompensation {
     /// No load seen yet.
     pub const fn new() -> Self {
-        Self { load: None }
+        Self {
+            load: None,
+            short: false,
+        }
+    }
+
+    /// Whether the pack was, at the last [`Self::scale`], too low for the compensation to make
+    /// up (the factor needed beyond [`MAX_SCALE`]): every rotor then makes less than asked.
+    pub fn short(&self) -> bool {
+        self.short
     }
 
     /// The factor on every rotor's command this tick, `dt` s after the last: `volts` the
@@ -69,6 +81,7 @@ impl VoltageCompensation {
             Some(f) => f + math::clamp(dt / (BATTERY_FILTER_S + dt), 0.0, 1.0) * (load - f),
         };
         self.load = Some(filtered);
+        self.short = false;
         let Some(volts) = volts.filter(|v| v.is_finite() && *v > 0.0) else {
             return 1.0;
         };
@@ -80,6 +93,7 @@ impl VoltageCompensation {
             return 1.0;
         }
         let ratio = pack.map_volts / math::max(open_circuit, f32::MIN_POSITIVE);
+        self.short = ratio * ratio > MAX_SCALE;
         math::min(ratio * ratio, MAX_SCALE)
     }
 }

@@ -392,7 +392,11 @@ impl Mission {
             to,
             reason,
         };
-        if let Reason::Abort(why) = reason {
+        // The first reason stands: a rotor found stopped in a landing for the pack says so
+        // (its own transition and notice), and the mission still ended for the pack.
+        if let Reason::Abort(why) = reason
+            && self.abort.is_none()
+        {
             self.abort = Some(why);
         }
         self.phase = to;

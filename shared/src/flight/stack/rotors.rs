@@ -104,7 +104,8 @@ impl FlightStack {
     /// Rotors found stopped are flown without from the next tick (on the interim mixer until
     /// the full one is taken, [`Self::mixer_wanted`]), and the next tick begins
     /// the landing ([`LandingCause::RotorOut`]; under a descent without position, that descent
-    /// goes on). With `imu_trusted` false (the IMU failed: its samples explain nothing) only
+    /// goes on). With `response_trusted` false (the IMU failed: its samples explain nothing;
+    /// or the pack cannot deliver the thrust asked, so every rotor makes less than expected) only
     /// the ESCs count. Returns what this tick found, if anything.
     pub fn watch_rotors(
         &mut self,
@@ -112,7 +113,7 @@ impl FlightStack {
         accel: Vec3,
         thrusts: &[f32],
         esc: EscTelemetry<'_>,
-        imu_trusted: bool,
+        response_trusted: bool,
         dt: f32,
     ) -> Option<RotorFinding> {
         if self.stopped.is_some() {
@@ -139,7 +140,7 @@ impl FlightStack {
             rate: nav.attitude.rate,
             accel,
             flying: self.config.watch_rotors && self.land.airborne(),
-            active: self.config.watch_rotors && imu_trusted && self.land.airborne() && clear,
+            active: self.config.watch_rotors && response_trusted && self.land.airborne() && clear,
             dt,
         });
         let newly = newly_reported | found;

@@ -172,10 +172,13 @@ impl Mission {
         };
         let n = self.scenario.robots.count();
         let reported = input.faults.rotors_out;
-        // A frozen or noisy IMU makes a residual no rotor caused: once it is found, only the
-        // ESCs' word counts.
-        let imu_trusted =
-            !input.faults.imu && self.imu_detection.is_none() && !self.navigator.imu_dropped();
+        // A frozen or noisy IMU makes a residual no rotor caused, and so does a pack too low
+        // for the voltage compensation to make up (every rotor makes less than asked, the
+        // heavily loaded ones most): then only the ESCs' word counts.
+        let response_trusted = !input.faults.imu
+            && self.imu_detection.is_none()
+            && !self.navigator.imu_dropped()
+            && !self.compensation.short();
         let Some(found) = flight.watch_rotors(
             nav,
             input.imu.accel,
@@ -185,7 +188,7 @@ impl Mission {
                 rpm_per_message: self.config.hardware.esc().is_ok_and(|p| p.on_can_bus()),
                 stopped: reported,
             },
-            imu_trusted,
+            response_trusted,
             dt,
         ) else {
             return;
