@@ -564,18 +564,8 @@ impl RotorMonitor {
             }
             return 0;
         }
-        // Some rotor explains it: confirm over time, the faster the larger the loss once it
-        // has stopped growing ([`evidence`]; a change still rising, as a downdraft's, passes
-        // through a rotor's size on its way); the next tick names the rotors.
-        // One rotor only: two rotors' combined columns are close to other pairs' (the
-        // longer average tells them apart).
-        let recent = scaled(&self.smoothed);
-        let levelled = dot(&recent, &recent) >= LEVELLED * LEVELLED * size2;
-        self.confirming += if levelled && found.count_ones() == 1 {
-            dt * evidence(&d, &columns, found, config)
-        } else {
-            dt
-        };
+        // Some rotor explains it: confirm over time; the next tick names the rotors.
+        self.confirming += dt;
         0
     }
 
@@ -683,61 +673,6 @@ impl RotorMonitor {
         found
     }
 }
-
-/// How fast a change the rotors `found` explain is confirmed, per second of it (hastened for
-/// one rotor only: a pair's combined column is close to other pairs'): the share of
-/// their thrust it has lost (`-d . v / |v|^2`, `v` the sum of their columns times their
-/// thrusts) over [`RotorMonitorConfig::min_fraction`], squared, between 1 and
-/// [`MAX_EVIDENCE_RATE`], once the change has levelled off ([`LEVELLED`]) at no more than a
-/// whole rotor's loss ([`FULL_LOSS`]), and only where those rotors explain it clearly better
-/// than a loss of lift on every rotor alike would. A loss just at the
-/// smallest size a rotor's could be takes [`RotorMonitorConfig::confirm_time`]; a whole
-/// rotor's, a quarter of it: a stopped rotor is named soon after its loss has grown to its
-/// full size (what a vehicle of four robots needs to catch its tilt), while a change at the
-/// edge of a rotor's size, which a gust or the model's error can make, still waits the whole
-/// time. The evidence of a sequential test
-/// grows with the change's size squared over its noise (A. Wald, "Sequential Analysis",
-/// 1947); this is its simplest form.
-fn evidence(d: &[f32; 3], columns: &Columns, found: u16, config: &RotorMonitorConfig) -> f32 {
-    let mut v = [0.0f32; 3];
-    for j in (0..MAX_ROBOTS).filter(|&j| found & (1 << j) != 0) {
-        let (a, t) = (columns.column(j), columns.thrust(j));
-        for (vi, ai) in v.iter_mut().zip(a) {
-            *vi += t * ai;
-        }
-    }
-    let (vv, dd) = (dot(&v, &v), dot(d, d));
-    if !(vv > 0.0 && dd > 0.0) || config.min_fraction <= 0.0 {
-        return 1.0;
-    }
-    let along = dot(d, &v);
-    // A healthy vehicle's likeliest change of this kind is a loss of lift on every rotor
-    // alike (a downdraft, a pack that sags faster than its reading): thrust, no torque. The
-    // rotors found must leave less than half of what that leaves unexplained (rotors near the
-    // COM, whose torque barely shows, cannot), crosswise: dd - along^2/vv < (dd - d0^2) / 2.
-    if 2.0 * (dd * vv - along * along) >= (dd - d[0] * d[0]) * vv {
-        return 1.0;
-    }
-    let lost = -along / vv;
-    // More than a rotor's whole thrust is no stopped rotor's: a change that large is let
-    // wait the whole time.
-    if lost > FULL_LOSS {
-        return 1.0;
-    }
-    let share = lost / config.min_fraction;
-    math::clamp(share * share, 1.0, MAX_EVIDENCE_RATE)
-}
-
-/// The largest share of their thrust the rotors found may have lost for the confirmation to
-/// be hastened: a stopped rotor loses its own, about 1 (the expected thrust's error apart).
-const FULL_LOSS: f32 = 1.2;
-
-/// The fastest a loss is confirmed, times [`RotorMonitorConfig::confirm_time`]'s rate.
-const MAX_EVIDENCE_RATE: f32 = 4.0;
-
-/// A change has stopped growing when its last 10 ms' average ([`SMOOTHING_TIME`]) is at least
-/// this share of it.
-const LEVELLED: f32 = 0.9;
 
 #[cfg(test)]
 mod tests;
