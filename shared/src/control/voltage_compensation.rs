@@ -16,6 +16,11 @@ use crate::mission::supervision::BATTERY_FILTER_S;
 
 /// Largest factor on a rotor's thrust command.
 pub const MAX_SCALE: f32 = 1.3;
+
+/// The factor needed beyond which the pack counts as short ([`VoltageCompensation::short`]):
+/// every rotor then makes a tenth or more less than asked. Just past [`MAX_SCALE`] (a pack
+/// near `BAT_LOW_V`) the rotors fall a few percent short, less than any rotor's own share.
+pub const SHORT_SCALE: f32 = MAX_SCALE / 0.9;
 /// A shortfall of the open-circuit estimate below the map's voltage smaller than this is
 /// the reading's noise, not a sag, V.
 pub const DEAD_BAND_VOLTS: f32 = 0.02;
@@ -51,7 +56,7 @@ impl Default for PackModel {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct VoltageCompensation {
     load: Option<f32>,
-    /// The last scale asked for more than [`MAX_SCALE`]: the pack cannot make up the rotors'
+    /// The last scale needed more than [`SHORT_SCALE`]: the pack cannot make up the rotors'
     /// thrust.
     short: bool,
 }
@@ -65,8 +70,9 @@ impl VoltageCompensation {
         }
     }
 
-    /// Whether the pack was, at the last [`Self::scale`], too low for the compensation to make
-    /// up (the factor needed beyond [`MAX_SCALE`]): every rotor then makes less than asked.
+    /// Whether the pack was, at the last [`Self::scale`], far too low for the compensation to
+    /// make up (the factor needed beyond [`SHORT_SCALE`]): every rotor then makes a tenth or
+    /// more less than asked.
     pub fn short(&self) -> bool {
         self.short
     }
@@ -93,7 +99,7 @@ impl VoltageCompensation {
             return 1.0;
         }
         let ratio = pack.map_volts / math::max(open_circuit, f32::MIN_POSITIVE);
-        self.short = ratio * ratio > MAX_SCALE;
+        self.short = ratio * ratio > SHORT_SCALE;
         math::min(ratio * ratio, MAX_SCALE)
     }
 }
@@ -105,6 +111,21 @@ mod tests {
     /// The plant's rule: the rotors feel only the sag beyond the map's pack.
     fn reading(extra_sag: f32, load: f32) -> f32 {
         16.0 - 0.8 * load - extra_sag
+    }
+
+    #[test]
+    fn a_pack_far_below_what_the_cap_makes_up_is_short() {
+        let pack = PackModel::DEFAULT;
+        // Near BAT_LOW_V under a light load: at the cap (a few percent short), not short.
+        let mut c = VoltageCompensation::new();
+        assert_eq!(c.scale(&pack, Some(13.8), 0.1, 0.0025), MAX_SCALE);
+        assert!(!c.short());
+        // 11 V: twice the thrust needed, far beyond the cap.
+        assert_eq!(c.scale(&pack, Some(11.0), 0.4, 0.0025), MAX_SCALE);
+        assert!(c.short());
+        // No reading: nothing known, not short.
+        assert_eq!(c.scale(&pack, None, 0.4, 0.0025), 1.0);
+        assert!(!c.short());
     }
 
     #[test]
